@@ -1,0 +1,187 @@
+"""The ``bouncedisk`` command (INTERFACES.md "Package and commands").
+
+Errors a user can cause print one line ``bouncedisk: error: FILE: FIELD: what is wrong`` and exit
+with status 2; nothing is written then. An interrupted run (Ctrl-C) leaves no output and exits 130.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+from pathlib import Path
+
+from . import __version__
+from .errors import InputError
+
+EXIT_USER = 2
+EXIT_FAIL = 1
+EXIT_INTERRUPT = 130
+
+
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    from .runner import run_scene
+    from .scene import load_scene
+
+    scene = load_scene(args.scene, args.set or [])
+    out = Path(args.output)
+    if out.exists() and out.is_dir():
+        raise InputError(str(out), "-o", "is a directory; give a file name such as out.nc")
+    command = "bouncedisk " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    summary = run_scene(scene, out, progress=not args.quiet, command=command)
+    if not args.quiet:
+        print(
+            f"{out}: {summary.n_impacts} impacts, {summary.n_chatter} chattering tails, "
+            f"status {summary.status!r}, {summary.wall_time_s:.3f} s (run {summary.run_id})"
+        )
+    return 0
+
+
+def _cmd_info(args: argparse.Namespace) -> int:
+    from .datasets import open_simulation
+
+    ds = open_simulation(args.file)
+    keys = (
+        "scene_name",
+        "run_id",
+        "e",
+        "omega_s",
+        "r_phi",
+        "psi",
+        "effects",
+        "solver",
+        "tol",
+        "status",
+        "n_impacts",
+        "n_chatter",
+        "wall_time_s",
+        "git_commit",
+        "created",
+    )
+    for k in keys:
+        if k in ds.attrs:
+            print(f"{k:>14}: {ds.attrs[k]}")
+    print(f"{'variables':>14}: {', '.join(sorted(ds.data_vars))}")
+    return 0
+
+
+def _cmd_runs(args: argparse.Namespace) -> int:
+    from . import registry
+
+    if args.action == "build":
+        if not args.files:
+            raise InputError("<arguments>", "FILES", "give the netCDF files to gather")
+        if not args.output:
+            raise InputError("<arguments>", "-o", "give the registry CSV to write")
+        table = registry.build(args.files, benchmarks_dir=args.benchmarks)
+        registry.write(table, args.output)
+        print(f"{args.output}: {len(table)} runs")
+        return 0
+    table = registry.read(args.registry)
+    if args.action == "diff":
+        if len(args.files) != 2:
+            raise InputError("<arguments>", "runs diff", "give two run ids (or unique prefixes)")
+        print(registry.diff(table, args.files[0], args.files[1]))
+        return 0
+    print(registry.format_table(table))
+    return 0
+
+
+def _cmd_check(args: argparse.Namespace) -> int:
+    from . import checks
+
+    results = checks.run_checks(Path(args.results) if args.results else None)
+    text = checks.to_markdown(results)
+    if args.output:
+        from .atomic import write_text_atomic
+
+        write_text_atomic(args.output, text)
+    print(checks.to_text(results))
+    return 0 if all(r.passed for r in results) else EXIT_FAIL
+
+
+def _cmd_fit(args: argparse.Namespace) -> int:
+    from . import fitting
+
+    fitting.fit_command(args)
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="bouncedisk",
+        description="Exact event-driven simulation of a rotor bouncing on a vibrating, "
+        "twisting stator.",
+    )
+    parser.add_argument("--version", action="version", version=f"bouncedisk {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("simulate", help="run one scene and write one netCDF file")
+    p.add_argument("scene", help="scene file (YAML)")
+    p.add_argument("-o", "--output", required=True, help="netCDF file to write")
+    p.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        help="override a scene field, e.g. --set parameters.e=0.6 (repeatable)",
+    )
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress or summary")
+    p.set_defaults(func=_cmd_simulate)
+
+    p = sub.add_parser("info", help="summarise a simulation netCDF file")
+    p.add_argument("file")
+    p.set_defaults(func=_cmd_info)
+
+    p = sub.add_parser("runs", help="list the run registry, diff two runs, or build it")
+    p.add_argument("action", nargs="?", choices=("list", "diff", "build"), default="list")
+    p.add_argument("files", nargs="*", help="diff: two run ids; build: netCDF files")
+    p.add_argument(
+        "--registry", default="results/runs.csv", help="registry CSV (default: %(default)s)"
+    )
+    p.add_argument("-o", "--output", help="build: registry CSV to write")
+    p.add_argument("--benchmarks", help="build: folder of Snakemake benchmark files")
+    p.set_defaults(func=_cmd_runs)
+
+    p = sub.add_parser("check", help="verify the paper's claims (exit 0 only if all pass)")
+    p.add_argument("--results", help="folder of built results to check (default: simulate)")
+    p.add_argument("-o", "--output", help="also write the report as Markdown")
+    p.set_defaults(func=_cmd_check)
+
+    p = sub.add_parser("fit", help="fit the model to a measured velocity-time curve")
+    p.add_argument("curve", help="CSV with time_s, omega_rad_s[, sigma_rad_s]")
+    p.add_argument("-o", "--output", required=True, help="fit netCDF file to write")
+    p.add_argument("--sidecar", help="YAML sidecar (default: CURVE with .yaml)")
+    p.add_argument("--seed", type=int, default=12345, help="random seed (default: %(default)s)")
+    p.add_argument(
+        "--bootstrap", type=int, default=40, help="bootstrap resamples (default: %(default)s)"
+    )
+    p.add_argument("-q", "--quiet", action="store_true")
+    p.set_defaults(func=_cmd_fit)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the console script."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except InputError as ex:
+        print(f"bouncedisk: error: {ex.line()}", file=sys.stderr)
+        return EXIT_USER
+    except KeyboardInterrupt:
+        print("bouncedisk: interrupted; no output written", file=sys.stderr)
+        return EXIT_INTERRUPT
+    except BrokenPipeError:
+        return 0
+    except Exception as ex:  # engine failures: one line, no traceback
+        from .engine import EngineError
+
+        if isinstance(ex, EngineError):
+            print(f"bouncedisk: error: {ex}", file=sys.stderr)
+            return EXIT_FAIL
+        raise
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,266 @@
+"""netCDF files people share: writing simulation output, reading and validating it.
+
+Names, units and attributes follow INTERFACES.md ("netCDF files"). Simulation files are streamed
+chunk by chunk (memory stays bounded for 10⁷-event runs) into a temporary file that is renamed
+only when complete. Derived datasets (Poincaré maps, sweeps, fits) are xarray Datasets written
+with :func:`write_dataset`, also atomically.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import netCDF4
+import numpy as np
+import xarray as xr
+
+from .atomic import atomic_path
+from .engine.driver import Chunk
+from .errors import InputError
+
+ENCODING = {"zlib": True, "complevel": 4}
+KIND_MEANINGS = "impact chatter"
+
+#: (long_name, units) of every variable a simulation file may hold.
+VARIABLES: dict[str, tuple[str, str]] = {
+    "t_impact": ("time of the event (impact, or accumulation point of a chattering tail)", "1"),
+    "phase": ("stator phase at the event, omega_s * t mod 2 pi", "rad"),
+    "v_rel": ("relative normal velocity just before impact, v_s - v_rotor", "1"),
+    "u_impact": ("axial position of the contact point at the event", "1"),
+    "kind": ("kind of event", "1"),
+    "omega_before": ("rotor angular velocity just before the event", "1"),
+    "omega_after": ("rotor angular velocity just after the event", "1"),
+    "time": ("time", "1"),
+    "u_rotor": ("rotor axial position", "1"),
+    "v_rotor": ("rotor axial velocity", "1"),
+    "u_stator": ("stator axial position", "1"),
+    "omega_rotor": ("rotor angular velocity", "1"),
+    "period": ("stator period index (stroboscopic section at phase 0)", "1"),
+    "strobe_t": ("time of the stroboscopic sample", "1"),
+    "strobe_u": ("rotor axial position at phase 0", "1"),
+    "strobe_v": ("rotor axial velocity at phase 0", "1"),
+    "strobe_omega": ("rotor angular velocity at phase 0", "1"),
+}
+REQUIRED_SIMULATION = ("t_impact", "phase", "v_rel", "kind")
+REQUIRED_ATTRS = ("e", "omega_s", "status")
+
+
+def _attr_value(v: Any) -> Any:
+    if isinstance(v, bool):
+        return int(v)
+    if v is None:
+        return "none"
+    if isinstance(v, float | int | str | np.integer | np.floating):
+        return v
+    return str(v)
+
+
+class SimulationWriter:
+    """Stream a run into a netCDF file, atomically.
+
+    Use as a context manager: the file appears at ``path`` after :meth:`close` with no error,
+    and no file (and no temporary) is left if the block raises.
+    """
+
+    def __init__(
+        self,
+        path: str | Path,
+        torsion: bool,
+        events: bool,
+        trajectory: bool,
+        strobe: bool,
+        chunk: int = 1 << 16,
+    ):
+        self.path = Path(path)
+        self.torsion = torsion
+        self.events = events
+        self.trajectory = trajectory
+        self.strobe = strobe
+        self.chunk = chunk
+        self.n_events = 0
+        self.n_impacts = 0
+        self.n_chatter = 0
+        self.n_traj = 0
+        self.n_strobe = 0
+        self._ctx = None
+        self._nc: netCDF4.Dataset | None = None
+
+    def _var(self, name: str, dtype: str, dim: str) -> None:
+        assert self._nc is not None
+        var = self._nc.createVariable(
+            name, dtype, (dim,), zlib=True, complevel=4, chunksizes=(self.chunk,), fill_value=False
+        )
+        long_name, units = VARIABLES[name]
+        var.long_name = long_name
+        var.units = units
+
+    def __enter__(self) -> SimulationWriter:
+        self._ctx = atomic_path(self.path, suffix=".nc")
+        tmp = self._ctx.__enter__()
+        nc = netCDF4.Dataset(tmp, "w", format="NETCDF4")
+        self._nc = nc
+        nc.createDimension("impact", None)
+        for name in ("t_impact", "phase", "v_rel", "u_impact"):
+            self._var(name, "f8", "impact")
+        self._var("kind", "i1", "impact")
+        nc["kind"].flag_values = np.array([0, 1], dtype="i1")
+        nc["kind"].flag_meanings = KIND_MEANINGS
+        nc["phase"].valid_range = np.array([0.0, 2.0 * math.pi])
+        if self.torsion:
+            self._var("omega_before", "f8", "impact")
+            self._var("omega_after", "f8", "impact")
+        if self.trajectory:
+            nc.createDimension("time", None)
+            self._var("time", "f8", "time")
+            nc["time"].standard_name = "time"
+            nc["time"].axis = "T"
+            for name in ("u_rotor", "v_rotor", "u_stator"):
+                self._var(name, "f8", "time")
+            if self.torsion:
+                self._var("omega_rotor", "f8", "time")
+        if self.strobe:
+            nc.createDimension("period", None)
+            self._var("period", "i8", "period")
+            for name in ("strobe_t", "strobe_u", "strobe_v"):
+                self._var(name, "f8", "period")
+            if self.torsion:
+                self._var("strobe_omega", "f8", "period")
+        return self
+
+    def append(self, c: Chunk) -> None:
+        """Append one engine chunk."""
+        nc = self._nc
+        assert nc is not None
+        n = len(c.t)
+        self.n_impacts += int(np.count_nonzero(c.kind == 0))
+        self.n_chatter += int(np.count_nonzero(c.kind == 1))
+        if n and self.events:
+            a, b = self.n_events, self.n_events + n
+            nc["t_impact"][a:b] = c.t
+            nc["phase"][a:b] = c.phase
+            nc["v_rel"][a:b] = c.v_rel
+            nc["u_impact"][a:b] = c.u
+            nc["kind"][a:b] = c.kind
+            if self.torsion:
+                nc["omega_before"][a:b] = c.omega_before
+                nc["omega_after"][a:b] = c.omega_after
+        self.n_events += n
+        m = len(c.traj)
+        if m and self.trajectory:
+            a, b = self.n_traj, self.n_traj + m
+            nc["time"][a:b] = c.traj[:, 0]
+            nc["u_rotor"][a:b] = c.traj[:, 1]
+            nc["v_rotor"][a:b] = c.traj[:, 2]
+            nc["u_stator"][a:b] = c.traj[:, 3]
+            if self.torsion:
+                nc["omega_rotor"][a:b] = c.traj[:, 4]
+            self.n_traj = b
+        m = len(c.strobe)
+        if m and self.strobe:
+            a, b = self.n_strobe, self.n_strobe + m
+            nc["period"][a:b] = c.strobe[:, 0].astype(np.int64)
+            nc["strobe_t"][a:b] = c.strobe[:, 1]
+            nc["strobe_u"][a:b] = c.strobe[:, 2]
+            nc["strobe_v"][a:b] = c.strobe[:, 3]
+            if self.torsion:
+                nc["strobe_omega"][a:b] = c.strobe[:, 4]
+            self.n_strobe = b
+
+    def set_attrs(self, attrs: dict[str, Any]) -> None:
+        """Set global attributes (call before leaving the block)."""
+        assert self._nc is not None
+        self._nc.setncatts({k: _attr_value(v) for k, v in attrs.items()})
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if self._nc is not None:
+            self._nc.close()
+            self._nc = None
+        assert self._ctx is not None
+        self._ctx.__exit__(exc_type, exc, tb)
+
+
+def open_checked(
+    path: str | Path,
+    required: tuple[str, ...] = (),
+    required_attrs: tuple[str, ...] = (),
+    what: str = "netCDF",
+) -> xr.Dataset:
+    """Open a netCDF file fully into memory, validating that it is readable and complete.
+
+    Raises
+    ------
+    InputError
+        File missing, not netCDF, truncated or corrupt, or lacking a required variable or
+        attribute.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise InputError(str(path), "", "file not found")
+    if p.is_dir():
+        raise InputError(str(path), "", f"is a directory, not a {what} file")
+    try:
+        with xr.open_dataset(p, engine="netcdf4") as ds:
+            ds = ds.load()
+    except Exception as ex:  # netCDF4/HDF5 raise a zoo of types for damaged files
+        reason = str(ex).splitlines()[0][:120] if str(ex) else type(ex).__name__
+        raise InputError(
+            str(path), "", f"not a readable netCDF file (truncated or corrupt?): {reason}"
+        ) from None
+    for name in required:
+        if name not in ds.variables:
+            raise InputError(str(path), name, f"missing required variable (not a {what} file?)")
+    for name in required_attrs:
+        if name not in ds.attrs:
+            raise InputError(str(path), name, f"missing required attribute (not a {what} file?)")
+    return ds
+
+
+def open_simulation(path: str | Path) -> xr.Dataset:
+    """Open and validate a simulation file (INTERFACES.md variables and attributes)."""
+    ds = open_checked(path, REQUIRED_SIMULATION, REQUIRED_ATTRS, what="bouncedisk simulation")
+    n = ds.sizes.get("impact", 0)
+    for name in REQUIRED_SIMULATION:
+        if ds[name].dims != ("impact",):
+            raise InputError(str(path), name, "must have the single dimension 'impact'")
+    if n and not np.all(np.isfinite(ds["t_impact"].values)):
+        raise InputError(str(path), "t_impact", "contains non-finite values")
+    return ds
+
+
+def events_of(ds: xr.Dataset) -> dict[str, np.ndarray]:
+    """The event table of a simulation Dataset as numpy arrays."""
+    out = {
+        "t": ds["t_impact"].values,
+        "phase": ds["phase"].values,
+        "v_rel": ds["v_rel"].values,
+        "kind": ds["kind"].values.astype(np.int8),
+    }
+    if "omega_after" in ds:
+        out["omega_after"] = ds["omega_after"].values
+    return out
+
+
+def finalize(ds: xr.Dataset) -> xr.Dataset:
+    """Give every variable ``units`` and ``long_name`` (known names) before writing."""
+    for name, var in ds.variables.items():
+        if name in VARIABLES:
+            long_name, units = VARIABLES[name]
+            var.attrs.setdefault("long_name", long_name)
+            var.attrs.setdefault("units", units)
+        var.attrs.setdefault("units", "1")
+        var.attrs.setdefault("long_name", name.replace("_", " "))
+    ds.attrs = {k: _attr_value(v) for k, v in ds.attrs.items()}
+    return ds
+
+
+def write_dataset(ds: xr.Dataset, path: str | Path) -> None:
+    """Write an xarray Dataset to netCDF (zlib-compressed numeric variables), atomically."""
+    ds = finalize(ds)
+    enc = {}
+    for name, var in ds.variables.items():
+        if var.dtype.kind in "fiu" and var.ndim > 0:
+            enc[name] = dict(ENCODING)
+    with atomic_path(path, suffix=".nc") as tmp:
+        ds.to_netcdf(tmp, engine="netcdf4", encoding=enc)

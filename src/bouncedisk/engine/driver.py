@@ -1,0 +1,303 @@
+"""Python driver of the compiled event loop: set-up, chunked runs, status messages.
+
+The driver is pure numpy: no file I/O and no xarray. :func:`iterate` yields one :class:`Chunk`
+per call of the kernel, so callers can stream results to disk, report progress or stop between
+chunks; :func:`simulate_arrays` collects a whole run in memory.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import kernel as K
+
+STATUS_TEXT = {
+    K.ST_EVENTS: "completed",
+    K.ST_TIME: "completed",
+    K.ST_REST: "rest: the rotor stays in contact with the stator for ever (no further impact)",
+    K.ST_NEED_CONTACT: (
+        "missing effect 'contact': the rotor lands softly or chatters and must ride the stator, "
+        "which needs the 'contact' effect"
+    ),
+    K.ST_NUMERICAL: "numerical failure: an event search failed or made no progress",
+}
+
+
+@dataclass(frozen=True)
+class EngineConfig:
+    """Everything the kernel needs, already validated (see :mod:`bouncedisk.scene`).
+
+    Parameters
+    ----------
+    e, omega_s, r_phi, psi : float
+        Nondimensional parameters (MODEL.md).
+    contact, torsion, impulse_cap : bool
+        Effects (MODEL.md "Optional effects").
+    inertia_ratio : float
+        ``J_s/J_r`` for the ``stator_inertia`` effect; ``inf`` for a stator not moved by
+        impacts (eq. 19).
+    mu_ratio : float
+        ``μ_static/μ_kinetic >= 1`` for the ``kinetic_static`` effect; 1 otherwise.
+    tol : float
+        Root tolerance of the event searches (and the chattering jump criterion).
+    t_end : float
+        Time at which the run stops (``inf``: stop on events only).
+    max_events : int
+        Number of events (impacts plus chattering tails) after which the run stops.
+    traj_dt, traj_t0, traj_t1 : float
+        Dense trajectory grid ``t0, t0 + dt, …, <= t1``; ``traj_dt = 0`` for none.
+    stroboscopic : bool
+        Sample the state at every stator period (phase 0).
+    """
+
+    e: float
+    omega_s: float
+    r_phi: float = 0.01
+    psi: float = 0.0
+    contact: bool = True
+    torsion: bool = False
+    impulse_cap: bool = True
+    inertia_ratio: float = math.inf
+    mu_ratio: float = 1.0
+    tol: float = 1e-12
+    t_end: float = math.inf
+    max_events: int = 10_000
+    traj_dt: float = 0.0
+    traj_t0: float = 0.0
+    traj_t1: float = math.inf
+    stroboscopic: bool = False
+
+
+@dataclass(frozen=True)
+class InitialState:
+    """Initial condition (MODEL.md "Initial condition").
+
+    ``u is None`` (default) puts the rotor in contact, moving with the stator, at ``t``.
+    Otherwise the rotor starts in flight at height ``u >= u_s(t)`` with velocity ``v``.
+    """
+
+    t: float = 0.0
+    omega: float = 0.0
+    u: float | None = None
+    v: float | None = None
+
+
+@dataclass
+class Chunk:
+    """Output of one kernel call. Arrays are views into fresh copies (safe to keep)."""
+
+    t: np.ndarray
+    phase: np.ndarray
+    v_rel: np.ndarray
+    omega_after: np.ndarray
+    u: np.ndarray
+    omega_before: np.ndarray
+    kind: np.ndarray
+    traj: np.ndarray  # (rows, 5): t, u, v, u_stator, omega
+    strobe: np.ndarray  # (rows, 5): period, t, u, v, omega
+    n_events_total: int
+    t_now: float
+
+
+@dataclass
+class RunResult:
+    """A whole run collected in memory (:func:`simulate_arrays`)."""
+
+    events: dict[str, np.ndarray]
+    traj: np.ndarray
+    strobe: np.ndarray
+    status: str
+    status_code: int
+    final: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        """True when the run ended as asked (events or time reached, or the rotor at rest)."""
+        return self.status_code in (K.ST_EVENTS, K.ST_TIME, K.ST_REST)
+
+
+class EngineError(RuntimeError):
+    """A run could not continue (missing effect, numerical failure)."""
+
+    def __init__(self, message: str, code: int):
+        super().__init__(message)
+        self.code = code
+
+
+def _pack(cfg: EngineConfig) -> tuple[np.ndarray, np.ndarray]:
+    prm = np.zeros(K.N_PRM)
+    prm[K.P_E] = cfg.e
+    prm[K.P_W] = cfg.omega_s
+    prm[K.P_R] = cfg.r_phi
+    prm[K.P_PSI] = cfg.psi
+    prm[K.P_TOL] = cfg.tol
+    j = cfg.inertia_ratio
+    prm[K.P_INERTIA] = 1.0 if math.isinf(j) else j / (1.0 + j)
+    prm[K.P_RHO] = cfg.mu_ratio
+    prm[K.P_TEND] = cfg.t_end
+    prm[K.P_DT] = cfg.traj_dt
+    prm[K.P_T0] = cfg.traj_t0
+    prm[K.P_T1] = min(cfg.traj_t1, cfg.t_end)
+    flg = np.zeros(K.N_FLG, dtype=np.int64)
+    flg[K.F_CONTACT] = int(cfg.contact)
+    flg[K.F_TORSION] = int(cfg.torsion)
+    flg[K.F_CAP] = int(cfg.impulse_cap)
+    flg[K.F_TRAJ] = int(cfg.traj_dt > 0.0)
+    flg[K.F_STROBE] = int(cfg.stroboscopic)
+    flg[K.F_MAXEV] = int(cfg.max_events)
+    return prm, flg
+
+
+def initial_state(cfg: EngineConfig, init: InitialState) -> tuple[np.ndarray, np.ndarray]:
+    """Kernel state arrays for an initial condition (validated by the caller)."""
+    w = cfg.omega_s
+    st = np.zeros(K.N_ST)
+    ist = np.zeros(K.N_IST, dtype=np.int64)
+    x = w * init.t
+    n0 = math.floor(x / K.TWO_PI)
+    th0 = x - n0 * K.TWO_PI
+    if th0 >= K.TWO_PI:
+        th0 -= K.TWO_PI
+        n0 += 1
+    ist[K.I_N] = n0
+    st[K.S_TH] = th0
+    st[K.S_OM] = init.omega
+    us, vs = math.sin(th0), w * math.cos(th0)
+    load = 1.0 - w * w * us
+    in_contact = init.u is None or (init.u <= us and init.v == vs)
+    if in_contact and load >= 0.0 and cfg.contact:
+        ist[K.I_MODE] = K.MODE_CONTACT
+        if cfg.torsion:
+            sig = K._contact_sigma(cfg.r_phi, w, cfg.psi, cfg.mu_ratio, init.omega, th0)
+            ist[K.I_SIG] = sig
+            ist[K.I_GUARD] = (
+                1
+                if sig != 0
+                and abs(cfg.r_phi * init.omega - w * math.cos(th0 + cfg.psi)) < 1e-14 * (1 + w)
+                else 0
+            )
+            if sig == 0:
+                st[K.S_OM] = w * math.cos(th0 + cfg.psi) / cfg.r_phi
+    else:
+        ist[K.I_MODE] = K.MODE_FLIGHT
+        u = us if init.u is None else max(init.u, us)
+        v = vs if init.v is None else init.v
+        st[K.S_U] = u
+        st[K.S_V] = v
+        st[K.S_TA] = 0.0
+        st[K.S_GA] = u - us
+    if cfg.traj_dt > 0.0:
+        ist[K.I_JTRAJ] = max(0, math.ceil((init.t - cfg.traj_t0) / cfg.traj_dt - 1e-9))
+    ist[K.I_KSTROBE] = n0 if th0 == 0.0 else n0 + 1
+    return st, ist
+
+
+def iterate(
+    cfg: EngineConfig,
+    init: InitialState | None = None,
+    chunk_events: int = 1 << 16,
+    chunk_samples: int = 1 << 16,
+) -> Iterator[Chunk]:
+    """Run the simulation, yielding one :class:`Chunk` per kernel call.
+
+    The generator's return value (``StopIteration.value``) is ``(status_code, final_state)``.
+
+    Raises
+    ------
+    EngineError
+        When the dynamics need an effect the configuration left out, or an event search fails.
+    """
+    init = init or InitialState()
+    prm, flg = _pack(cfg)
+    st, ist = initial_state(cfg, init)
+    ev = np.empty((chunk_events, K.EV_COLS))
+    evk = np.empty(chunk_events, dtype=np.int8)
+    traj = np.empty((chunk_samples if cfg.traj_dt > 0 else 0, K.TRAJ_COLS))
+    strobe = np.empty((chunk_samples if cfg.stroboscopic else 0, K.STROBE_COLS))
+    info = np.zeros(5, dtype=np.int64)
+    w = cfg.omega_s
+    while True:
+        K.run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info)
+        status, n_ev, n_tr, n_sb, need = (int(x) for x in info)
+        t_now = (ist[K.I_N] * K.TWO_PI + st[K.S_TH]) / w
+        if n_ev or n_tr or n_sb:
+            yield Chunk(
+                t=ev[:n_ev, 0].copy(),
+                phase=ev[:n_ev, 1].copy(),
+                v_rel=ev[:n_ev, 2].copy(),
+                omega_after=ev[:n_ev, 3].copy(),
+                u=ev[:n_ev, 4].copy(),
+                omega_before=ev[:n_ev, 5].copy(),
+                kind=evk[:n_ev].copy(),
+                traj=traj[:n_tr].copy(),
+                strobe=strobe[:n_sb].copy(),
+                n_events_total=int(ist[K.I_NEV]),
+                t_now=t_now,
+            )
+        if status == K.ST_NEED_TRAJ:
+            traj = np.empty((max(need, chunk_samples), K.TRAJ_COLS))
+            continue
+        if status == K.ST_NEED_STROBE:
+            strobe = np.empty((max(need, chunk_samples), K.STROBE_COLS))
+            continue
+        if status == K.ST_CHUNK:
+            continue
+        if status in (K.ST_NEED_CONTACT, K.ST_NUMERICAL):
+            raise EngineError(
+                f"{STATUS_TEXT[status]} (at t = {t_now:.9g}, after {ist[K.I_NEV]} events)", status
+            )
+        final = {
+            "t": t_now,
+            "u": float(st[K.S_U]),
+            "v": float(st[K.S_V]),
+            "omega": float(st[K.S_OM]),
+            "in_contact": float(ist[K.I_MODE] == K.MODE_CONTACT),
+        }
+        return status, final
+
+
+def simulate_arrays(
+    cfg: EngineConfig,
+    init: InitialState | None = None,
+    on_chunk: Callable[[Chunk], None] | None = None,
+) -> RunResult:
+    """Run to the end and collect events and samples in memory.
+
+    Raises
+    ------
+    EngineError
+        As :func:`iterate`.
+    """
+    chunks: list[Chunk] = []
+    gen = iterate(cfg, init)
+    while True:
+        try:
+            c = next(gen)
+        except StopIteration as stop:
+            status, final = stop.value
+            break
+        chunks.append(c)
+        if on_chunk is not None:
+            on_chunk(c)
+
+    def cat(name: str, dtype=float) -> np.ndarray:
+        parts = [getattr(c, name) for c in chunks]
+        return np.concatenate(parts) if parts else np.empty(0, dtype=dtype)
+
+    events = {
+        "t": cat("t"),
+        "phase": cat("phase"),
+        "v_rel": cat("v_rel"),
+        "omega_after": cat("omega_after"),
+        "u": cat("u"),
+        "omega_before": cat("omega_before"),
+        "kind": cat("kind", np.int8),
+    }
+    traj = np.concatenate([c.traj for c in chunks]) if chunks else np.empty((0, K.TRAJ_COLS))
+    strobe = np.concatenate([c.strobe for c in chunks]) if chunks else np.empty((0, K.STROBE_COLS))
+    # the final state of a 'rest' run is the contact state at the last event
+    return RunResult(events, traj, strobe, STATUS_TEXT[status], status, final)

@@ -1,0 +1,130 @@
+"""The nonsmooth laws of the bouncing disk, as small compiled functions (MODEL.md "Events").
+
+Nondimensional throughout (MODEL.md "Variables and scales"): stator ``u_s = sin φ``,
+``v_s = w cos φ``, ``a_s = −w² sin φ``, twist rate ``Ω_s = w cos(φ + ψ)``, twist acceleration
+``α_s = −w² sin(φ + ψ)``; normal load in contact ``N = 1 + a_s``; slip ``s = RΩ − Ω_s``.
+"""
+
+from math import asin, cos, pi, sin, sqrt
+
+from numba import njit
+
+
+@njit(cache=True, inline="always")
+def normal_load(w, phase):
+    """Normal load in contact ``N = 1 − w² sin φ`` (MODEL.md; paper eq. 17 corrected)."""
+    return 1.0 - w * w * sin(phase)
+
+
+@njit(cache=True, inline="always")
+def slip(r, w, psi, omega, phase):
+    """Slip ``s = RΩ − Ω_s`` with ``Ω_s = w cos(φ + ψ)`` (MODEL.md; paper eq. 19)."""
+    return r * omega - w * cos(phase + psi)
+
+
+@njit(cache=True)
+def impact_law(e, w, r, psi, phase, v_minus, omega, torsion, cap, inertia_factor):
+    """Apply restitution and impulsive friction at an impact (paper eqs. 4, 8, 18, 19).
+
+    Parameters
+    ----------
+    e, w, r, psi : float
+        Restitution, stator frequency, angular amplitude ratio ``R``, torsional phase.
+    phase : float
+        Stator phase at impact.
+    v_minus, omega : float
+        Rotor axial velocity and angular velocity just before impact.
+    torsion, cap : bool
+        Whether angular impulses are applied, and whether ``H = min(H_a, H_p)`` (else ``H_a``).
+    inertia_factor : float
+        ``J_s/(J_s + J_r)`` for the finite-stator-inertia effect (eq. 11), 1 for eq. 19.
+
+    Returns
+    -------
+    v_rel, v_plus, omega_plus : float
+        Relative impact velocity ``v_s − v⁻ >= 0``, ``v⁺ = v_s + e(v_s − v⁻)`` and
+        ``Ω⁺ = Ω⁻ − H sgn(s⁻)`` with ``H_a = (1 + e) v_rel`` and ``H_p = |s⁻|/R``.
+    """
+    vs = w * cos(phase)
+    v_rel = vs - v_minus
+    if v_rel < 0.0:
+        v_rel = 0.0
+    v_plus = vs + e * v_rel
+    omega_plus = omega
+    if torsion:
+        s = r * omega - w * cos(phase + psi)
+        if s != 0.0:
+            h_a = (1.0 + e) * v_rel
+            h_p = inertia_factor * abs(s) / r
+            if cap and h_p <= h_a:
+                if inertia_factor == 1.0:
+                    # the slip is brought exactly to zero
+                    omega_plus = w * cos(phase + psi) / r
+                else:
+                    omega_plus = omega - h_p * (1.0 if s > 0.0 else -1.0)
+            else:
+                omega_plus = omega - h_a * (1.0 if s > 0.0 else -1.0)
+    return v_rel, v_plus, omega_plus
+
+
+@njit(cache=True)
+def chatter_time(e, w, phase, w_rel, tol):
+    """Time to the accumulation point of a complete chattering sequence, or -1.
+
+    After an impact leaving relative velocity ``W = e v_rel``, bounces on a locally constant
+    effective gravity ``N0`` take ``2 e^k W / N0`` and accumulate after
+    ``T = 2 W / (N0 (1 − e))`` (MODEL.md "Chattering"; Nordmark & Piiroinen 2009). The jump is
+    taken only when the neglected variation of ``N`` changes the accumulation time by less than
+    ``tol``: ``(|N'| + w⁴T) T² / (N0 (1 − e²)) <= tol``, and ``N`` stays positive over ``T``.
+    """
+    if e >= 1.0 or w_rel <= 0.0:
+        return -1.0
+    n0 = 1.0 - w * w * sin(phase)
+    if n0 <= 0.0:
+        return -1.0
+    t = 2.0 * w_rel / (n0 * (1.0 - e))
+    n1 = abs(w * w * w * cos(phase))
+    w4 = w * w * w * w
+    if (n1 + w4 * t) * t * t > tol * n0 * (1.0 - e * e):
+        return -1.0
+    if n0 - n1 * t - 0.5 * w4 * t * t <= 0.0:
+        return -1.0
+    return t
+
+
+@njit(cache=True)
+def separation_phase(w):
+    """Phase ``θ_sep = arcsin(1/w²)`` at which contact ends (``N = 0``, decreasing); -1 if ``w <= 1``."""
+    if w <= 1.0:
+        return -1.0
+    return asin(1.0 / (w * w))
+
+
+@njit(cache=True)
+def separation_window(w):
+    """Flight through the window where ``N < 0`` right after a separation.
+
+    From the separation point (``u = 1/w²``, ``v = w cos θ_sep``) the gap is convex while
+    ``N < 0``, i.e. for phases in ``(θ_sep, π − θ_sep)``; so it stays positive there and the first
+    impact search can start at the window's end. Returns the window's duration ``T``, the gap
+    ``g = T (v_sep − T/2)`` and the rotor velocity ``v_sep − T`` at its end.
+    """
+    ts = asin(1.0 / (w * w))
+    # cos θ_sep computed without cancellation from (w² − 1)(w² + 1)/w⁴
+    wm1 = w - 1.0
+    c = sqrt(wm1 * (w + 1.0) * (w * w + 1.0)) / (w * w)
+    t = (pi - 2.0 * ts) / w
+    v_sep = w * c
+    g = t * (v_sep - 0.5 * t)
+    return t, g, v_sep - t
+
+
+@njit(cache=True, inline="always")
+def slip_omega(omega0, sigma, w, th0, tau):
+    """Rotor angular velocity while slipping, eq. (23) corrected.
+
+    ``Ω(τ) = Ω0 − σ [τ + (v_s(τ) − v_s(0))]`` with ``v_s = w cos φ``, written in difference form.
+    """
+    half = 0.5 * w * tau
+    dv = -2.0 * w * sin(th0 + half) * sin(half)
+    return omega0 - sigma * (tau + dv)

@@ -1,0 +1,329 @@
+"""Observables of a run: periodicity, Lyapunov exponent, rotor speed trend, regime.
+
+All functions take plain numpy arrays of the event table (``t``, ``phase``, ``v_rel``,
+``omega_after``, ``kind``; see :mod:`bouncedisk.engine`) so they serve any solver.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .engine.kernel import KIND_CHATTER, KIND_IMPACT
+
+TWO_PI = 2.0 * math.pi
+
+
+def circular_distance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance between phases on the circle, in ``[0, π]``."""
+    d = np.mod(np.asarray(a) - np.asarray(b), TWO_PI)
+    return np.minimum(d, TWO_PI - d)
+
+
+@dataclass(frozen=True)
+class Periodicity:
+    """A periodic impact sequence: ``p`` impacts every ``q`` stator periods."""
+
+    p: int
+    q: int
+    phases: np.ndarray  # the p impact phases of one cycle, sorted
+
+    @property
+    def label(self) -> str:
+        return f"period-{self.p}" if self.p == self.q else f"period-{self.p}/{self.q}"
+
+
+def find_period(
+    t: np.ndarray,
+    phase: np.ndarray,
+    v_rel: np.ndarray,
+    kind: np.ndarray,
+    omega_s: float,
+    max_period: int = 16,
+    tail: int = 200,
+    tol: float = 1e-6,
+) -> Periodicity | None:
+    """Smallest ``p <= max_period`` with ``(φ, V)_{k+p} = (φ, V)_k`` over the last ``tail`` impacts.
+
+    Parameters
+    ----------
+    t, phase, v_rel, kind : ndarray
+        Event table of a run (after transients).
+    omega_s : float
+        Stator frequency, to count stator periods per cycle.
+    tol : float
+        Tolerance on phase (radians) and relative velocity.
+
+    Returns
+    -------
+    Periodicity or None
+        ``None`` when no period up to ``max_period`` fits, or the tail has chattering rows.
+    """
+    n = min(tail, len(t))
+    if n < 2 * max_period + 2:
+        n = len(t)
+    if n < 4:
+        return None
+    sl = slice(len(t) - n, len(t))
+    ph, vr, tt, kd = phase[sl], v_rel[sl], t[sl], kind[sl]
+    for p in range(1, max_period + 1):
+        if n <= 2 * p:
+            break
+        dph = circular_distance(ph[p:], ph[:-p])
+        dv = np.abs(vr[p:] - vr[:-p])
+        same_kind = np.all(kd[p:] == kd[:-p])
+        if same_kind and np.all(dph < tol) and np.all(dv < tol * (1.0 + np.abs(vr[:-p]))):
+            q = int(round((tt[-1] - tt[-1 - p]) * omega_s / TWO_PI))
+            return Periodicity(p=p, q=q, phases=np.sort(ph[-p:]))
+    return None
+
+
+@dataclass(frozen=True)
+class ImpactJacobian:
+    """Jacobian of the impact map ``(t_k, v_k) → (t_{k+1}, v_{k+1})`` for one free flight."""
+
+    matrix: np.ndarray
+
+    @property
+    def trace(self) -> float:
+        return float(np.trace(self.matrix))
+
+    @property
+    def det(self) -> float:
+        return float(np.linalg.det(self.matrix))
+
+
+def impact_jacobians(
+    t: np.ndarray, phase: np.ndarray, v_rel: np.ndarray, kind: np.ndarray, e: float, omega_s: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Jacobians of the exact impact map for consecutive free-flight impacts.
+
+    With ``v_k = v_s(t_k) + e V_k`` the rotor velocity after impact ``k``, flight time ``Δ`` and
+    relative impact velocity ``V_{k+1}``, differentiating the first-root condition (eq. 20) and
+    the restitution law (eq. 4) gives::
+
+        ∂t'/∂t = (v_s(t_k) − v_k + Δ)/V_{k+1},   ∂t'/∂v = Δ/V_{k+1},
+        c = e − (1 + e) w² sin φ_{k+1},
+        ∂v'/∂t = c ∂t'/∂t − e,                   ∂v'/∂v = c ∂t'/∂v − e.
+
+    At a period-1 fixed point this gives ``det J = e²`` and
+    ``trace J = 1 + e² − (1 + e)² Γ sin φ`` (MODEL.md "Impact map Jacobian").
+
+    Returns
+    -------
+    jac : ndarray, shape (m, 2, 2)
+        One matrix per valid pair.
+    index : ndarray, shape (m,)
+        Index ``k`` of the first impact of each pair. A pair is valid when both rows are impacts
+        and the free flight from ``k`` lands at ``k + 1`` (no contact in between).
+    """
+    w = omega_s
+    if len(t) < 2:
+        return np.empty((0, 2, 2)), np.empty(0, dtype=int)
+    vs = w * np.cos(phase)
+    v_post = vs + e * v_rel
+    dt = np.diff(t)
+    u0 = np.sin(phase[:-1])
+    landing = u0 + v_post[:-1] * dt - 0.5 * dt**2
+    ok = (
+        (kind[:-1] == KIND_IMPACT)
+        & (kind[1:] == KIND_IMPACT)
+        & (np.abs(landing - np.sin(phase[1:])) < 1e-7 * (1.0 + dt**2))
+        & (v_rel[1:] > 0.0)
+    )
+    idx = np.nonzero(ok)[0]
+    V = v_rel[idx + 1]
+    d = dt[idx]
+    a = (vs[idx] - v_post[idx] + d) / V
+    b = d / V
+    c = e - (1.0 + e) * w * w * np.sin(phase[idx + 1])
+    jac = np.empty((len(idx), 2, 2))
+    jac[:, 0, 0] = a
+    jac[:, 0, 1] = b
+    jac[:, 1, 0] = c * a - e
+    jac[:, 1, 1] = c * b - e
+    return jac, idx
+
+
+def lyapunov_exponent(
+    t: np.ndarray,
+    phase: np.ndarray,
+    v_rel: np.ndarray,
+    kind: np.ndarray,
+    e: float,
+    omega_s: float,
+    skip: int = 100,
+) -> tuple[float, float]:
+    """Largest Lyapunov exponent of the impact map (Benettin's method with the exact Jacobian).
+
+    Contact and chattering episodes collapse all perturbations; they reset the tangent vector
+    and are left out of the average, so the value is the mean expansion rate over free flights.
+
+    Returns
+    -------
+    per_impact, per_time : float
+        Exponent per impact and per unit nondimensional time (``nan`` if too few free flights).
+    """
+    jac, idx = impact_jacobians(t, phase, v_rel, kind, e, omega_s)
+    if len(idx) <= skip + 10:
+        return math.nan, math.nan
+    vec = np.array([1.0, 1.0]) / math.sqrt(2.0)
+    total = 0.0
+    count = 0
+    elapsed = 0.0
+    prev = -2
+    for j in range(len(idx)):
+        k = idx[j]
+        if k != prev + 1:
+            vec = np.array([1.0, 1.0]) / math.sqrt(2.0)
+        prev = k
+        vec = jac[j] @ vec
+        norm = math.hypot(vec[0], vec[1])
+        if norm == 0.0 or not math.isfinite(norm):
+            vec = np.array([1.0, 1.0]) / math.sqrt(2.0)
+            continue
+        vec /= norm
+        if j >= skip:
+            total += math.log(norm)
+            count += 1
+            elapsed += t[k + 1] - t[k]
+    if count == 0:
+        return math.nan, math.nan
+    return total / count, total / elapsed
+
+
+def mean_rotor_speed(t: np.ndarray, omega_after: np.ndarray, t_from: float = 0.0) -> float:
+    """Time average of the rotor angular velocity from the events, ``Σ Ω_k Δt_k / Σ Δt_k``.
+
+    ``Ω`` is constant in flight (MODEL.md "Flight"), so this is exact for runs without contact
+    and a first-order approximation of the contact segments otherwise.
+    """
+    sel = t[:-1] >= t_from
+    dt = np.diff(t)[sel]
+    if dt.sum() <= 0:
+        return math.nan
+    return float(np.sum(omega_after[:-1][sel] * dt) / dt.sum())
+
+
+@dataclass(frozen=True)
+class FirstOrderTrend:
+    """``Ω(t) ≈ Ω∞ (1 − exp(−(t − t0)/τ)) + Ω0 exp(−(t − t0)/τ)`` fitted to a speed record."""
+
+    steady: float
+    tau: float
+    omega0: float
+    t0: float
+    ripple_rms: float
+
+    def __call__(self, t: np.ndarray) -> np.ndarray:
+        x = np.exp(-(np.asarray(t) - self.t0) / self.tau)
+        return self.steady * (1.0 - x) + self.omega0 * x
+
+
+def first_order_trend(t: np.ndarray, omega: np.ndarray) -> FirstOrderTrend:
+    """Least-squares first-order response (steady value and time constant) through ``(t, Ω)``.
+
+    The ripple is the RMS of the residual about the trend.
+    """
+    from scipy.optimize import curve_fit
+
+    t = np.asarray(t, float)
+    y = np.asarray(omega, float)
+    t0 = float(t[0])
+    span = float(t[-1] - t0) or 1.0
+    tail = y[int(0.8 * len(y)) :]
+    steady0 = float(np.mean(tail)) if len(tail) else float(y[-1])
+    # initial time constant: time to reach 63 % of the steady value
+    target = y[0] + 0.632 * (steady0 - y[0])
+    cross = np.nonzero((y - target) * np.sign(steady0 - y[0] or 1.0) >= 0)[0]
+    tau0 = float(t[cross[0]] - t0) if len(cross) and t[cross[0]] > t0 else 0.2 * span
+    tau0 = max(tau0, 1e-6 * span)
+
+    def model(tt, s, tau, o0):
+        x = np.exp(-(tt - t0) / tau)
+        return s * (1.0 - x) + o0 * x
+
+    try:
+        popt, _ = curve_fit(
+            model,
+            t,
+            y,
+            p0=[steady0, tau0, float(y[0])],
+            bounds=([-np.inf, 1e-9 * span, -np.inf], [np.inf, 1e3 * span, np.inf]),
+            maxfev=20000,
+        )
+    except (RuntimeError, ValueError):
+        popt = np.array([steady0, tau0, float(y[0])])
+    s, tau, o0 = (float(x) for x in popt)
+    resid = y - model(t, s, tau, o0)
+    return FirstOrderTrend(steady=s, tau=tau, omega0=o0, t0=t0, ripple_rms=float(np.std(resid)))
+
+
+@dataclass(frozen=True)
+class Regime:
+    """Dynamical regime of a run's tail."""
+
+    name: str  # "period-p[/q]", "chaotic", "chattering", "rest", "irregular"
+    period: Periodicity | None
+    lyapunov: float  # per impact (nan when undefined)
+    chatter_fraction: float
+
+    @property
+    def code(self) -> int:
+        """Integer code for maps: period p -> p (1..16), chaotic 20, chattering 30, rest 40,
+        irregular (no period, exponent <= 0) 50."""
+        if self.period is not None:
+            return self.period.p
+        return {"chaotic": 20, "chattering": 30, "rest": 40}.get(self.name, 50)
+
+
+def classify(
+    t: np.ndarray,
+    phase: np.ndarray,
+    v_rel: np.ndarray,
+    kind: np.ndarray,
+    e: float,
+    omega_s: float,
+    at_rest: bool = False,
+    max_period: int = 16,
+    tail: int = 400,
+) -> Regime:
+    """Classify the tail of a run: periodic, chaotic (positive exponent), chattering or at rest."""
+    if at_rest:
+        return Regime("rest", None, math.nan, 1.0)
+    n = min(tail, len(t))
+    sl = slice(len(t) - n, len(t))
+    chat = float(np.mean(kind[sl] == KIND_CHATTER)) if n else 0.0
+    per = find_period(t, phase, v_rel, kind, omega_s, max_period=max_period, tail=n)
+    lam, _ = lyapunov_exponent(t, phase, v_rel, kind, e, omega_s, skip=min(100, len(t) // 4))
+    if per is not None:
+        name = per.label if chat == 0.0 else "chattering"
+        return Regime(name, per, lam, chat)
+    if math.isfinite(lam) and lam > 0.0:
+        return Regime("chaotic", None, lam, chat)
+    if chat > 0.0:
+        return Regime("chattering", None, lam, chat)
+    return Regime("irregular", None, lam, chat)
+
+
+def period_n_threshold(n: int, e: float) -> float:
+    """``Γ_n = nπ(1 − e)/(1 + e)``: smallest ``Γ`` with a period-n orbit (MODEL.md)."""
+    return n * math.pi * (1.0 - e) / (1.0 + e)
+
+
+def period_doubling_threshold(n: int, e: float) -> float:
+    """``Γ = sqrt(Γ_n² + (2(1 + e²)/(1 + e)²)²)``: the period-n orbit doubles (MODEL.md)."""
+    g = period_n_threshold(n, e)
+    return math.sqrt(g * g + (2.0 * (1.0 + e * e) / (1.0 + e) ** 2) ** 2)
+
+
+def period_n_fixed_point(n: int, e: float, omega_s: float) -> tuple[float, float]:
+    """Stable period-n orbit: impact phase ``φ`` (``cos φ = Γ_n/Γ``, ``sin φ > 0``) and the rotor
+    velocity just after impact ``v⁺ = T/2`` with ``T = 2πn/w``."""
+    g = omega_s**2
+    c = period_n_threshold(n, e) / g
+    if c > 1.0:
+        raise ValueError(f"no period-{n} orbit below Γ_{n} = {period_n_threshold(n, e):.6g}")
+    return math.acos(c), math.pi * n / omega_s

@@ -1,0 +1,217 @@
+"""Model parameters: the nondimensional set and the physical set it comes from (MODEL.md).
+
+Nondimensional (paper §2.3, eqs. 13–15): ``e`` restitution, ``omega_s = ω t_c`` stator
+frequency (peak stator acceleration ``Γ = omega_s²`` in units of g), ``r_phi = R_φ`` angular
+amplitude ratio, ``psi`` torsional phase. Physical: ``t_c = sqrt(U0 / g_eff)`` with
+``g_eff = g + F_preload / m_r``; ``r_eff = 2 r_c / 3`` (eq. 2); ``R_d = r_eff Φ0 / U0``;
+``R_φ = (r_eff / r_g)² μ / R_d`` (eq. 15); rotor angular velocity in rad/s is ``Ω R_φ Φ0 / t_c``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+from .errors import InputError
+
+
+def _finite(source: str, name: str, value: object) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise InputError(source, name, f"must be a number, got {value!r}")
+    x = float(value)
+    if not math.isfinite(x):
+        raise InputError(source, name, f"must be finite, got {value!r}")
+    return x
+
+
+@dataclass(frozen=True)
+class Parameters:
+    """Nondimensional model parameters (MODEL.md "Variables and scales").
+
+    Parameters
+    ----------
+    e : float
+        Coefficient of restitution, ``0 <= e <= 1`` (eq. 3).
+    omega_s : float
+        Stator frequency ``ω t_c > 0``.
+    r_phi : float
+        Angular amplitude ratio ``R_φ > 0`` (eq. 15).
+    psi : float
+        Phase of the torsional vibration relative to the axial one (eq. 1), radians.
+    inertia_ratio : float
+        ``J_s / J_r > 0`` for the ``stator_inertia`` effect (eq. 11); ``inf`` means eq. 19.
+    mu_ratio : float
+        ``μ_static / μ_kinetic >= 1`` for the ``kinetic_static`` effect.
+    """
+
+    e: float
+    omega_s: float
+    r_phi: float = 0.01
+    psi: float = 0.0
+    inertia_ratio: float = math.inf
+    mu_ratio: float = 1.0
+
+    @classmethod
+    def from_mapping(cls, data: dict, source: str = "", prefix: str = "parameters") -> Parameters:
+        """Validate a mapping (e.g. a scene's ``parameters:``) into :class:`Parameters`."""
+        known = {"e", "omega_s", "r_phi", "psi", "inertia_ratio", "mu_ratio"}
+        for key in data:
+            if key not in known:
+                raise InputError(
+                    source,
+                    f"{prefix}.{key}",
+                    f"unknown parameter (known: {', '.join(sorted(known))})",
+                )
+        for key in ("e", "omega_s"):
+            if key not in data:
+                raise InputError(source, f"{prefix}.{key}", "is required")
+        vals = {
+            k: _finite(source, f"{prefix}.{k}", v) for k, v in data.items() if k != "inertia_ratio"
+        }
+        if "inertia_ratio" in data:
+            j = data["inertia_ratio"]
+            if isinstance(j, str) and j.strip().lower() in ("inf", "infinity", ".inf"):
+                vals["inertia_ratio"] = math.inf
+            else:
+                vals["inertia_ratio"] = _finite(source, f"{prefix}.inertia_ratio", j)
+        p = cls(**vals)
+        p.validate(source, prefix)
+        return p
+
+    def validate(self, source: str = "", prefix: str = "parameters") -> None:
+        """Raise :class:`InputError` for out-of-range values."""
+        if not 0.0 <= self.e <= 1.0:
+            raise InputError(source, f"{prefix}.e", f"must be in [0, 1], got {self.e}")
+        if not self.omega_s > 0.0:
+            raise InputError(source, f"{prefix}.omega_s", f"must be > 0, got {self.omega_s}")
+        if self.omega_s > 1e4:
+            raise InputError(source, f"{prefix}.omega_s", f"must be <= 1e4, got {self.omega_s}")
+        if not self.r_phi > 0.0:
+            raise InputError(source, f"{prefix}.r_phi", f"must be > 0, got {self.r_phi}")
+        if not self.inertia_ratio > 0.0:
+            raise InputError(
+                source, f"{prefix}.inertia_ratio", f"must be > 0, got {self.inertia_ratio}"
+            )
+        if not self.mu_ratio >= 1.0:
+            raise InputError(source, f"{prefix}.mu_ratio", f"must be >= 1, got {self.mu_ratio}")
+        if abs(self.psi) > 1e3:
+            raise InputError(
+                source, f"{prefix}.psi", f"must be an angle in radians, got {self.psi}"
+            )
+
+    @property
+    def gamma(self) -> float:
+        """Peak stator acceleration in units of g, ``Γ = omega_s²``."""
+        return self.omega_s**2
+
+
+@dataclass(frozen=True)
+class Scales:
+    """Conversion from nondimensional to SI units.
+
+    ``time_s = t * t_c``; ``omega_rad_s = Ω * omega_scale`` with ``omega_scale = R_φ Φ0 / t_c``;
+    ``length_m = u * U0``.
+    """
+
+    t_c: float
+    omega_scale: float
+    length: float
+    g_eff: float
+
+
+@dataclass(frozen=True)
+class PhysicalParameters:
+    """Dimensional description of a motor (SI units; MODEL.md "Physical conversion").
+
+    Parameters
+    ----------
+    m_r : float
+        Rotor mass [kg].
+    r_g : float
+        Rotor radius of gyration [m] (``J_r = m_r r_g²``).
+    r_c : float
+        Contact radius [m] (``r_eff = 2 r_c / 3``, eq. 2).
+    mu : float
+        Kinetic friction coefficient.
+    e : float
+        Coefficient of restitution.
+    g : float
+        Gravitational acceleration [m/s²].
+    f : float
+        Stator drive frequency [Hz].
+    U0 : float
+        Axial vibration amplitude [m].
+    Phi0 : float
+        Torsional vibration amplitude [rad].
+    psi : float
+        Torsional phase [rad].
+    F_preload : float
+        Constant spring preload [N], acting as extra gravity.
+    """
+
+    m_r: float
+    r_g: float
+    r_c: float
+    mu: float
+    e: float
+    g: float
+    f: float
+    U0: float
+    Phi0: float
+    psi: float = 0.0
+    F_preload: float = 0.0
+
+    @classmethod
+    def from_mapping(
+        cls, data: dict, source: str = "", prefix: str = "physical"
+    ) -> PhysicalParameters:
+        """Validate a mapping (a scene's ``physical:``) into :class:`PhysicalParameters`."""
+        names = [f for f in cls.__dataclass_fields__]
+        for key in data:
+            if key not in names:
+                raise InputError(
+                    source, f"{prefix}.{key}", f"unknown field (known: {', '.join(names)})"
+                )
+        required = ["m_r", "r_g", "r_c", "mu", "e", "g", "f", "U0", "Phi0"]
+        for key in required:
+            if key not in data:
+                raise InputError(source, f"{prefix}.{key}", "is required")
+        vals = {k: _finite(source, f"{prefix}.{k}", v) for k, v in data.items()}
+        p = cls(**vals)
+        for key in ("m_r", "r_g", "r_c", "mu", "g", "f", "U0", "Phi0"):
+            if not getattr(p, key) > 0.0:
+                raise InputError(source, f"{prefix}.{key}", f"must be > 0, got {getattr(p, key)}")
+        if not 0.0 <= p.e <= 1.0:
+            raise InputError(source, f"{prefix}.e", f"must be in [0, 1], got {p.e}")
+        if p.F_preload < 0.0:
+            raise InputError(source, f"{prefix}.F_preload", f"must be >= 0, got {p.F_preload}")
+        return p
+
+    def scales(self) -> Scales:
+        """Time, angular-velocity and length scales (paper eq. 14)."""
+        g_eff = self.g + self.F_preload / self.m_r
+        t_c = math.sqrt(self.U0 / g_eff)
+        return Scales(
+            t_c=t_c, omega_scale=self.r_phi * self.Phi0 / t_c, length=self.U0, g_eff=g_eff
+        )
+
+    @property
+    def r_eff(self) -> float:
+        """Effective friction radius ``2 r_c / 3`` (eq. 2)."""
+        return 2.0 * self.r_c / 3.0
+
+    @property
+    def r_phi(self) -> float:
+        """``R_φ = (r_eff / r_g)² μ / R_d`` with ``R_d = r_eff Φ0 / U0`` (eq. 15)."""
+        r_d = self.r_eff * self.Phi0 / self.U0
+        return (self.r_eff / self.r_g) ** 2 * self.mu / r_d
+
+    def to_nondimensional(self) -> Parameters:
+        """The four nondimensional parameters ``(e, omega_s, r_phi, psi)``."""
+        t_c = self.scales().t_c
+        return Parameters(
+            e=self.e, omega_s=2.0 * math.pi * self.f * t_c, r_phi=self.r_phi, psi=self.psi
+        )
+
+    def as_dict(self) -> dict:
+        return asdict(self)

@@ -1,0 +1,75 @@
+"""Provenance of results: run ids, code version and git commit, scene hashes, file hashes."""
+
+from __future__ import annotations
+
+import datetime as _dt
+import functools
+import hashlib
+import platform
+import subprocess
+import uuid
+from pathlib import Path
+
+from . import __version__
+
+REFERENCES = (
+    "Bouncing disk on a vibrating pretwisted beam (seed paper, shared/seed/bouncing-disk-paper.md); "
+    "Nordmark & Piiroinen, Nonlinear Dyn. 58 (2009) for chattering; "
+    "Luck & Mehta, Phys. Rev. E 48, 3988 (1993) for the bouncing ball."
+)
+
+
+@functools.lru_cache(maxsize=1)
+def git_commit() -> str:
+    """Commit of the source tree this package runs from (``unknown`` outside a checkout)."""
+    here = Path(__file__).resolve().parent
+    try:
+        out = subprocess.run(
+            ["git", "rev-parse", "HEAD"], cwd=here, capture_output=True, text=True, timeout=5
+        )
+        if out.returncode != 0:
+            return "unknown"
+        commit = out.stdout.strip()
+        dirty = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=no", "--", "."],
+            cwd=here,
+            capture_output=True,
+            text=True,
+            timeout=5,
+        )
+        return commit + ("-dirty" if dirty.stdout.strip() else "")
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+
+
+def new_run_id(scene_name: str, scene_sha256: str) -> str:
+    """A unique run id ``<scene>-<scene hash 8>-<random 8>``."""
+    return f"{scene_name}-{scene_sha256[:8]}-{uuid.uuid4().hex[:8]}"
+
+
+def utc_now() -> str:
+    """ISO-8601 UTC timestamp."""
+    return _dt.datetime.now(_dt.UTC).replace(microsecond=0).isoformat().replace("+00:00", "Z")
+
+
+def sha256_file(path: str | Path, block: int = 1 << 20) -> str:
+    """SHA-256 of a file's bytes."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        while chunk := fh.read(block):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def base_attrs(title: str) -> dict[str, str]:
+    """CF/ACDD global attributes shared by every file the package writes."""
+    return {
+        "Conventions": "CF-1.10, ACDD-1.3",
+        "title": title,
+        "source": f"bouncedisk {__version__} (python {platform.python_version()})",
+        "references": REFERENCES,
+        "bouncedisk_version": __version__,
+        "git_commit": git_commit(),
+        "created": utc_now(),
+        "date_created": utc_now(),
+    }

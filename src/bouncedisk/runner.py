@@ -1,0 +1,269 @@
+"""Run a scene: engine (or comparator solver) → streamed netCDF with provenance.
+
+This is the one place that joins a validated :class:`~bouncedisk.scene.Scene`, the engine and
+the file writer; the CLI and the pipeline's scripts call :func:`run_scene`.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+from .datasets import SimulationWriter
+from .engine import EngineConfig, EngineError, InitialState, RunResult, iterate, simulate_arrays
+from .engine import kernel as K
+from .engine.driver import STATUS_TEXT, Chunk
+from .errors import InputError
+from .provenance import base_attrs, new_run_id
+from .scene import Scene
+
+
+def engine_config(scene: Scene) -> EngineConfig:
+    """Translate a scene into the engine's configuration."""
+    p = scene.params
+    eff = scene.effects
+    traj = scene.outputs.trajectory
+    t_end = scene.stop.time if scene.stop.time is not None else math.inf
+    return EngineConfig(
+        e=p.e,
+        omega_s=p.omega_s,
+        r_phi=p.r_phi,
+        psi=p.psi,
+        contact="contact" in eff,
+        torsion="torsion" in eff,
+        impulse_cap="impulse_cap" in eff,
+        inertia_ratio=p.inertia_ratio if "stator_inertia" in eff else math.inf,
+        mu_ratio=p.mu_ratio if "kinetic_static" in eff else 1.0,
+        tol=scene.solver.tol,
+        t_end=t_end,
+        max_events=scene.stop.impacts if scene.stop.impacts is not None else scene.stop.max_events,
+        traj_dt=traj.dt if traj else 0.0,
+        traj_t0=traj.t_start if traj and traj.t_start is not None else scene.initial.t,
+        traj_t1=traj.t_stop if traj and traj.t_stop is not None else math.inf,
+        stroboscopic=scene.outputs.stroboscopic,
+    )
+
+
+def initial_state(scene: Scene) -> InitialState:
+    i = scene.initial
+    return InitialState(t=i.t, omega=i.omega, u=i.u, v=i.v)
+
+
+def _chunks(scene: Scene) -> Iterator[Chunk]:
+    """Chunks from the scene's solver (the exact engine or a comparator)."""
+    if scene.solver.method == "exact":
+        return iterate(engine_config(scene), initial_state(scene))
+    from .solvers import iterate_comparator
+
+    return iterate_comparator(scene)
+
+
+def _status_text(scene: Scene, code: int) -> str:
+    if code == K.ST_EVENTS and scene.stop.kind == "time":
+        return f"cap: stopped at the safety cap stop.max_events = {scene.stop.max_events}"
+    return STATUS_TEXT[code]
+
+
+class Progress:
+    """Progress on stderr for runs longer than ``delay`` seconds (a bar on a terminal)."""
+
+    def __init__(
+        self,
+        label: str,
+        total_events: int | None,
+        t_end: float | None,
+        t_start: float,
+        delay: float = 2.0,
+        stream=None,
+    ):
+        self.label = label
+        self.total_events = total_events
+        self.t_end = t_end
+        self.t_start = t_start
+        self.delay = delay
+        self.stream = stream or sys.stderr
+        self.start = time.monotonic()
+        self.last = 0.0
+        self.shown = False
+        self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
+
+    def fraction(self, events: int, t_now: float) -> float:
+        if self.total_events:
+            return min(1.0, events / self.total_events)
+        if self.t_end and math.isfinite(self.t_end) and self.t_end > self.t_start:
+            return min(1.0, (t_now - self.t_start) / (self.t_end - self.t_start))
+        return math.nan
+
+    def update(self, events: int, t_now: float) -> None:
+        now = time.monotonic()
+        elapsed = now - self.start
+        if elapsed < self.delay or now - self.last < (0.5 if self.tty else 10.0):
+            return
+        self.last = now
+        frac = self.fraction(events, t_now)
+        eta = elapsed * (1 - frac) / frac if frac and frac > 0 and math.isfinite(frac) else math.nan
+        bar = ""
+        if math.isfinite(frac):
+            filled = int(30 * frac)
+            bar = f"[{'#' * filled}{'.' * (30 - filled)}] {100 * frac:5.1f}% "
+        msg = f"{self.label}: {bar}{events:,} events, t = {t_now:.6g}, {elapsed:.0f} s" + (
+            f", ~{eta:.0f} s left" if math.isfinite(eta) else ""
+        )
+        if self.tty:
+            self.stream.write("\r" + msg)
+        else:
+            self.stream.write(msg + "\n")
+        self.stream.flush()
+        self.shown = True
+
+    def close(self) -> None:
+        if self.shown and self.tty:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+@dataclass
+class RunSummary:
+    path: Path
+    run_id: str
+    status: str
+    n_events: int
+    n_impacts: int
+    n_chatter: int
+    wall_time_s: float
+
+
+def scene_attrs(scene: Scene) -> dict:
+    """Global attributes describing a scene (INTERFACES.md)."""
+    p = scene.params
+    i = scene.initial
+    attrs = {
+        "e": p.e,
+        "omega_s": p.omega_s,
+        "r_phi": p.r_phi,
+        "psi": p.psi,
+        "gamma": p.gamma,
+        "effects": ",".join(sorted(scene.effects)),
+        "solver": scene.solver.method,
+        "tol": scene.solver.tol,
+        "scene_name": scene.name,
+        "scene_sha256": scene.sha256,
+        "scene_description": scene.description,
+        "initial_t": i.t,
+        "initial_omega": i.omega,
+        "initial_condition": (
+            "rotor in contact, moving with the stator"
+            if i.u is None
+            else f"rotor in flight at u = {i.u!r}, v = {i.v!r}"
+        ),
+        "stop": (
+            f"impacts = {scene.stop.impacts}"
+            if scene.stop.impacts is not None
+            else f"time = {scene.stop.time!r}"
+        ),
+    }
+    if "stator_inertia" in scene.effects:
+        attrs["inertia_ratio"] = p.inertia_ratio
+    if "kinetic_static" in scene.effects:
+        attrs["mu_ratio"] = p.mu_ratio
+    if scene.solver.step is not None:
+        attrs["step"] = scene.solver.step
+    if scene.physical is not None:
+        sc = scene.physical.scales()
+        attrs.update({"t_c_s": sc.t_c, "omega_scale_rad_s": sc.omega_scale, "U0_m": sc.length})
+        attrs.update({f"physical_{k}": v for k, v in scene.physical.as_dict().items()})
+    return attrs
+
+
+def run_scene(
+    scene: Scene,
+    out: str | Path,
+    progress: bool = True,
+    on_chunk: Callable[[Chunk], None] | None = None,
+    command: str = "",
+) -> RunSummary:
+    """Run ``scene`` and write its netCDF file to ``out`` (atomically).
+
+    Raises
+    ------
+    InputError
+        When the scene leaves out an effect its dynamics need (names ``effects``).
+    EngineError
+        On a numerical failure of the engine.
+    """
+    out = Path(out)
+    torsion = scene.has("torsion")
+    run_id = new_run_id(scene.name, scene.sha256)
+    prog = (
+        Progress(scene.name, scene.stop.impacts, scene.stop.time, scene.initial.t)
+        if progress
+        else None
+    )
+    start = time.perf_counter()
+    gen = _chunks(scene)
+    try:
+        with SimulationWriter(
+            out,
+            torsion=torsion,
+            events=scene.outputs.events,
+            trajectory=scene.outputs.trajectory is not None,
+            strobe=scene.outputs.stroboscopic,
+        ) as writer:
+            while True:
+                try:
+                    c = next(gen)
+                except StopIteration as stop:
+                    code, final = stop.value
+                    break
+                writer.append(c)
+                if on_chunk is not None:
+                    on_chunk(c)
+                if prog:
+                    prog.update(c.n_events_total, c.t_now)
+            wall = time.perf_counter() - start
+            status = _status_text(scene, code)
+            attrs = base_attrs(f"bouncedisk simulation of scene '{scene.name}'")
+            attrs.update(scene_attrs(scene))
+            attrs.update(
+                {
+                    "run_id": run_id,
+                    "wall_time_s": round(wall, 6),
+                    "n_impacts": writer.n_impacts,
+                    "n_chatter": writer.n_chatter,
+                    "n_events": writer.n_events,
+                    "status": status,
+                    "final_t": final["t"],
+                    "final_omega": final["omega"],
+                    "final_in_contact": int(final["in_contact"]),
+                    "history": f"{attrs['created']}: {command or 'bouncedisk.runner.run_scene'}",
+                }
+            )
+            writer.set_attrs(attrs)
+    except EngineError as ex:
+        if ex.code == K.ST_NEED_CONTACT:
+            raise InputError(scene.source, "effects", str(ex)) from None
+        raise
+    finally:
+        if prog:
+            prog.close()
+    return RunSummary(
+        out, run_id, status, writer.n_events, writer.n_impacts, writer.n_chatter, wall
+    )
+
+
+def run_scene_arrays(scene: Scene) -> RunResult:
+    """Run ``scene`` in memory (analysis, sweeps). Raises like :func:`run_scene`."""
+    try:
+        if scene.solver.method == "exact":
+            return simulate_arrays(engine_config(scene), initial_state(scene))
+        from .solvers import simulate_comparator
+
+        return simulate_comparator(scene)
+    except EngineError as ex:
+        if ex.code == K.ST_NEED_CONTACT:
+            raise InputError(scene.source, "effects", str(ex)) from None
+        raise

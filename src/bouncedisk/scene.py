@@ -1,0 +1,396 @@
+"""Scenes: parameters, initial state, effects, stop rule, outputs and solver (INTERFACES.md).
+
+A scene is read from YAML, ``--set key=value`` overrides are applied to the raw mapping, and the
+result is validated field by field; every problem raises :class:`~bouncedisk.errors.InputError`
+naming the file and the dotted field.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from .errors import InputError
+from .params import Parameters, PhysicalParameters, Scales
+
+#: Effects a scene may name (MODEL.md "Optional effects").
+EFFECTS = ("impacts", "contact", "torsion", "impulse_cap", "stator_inertia", "kinetic_static")
+#: Solver methods: the exact engine, and comparators for the accuracy study.
+SOLVERS = ("exact", "rk45", "dop853", "lsoda", "moreau")
+DEFAULT_MAX_EVENTS = 100_000_000
+TOP_KEYS = (
+    "name",
+    "description",
+    "parameters",
+    "physical",
+    "initial",
+    "effects",
+    "stop",
+    "outputs",
+    "solver",
+)
+_NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+
+
+@dataclass(frozen=True)
+class Initial:
+    """Initial condition; ``u is None`` means in contact, moving with the stator (default)."""
+
+    t: float = 0.0
+    omega: float = 0.0
+    u: float | None = None
+    v: float | None = None
+
+
+@dataclass(frozen=True)
+class Stop:
+    """When a run ends: after ``impacts`` events, or at ``time`` (``periods`` is converted).
+
+    ``max_events`` is the safety cap that always applies.
+    """
+
+    impacts: int | None = None
+    time: float | None = None
+    max_events: int = DEFAULT_MAX_EVENTS
+
+    @property
+    def kind(self) -> str:
+        return "impacts" if self.impacts is not None else "time"
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Dense trajectory sampling on ``t_start, t_start + dt, …`` up to ``t_stop``."""
+
+    dt: float
+    t_start: float | None = None
+    t_stop: float | None = None
+
+
+@dataclass(frozen=True)
+class Outputs:
+    events: bool = True
+    trajectory: Trajectory | None = None
+    stroboscopic: bool = False
+
+
+@dataclass(frozen=True)
+class Solver:
+    method: str = "exact"
+    tol: float = 1e-12
+    step: float | None = None  # fixed step of the Moreau–Jean comparator
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene. ``raw`` is the resolved mapping (after overrides) that ``sha256`` hashes."""
+
+    name: str
+    params: Parameters
+    initial: Initial
+    effects: frozenset[str]
+    stop: Stop
+    outputs: Outputs
+    solver: Solver
+    physical: PhysicalParameters | None = None
+    description: str = ""
+    source: str = "<scene>"
+    raw: dict = field(default_factory=dict, compare=False)
+
+    @property
+    def sha256(self) -> str:
+        """Hash of the resolved scene (canonical JSON), so overrides change it."""
+        blob = json.dumps(self.raw, sort_keys=True, default=str).encode()
+        return hashlib.sha256(blob).hexdigest()
+
+    @property
+    def scales(self) -> Scales | None:
+        """SI scales when the scene was given in physical units."""
+        return self.physical.scales() if self.physical else None
+
+    def has(self, effect: str) -> bool:
+        return effect in self.effects
+
+
+# ------------------------------------------------------------------------------------ helpers
+def _num(src: str, name: str, v: Any, *, positive: bool = False, nonneg: bool = False) -> float:
+    if isinstance(v, bool) or not isinstance(v, int | float):
+        raise InputError(src, name, f"must be a number, got {v!r}")
+    x = float(v)
+    if not math.isfinite(x):
+        raise InputError(src, name, f"must be finite, got {v!r}")
+    if positive and not x > 0:
+        raise InputError(src, name, f"must be > 0, got {v!r}")
+    if nonneg and x < 0:
+        raise InputError(src, name, f"must be >= 0, got {v!r}")
+    return x
+
+
+def _int(src: str, name: str, v: Any, *, minimum: int = 1) -> int:
+    if isinstance(v, float) and v.is_integer():
+        v = int(v)
+    if isinstance(v, bool) or not isinstance(v, int):
+        raise InputError(src, name, f"must be a whole number, got {v!r}")
+    if v < minimum:
+        raise InputError(src, name, f"must be >= {minimum}, got {v}")
+    return v
+
+
+def _mapping(src: str, name: str, v: Any, keys: tuple[str, ...]) -> dict:
+    if v is None:
+        return {}
+    if not isinstance(v, dict):
+        raise InputError(src, name, f"must be a mapping, got {type(v).__name__}")
+    for k in v:
+        if k not in keys:
+            raise InputError(src, f"{name}.{k}", f"unknown key (known: {', '.join(keys)})")
+    return v
+
+
+def _bool(src: str, name: str, v: Any) -> bool:
+    if not isinstance(v, bool):
+        raise InputError(src, name, f"must be true or false, got {v!r}")
+    return v
+
+
+def apply_overrides(raw: dict, overrides: list[str], source: str = "--set") -> dict:
+    """Apply ``key.sub=value`` overrides (values parsed as YAML) to a copy of ``raw``."""
+    out = json.loads(json.dumps(raw, default=str)) if raw else {}
+    for item in overrides:
+        if "=" not in item:
+            raise InputError(source, item, "expected KEY=VALUE, e.g. parameters.e=0.6")
+        key, _, text = item.partition("=")
+        key = key.strip()
+        if not key or any(not part for part in key.split(".")):
+            raise InputError(source, item, "expected KEY=VALUE with a dotted key")
+        try:
+            value = yaml.safe_load(text) if text.strip() else None
+        except yaml.YAMLError:
+            raise InputError(source, key, f"cannot parse value {text!r}") from None
+        node = out
+        parts = key.split(".")
+        for part in parts[:-1]:
+            nxt = node.get(part)
+            if nxt is None:
+                nxt = node[part] = {}
+            if not isinstance(nxt, dict):
+                raise InputError(source, key, f"{part!r} is not a mapping")
+            node = nxt
+        node[parts[-1]] = value
+    return out
+
+
+def read_yaml(path: str | Path) -> dict:
+    """Read a YAML mapping, turning every failure into one :class:`InputError` line."""
+    p = Path(path)
+    src = str(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError(src, "", "file not found") from None
+    except IsADirectoryError:
+        raise InputError(src, "", "is a directory, not a scene file") from None
+    except UnicodeDecodeError:
+        raise InputError(src, "", "not a text (UTF-8) file") from None
+    except OSError as ex:
+        raise InputError(src, "", f"cannot read: {ex.strerror}") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as ex:
+        mark = getattr(ex, "problem_mark", None)
+        where = f"line {mark.line + 1}, column {mark.column + 1}" if mark else "YAML"
+        problem = getattr(ex, "problem", None) or "malformed YAML"
+        raise InputError(src, where, f"malformed YAML: {problem}") from None
+    if data is None:
+        raise InputError(src, "", "empty scene file")
+    if not isinstance(data, dict):
+        raise InputError(src, "", f"a scene must be a YAML mapping, got {type(data).__name__}")
+    return data
+
+
+# ------------------------------------------------------------------------------------ parsing
+def _effects(src: str, v: Any) -> frozenset[str]:
+    if v is None:
+        v = ["impacts", "contact"]
+    chosen: dict[str, bool] = {}
+    if isinstance(v, str):
+        v = [x.strip() for x in v.split(",") if x.strip()]
+    if isinstance(v, list):
+        for i, item in enumerate(v):
+            if not isinstance(item, str):
+                raise InputError(src, f"effects[{i}]", f"must be an effect name, got {item!r}")
+            chosen[item] = True
+    elif isinstance(v, dict):
+        for k, on in v.items():
+            chosen[str(k)] = _bool(src, f"effects.{k}", on)
+    else:
+        raise InputError(src, "effects", "must be a list of effect names")
+    for k in chosen:
+        if k not in EFFECTS:
+            raise InputError(src, f"effects.{k}", f"unknown effect (known: {', '.join(EFFECTS)})")
+    if chosen.get("impacts") is False:
+        raise InputError(src, "effects.impacts", "cannot be turned off")
+    on = {k for k, flag in chosen.items() if flag} | {"impacts"}
+    if "torsion" in on and chosen.get("impulse_cap") is not False:
+        on.add("impulse_cap")
+    for dep in ("impulse_cap", "stator_inertia", "kinetic_static"):
+        if dep in on and "torsion" not in on:
+            raise InputError(src, f"effects.{dep}", "needs the 'torsion' effect")
+    if "kinetic_static" in on and "contact" not in on:
+        raise InputError(src, "effects.kinetic_static", "needs the 'contact' effect")
+    return frozenset(on)
+
+
+def scene_from_mapping(raw: dict, source: str = "<scene>") -> Scene:
+    """Validate a raw scene mapping into a :class:`Scene`."""
+    src = source
+    for k in raw:
+        if k not in TOP_KEYS:
+            raise InputError(src, str(k), f"unknown key (known: {', '.join(TOP_KEYS)})")
+    name = raw.get("name", Path(source).stem if source and not source.startswith("<") else "scene")
+    if not isinstance(name, str) or not _NAME_RE.match(name):
+        raise InputError(
+            src, "name", f"must be a simple name (letters, digits, _ . -), got {name!r}"
+        )
+    description = raw.get("description", "")
+    if not isinstance(description, str):
+        raise InputError(src, "description", "must be text")
+
+    physical = None
+    if "parameters" in raw and "physical" in raw:
+        raise InputError(src, "physical", "give either 'parameters' or 'physical', not both")
+    if "physical" in raw:
+        pm = _mapping(
+            src, "physical", raw["physical"], tuple(PhysicalParameters.__dataclass_fields__)
+        )
+        physical = PhysicalParameters.from_mapping(pm, src)
+        params = physical.to_nondimensional()
+        params.validate(src, "physical")
+    elif "parameters" in raw:
+        pm = raw["parameters"]
+        if not isinstance(pm, dict):
+            raise InputError(src, "parameters", "must be a mapping")
+        params = Parameters.from_mapping(pm, src)
+    else:
+        raise InputError(src, "parameters", "is required (or 'physical')")
+
+    effects = _effects(src, raw.get("effects"))
+    if "stator_inertia" in effects and math.isinf(params.inertia_ratio):
+        raise InputError(
+            src, "parameters.inertia_ratio", "is required by the 'stator_inertia' effect"
+        )
+    if (
+        "kinetic_static" in effects
+        and params.mu_ratio == 1.0
+        and "mu_ratio" not in (raw.get("parameters") or {})
+    ):
+        raise InputError(src, "parameters.mu_ratio", "is required by the 'kinetic_static' effect")
+
+    im = _mapping(src, "initial", raw.get("initial"), ("t", "omega", "u", "v"))
+    t0 = _num(src, "initial.t", im.get("t", 0.0))
+    om0 = _num(src, "initial.omega", im.get("omega", 0.0))
+    u0 = im.get("u")
+    v0 = im.get("v")
+    if (u0 is None) != (v0 is None):
+        raise InputError(
+            src, "initial.u" if u0 is None else "initial.v", "give both u and v to start in flight"
+        )
+    if u0 is not None:
+        u0 = _num(src, "initial.u", u0)
+        v0 = _num(src, "initial.v", v0)
+        us = math.sin(params.omega_s * t0)
+        if u0 < us - 1e-12:
+            raise InputError(
+                src, "initial.u", f"must be >= u_s(t) = {us:.12g} (rotor above the stator)"
+            )
+    if abs(t0) > 1e12:
+        raise InputError(src, "initial.t", "must be within ±1e12")
+    initial = Initial(t=t0, omega=om0, u=u0, v=v0)
+
+    sm = _mapping(src, "stop", raw.get("stop"), ("impacts", "time", "periods", "max_events"))
+    given = [k for k in ("impacts", "time", "periods") if sm.get(k) is not None]
+    if len(given) != 1:
+        raise InputError(src, "stop", "give exactly one of impacts, time or periods")
+    max_ev = _int(src, "stop.max_events", sm.get("max_events", DEFAULT_MAX_EVENTS))
+    if given[0] == "impacts":
+        n = _int(src, "stop.impacts", sm["impacts"])
+        stop = Stop(impacts=min(n, max_ev), max_events=max_ev)
+    elif given[0] == "time":
+        t_stop = _num(src, "stop.time", sm["time"], positive=True)
+        stop = Stop(time=t0 + t_stop, max_events=max_ev)
+    else:
+        periods = _num(src, "stop.periods", sm["periods"], positive=True)
+        stop = Stop(time=t0 + periods * 2.0 * math.pi / params.omega_s, max_events=max_ev)
+
+    om = _mapping(src, "outputs", raw.get("outputs"), ("events", "trajectory", "stroboscopic"))
+    events = _bool(src, "outputs.events", om.get("events", True))
+    traj = None
+    tm = om.get("trajectory")
+    if tm is not None and tm is not False:
+        if tm is True:
+            tm = {"dt": 0.01}
+        tm = _mapping(src, "outputs.trajectory", tm, ("dt", "t_start", "t_stop"))
+        if "dt" not in tm:
+            raise InputError(src, "outputs.trajectory.dt", "is required")
+        dt = _num(src, "outputs.trajectory.dt", tm["dt"], positive=True)
+        ts = tm.get("t_start")
+        te = tm.get("t_stop")
+        ts = None if ts is None else _num(src, "outputs.trajectory.t_start", ts)
+        te = None if te is None else _num(src, "outputs.trajectory.t_stop", te)
+        if ts is not None and te is not None and te < ts:
+            raise InputError(src, "outputs.trajectory.t_stop", "must be >= t_start")
+        horizon = te if te is not None else stop.time
+        if horizon is not None and (horizon - (ts if ts is not None else t0)) / dt > 5e8:
+            raise InputError(src, "outputs.trajectory.dt", "would produce more than 5e8 samples")
+        traj = Trajectory(dt=dt, t_start=ts, t_stop=te)
+    strobe = _bool(src, "outputs.stroboscopic", om.get("stroboscopic", False))
+    outputs = Outputs(events=events, trajectory=traj, stroboscopic=strobe)
+
+    vm = _mapping(src, "solver", raw.get("solver"), ("method", "tol", "step"))
+    method = vm.get("method", "exact")
+    if method not in SOLVERS:
+        raise InputError(
+            src, "solver.method", f"unknown method {method!r} (known: {', '.join(SOLVERS)})"
+        )
+    tol = _num(src, "solver.tol", vm.get("tol", 1e-12), positive=True)
+    if tol > 1e-2:
+        raise InputError(src, "solver.tol", f"must be <= 1e-2, got {tol}")
+    step = vm.get("step")
+    if step is not None:
+        step = _num(src, "solver.step", step, positive=True)
+    solver = Solver(method=method, tol=tol, step=step)
+
+    return Scene(
+        name=name,
+        params=params,
+        initial=initial,
+        effects=effects,
+        stop=stop,
+        outputs=outputs,
+        solver=solver,
+        physical=physical,
+        description=description,
+        source=src,
+        raw=raw,
+    )
+
+
+def load_scene(path: str | Path, overrides: list[str] | None = None) -> Scene:
+    """Read, override and validate a scene file.
+
+    Raises
+    ------
+    InputError
+        Naming the file (or ``--set``) and the field at fault.
+    """
+    raw = read_yaml(path)
+    if overrides:
+        raw = apply_overrides(raw, overrides)
+    return scene_from_mapping(raw, str(path))
