@@ -180,7 +180,7 @@ def _sample(
         if prm[P_T1] < inf:
             jmax = np.int64(floor((prm[P_T1] - t0) / dt + 1e-9))
         x = (t_b - t0) / dt
-        j1 = np.int64(floor(x)) + 1 if inclusive else np.int64(np.ceil(x))
+        j1 = np.int64(floor(x + 1e-9)) + 1 if inclusive else np.int64(np.ceil(x))
         if j1 > jmax + 1:
             j1 = jmax + 1
         if j1 < j0:

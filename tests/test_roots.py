@@ -1,0 +1,74 @@
+"""The certified first-root search (engine/roots.py) against closed forms and brute force."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from bouncedisk.engine.roots import first_root
+
+
+def f_eval(f0, c1, c2, a, b, th0, w, tau):
+    ph = th0 + w * tau
+    return f0 + c1 * tau + c2 * tau**2 + a * (np.cos(ph) - math.cos(th0)) + b * (np.sin(ph) - math.sin(th0))
+
+
+def test_linear_root():
+    assert first_root(1.0, -1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 10.0, 1e-14) == pytest.approx(1.0, abs=1e-14)
+
+
+def test_parabola_on_resting_stator_lands_at_2v():
+    # gap of a rotor launched at v = 0.7 from a stator at rest (A = B = 0): root 2v
+    r = first_root(0.0, 0.7, -0.5, 0.0, 0.0, 0.0, 1.0, 10.0, 1e-14)
+    assert r == pytest.approx(1.4, abs=1e-13)
+
+
+def test_tangential_root_is_found():
+    # f = 1 - sin(τ) touches zero at π/2 without crossing (grazing)
+    r = first_root(1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 10.0, 1e-14)
+    assert r == pytest.approx(math.pi / 2, abs=1e-7)
+
+
+def test_near_miss_is_not_a_root_but_near_hit_is():
+    assert first_root(1.0 + 1e-10, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 3.0, 1e-14) == -1.0
+    r = first_root(1.0 - 1e-10, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 3.0, 1e-14)
+    assert abs(r - math.pi / 2) < 2e-5 and r < math.pi / 2
+
+
+def test_first_of_many_roots_at_high_frequency():
+    # f = 0.999 - sin(100 τ) has roots every period; the first is at asin(0.999)/100
+    r = first_root(0.999, 0.0, 0.0, 0.0, -1.0, 0.0, 100.0, 50.0, 1e-15)
+    assert r == pytest.approx(math.asin(0.999) / 100.0, abs=1e-13)
+
+
+def test_departing_start_is_not_a_root():
+    # f(0) = 0 with f'(0) > 0: the root at 0 is ignored, the next one is returned
+    r = first_root(0.0, 1.0, -0.5, 0.0, 0.0, 0.0, 1.0, 5.0, 1e-14)
+    assert r == pytest.approx(2.0, abs=1e-13)
+
+
+@given(
+    f0=st.floats(0.0, 2.0),
+    c1=st.floats(-5.0, 5.0),
+    c2=st.floats(-2.0, 0.5),
+    a=st.floats(-3.0, 3.0),
+    b=st.floats(-3.0, 3.0),
+    th0=st.floats(0.0, 2 * math.pi),
+    w=st.floats(0.05, 30.0),
+)
+def test_no_root_is_skipped(f0, c1, c2, a, b, th0, w):
+    """Against a dense scan: nothing below zero before the returned root, and f(root) ≈ 0."""
+    t_max = 6.0
+    r = first_root(f0, c1, c2, a, b, th0, w, t_max, 1e-13)
+    tau = np.linspace(0.0, t_max, 200_001)[1:]
+    f = f_eval(f0, c1, c2, a, b, th0, w, tau)
+    scale = 1.0 + abs(f0) + abs(c1) * t_max + abs(c2) * t_max**2 + abs(a) + abs(b)
+    if r < 0:
+        assert f.min() > -1e-9 * scale
+    else:
+        before = tau < r * (1 - 1e-9) - 1e-12
+        if before.any():
+            assert f[before].min() > -1e-9 * scale
+        assert abs(f_eval(f0, c1, c2, a, b, th0, w, r)) < 1e-8 * scale
