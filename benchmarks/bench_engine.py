@@ -39,7 +39,9 @@ def main() -> None:
     ap.add_argument("--events", type=int, default=2_000_000)
     ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args()
-    print(f"machine: {platform.machine()} {platform.processor() or ''} python {platform.python_version()}")
+    print(
+        f"machine: {platform.machine()} {platform.processor() or ''} python {platform.python_version()}"
+    )
     print(f"{args.events:,} events per run, best of {args.repeat}; e = 0.3")
     print(f"{'scene':<24}{'omega_s=1.5':>16}{'omega_s=100':>16}{'cost ratio 100/1.5':>22}")
     results = {}
@@ -51,7 +53,9 @@ def main() -> None:
     r15, r100 = results["axial-only"]
     ok1 = r15 >= 1e6
     ok2 = r15 / r100 <= 3.0
-    print(f"target axial-only >= 1e6 impacts/s at 1.5: {'met' if ok1 else 'NOT met'} ({r15:,.0f}/s)")
+    print(
+        f"target axial-only >= 1e6 impacts/s at 1.5: {'met' if ok1 else 'NOT met'} ({r15:,.0f}/s)"
+    )
     print(f"target cost(100)/cost(1.5) <= 3: {'met' if ok2 else 'NOT met'} ({r15 / r100:.2f})")
 
 

@@ -144,8 +144,16 @@ def test_stick_slip_stick_in_contact_matches_time_stepping(w, r, psi, cycles):
 
 
 def test_stator_inertia_and_kinetic_static_effects_run_stably():
-    cfg = EngineConfig(e=0.4, omega_s=1.8, r_phi=0.3, psi=0.5, torsion=True, inertia_ratio=2.0,
-                       mu_ratio=1.5, max_events=200_000)
+    cfg = EngineConfig(
+        e=0.4,
+        omega_s=1.8,
+        r_phi=0.3,
+        psi=0.5,
+        torsion=True,
+        inertia_ratio=2.0,
+        mu_ratio=1.5,
+        max_events=200_000,
+    )
     res = simulate_arrays(cfg)
     check_events_sane(res)
     check_slip_never_reverses(res, 0.3, 1.8, 0.5)

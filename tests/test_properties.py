@@ -31,8 +31,16 @@ def test_invariants_over_random_scenes(
     else:
         init = InitialState(t=t0, omega=omega0)
     cfg = EngineConfig(
-        e=e, omega_s=w, r_phi=r_phi, psi=psi, torsion=True, inertia_ratio=inertia,
-        mu_ratio=mu_ratio, max_events=3000, t_end=t0 + 5e4, traj_dt=0.0,
+        e=e,
+        omega_s=w,
+        r_phi=r_phi,
+        psi=psi,
+        torsion=True,
+        inertia_ratio=inertia,
+        mu_ratio=mu_ratio,
+        max_events=3000,
+        t_end=t0 + 5e4,
+        traj_dt=0.0,
     )
     res = simulate_arrays(cfg, init)
     assert res.ok, res.status
@@ -49,8 +57,9 @@ def test_invariants_over_random_scenes(
     dt=st.floats(0.003, 0.3),
 )
 def test_dense_trajectory_never_below_stator(e, w, dt):
-    cfg = EngineConfig(e=e, omega_s=w, torsion=True, r_phi=0.05, t_end=60.0, traj_dt=dt,
-                       max_events=100_000)
+    cfg = EngineConfig(
+        e=e, omega_s=w, torsion=True, r_phi=0.05, t_end=60.0, traj_dt=dt, max_events=100_000
+    )
     res = simulate_arrays(cfg)
     tr = res.traj
     assert len(tr) == int(math.floor(60.0 / dt + 1e-9)) + 1

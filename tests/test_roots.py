@@ -12,11 +12,19 @@ from bouncedisk.engine.roots import first_root
 
 def f_eval(f0, c1, c2, a, b, th0, w, tau):
     ph = th0 + w * tau
-    return f0 + c1 * tau + c2 * tau**2 + a * (np.cos(ph) - math.cos(th0)) + b * (np.sin(ph) - math.sin(th0))
+    return (
+        f0
+        + c1 * tau
+        + c2 * tau**2
+        + a * (np.cos(ph) - math.cos(th0))
+        + b * (np.sin(ph) - math.sin(th0))
+    )
 
 
 def test_linear_root():
-    assert first_root(1.0, -1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 10.0, 1e-14) == pytest.approx(1.0, abs=1e-14)
+    assert first_root(1.0, -1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 10.0, 1e-14) == pytest.approx(
+        1.0, abs=1e-14
+    )
 
 
 def test_parabola_on_resting_stator_lands_at_2v():

@@ -27,8 +27,13 @@ def test_scene_defaults_and_effects(scene_file):
     s = load_scene(scene_file(GOOD))
     assert s.effects == {"impacts", "contact", "torsion", "impulse_cap"}
     assert s.initial.u is None and s.stop.impacts == 50
-    s2 = load_scene(scene_file(GOOD), ["parameters.e=0.6", "effects={impacts: true, contact: true, "
-                                        "torsion: true, impulse_cap: false}"])
+    s2 = load_scene(
+        scene_file(GOOD),
+        [
+            "parameters.e=0.6",
+            "effects={impacts: true, contact: true, torsion: true, impulse_cap: false}",
+        ],
+    )
     assert s2.params.e == 0.6 and "impulse_cap" not in s2.effects
     assert s.sha256 != s2.sha256
 
@@ -39,8 +44,19 @@ def test_periods_stop_is_converted_to_time(scene_file):
 
 
 def test_physical_parameters_convert_to_nondimensional():
-    p = PhysicalParameters(m_r=0.01, r_g=0.004, r_c=0.001, mu=0.2, e=0.5, g=9.81, f=40e3,
-                           U0=1e-6, Phi0=1e-3, psi=0.1, F_preload=0.5)
+    p = PhysicalParameters(
+        m_r=0.01,
+        r_g=0.004,
+        r_c=0.001,
+        mu=0.2,
+        e=0.5,
+        g=9.81,
+        f=40e3,
+        U0=1e-6,
+        Phi0=1e-3,
+        psi=0.1,
+        F_preload=0.5,
+    )
     sc = p.scales()
     g_eff = 9.81 + 0.5 / 0.01
     assert sc.t_c == pytest.approx(math.sqrt(1e-6 / g_eff))
@@ -115,8 +131,19 @@ def test_malformed_scene_files(scene_file, tmp_path, capsys, text, field):
 
 def test_missing_effect_is_named(scene_file, tmp_path, capsys):
     out = tmp_path / "out.nc"
-    code = main(["simulate", str(scene_file(GOOD)), "-o", str(out), "-q",
-                 "--set", "effects=[impacts]", "--set", "parameters.e=0.0"])
+    code = main(
+        [
+            "simulate",
+            str(scene_file(GOOD)),
+            "-o",
+            str(out),
+            "-q",
+            "--set",
+            "effects=[impacts]",
+            "--set",
+            "parameters.e=0.0",
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 2 and "'contact'" in err and "effects" in err and not out.exists()
 
@@ -124,7 +151,9 @@ def test_missing_effect_is_named(scene_file, tmp_path, capsys):
 def test_missing_file_and_bad_set_syntax(tmp_path, capsys, scene_file):
     assert main(["simulate", str(tmp_path / "nope.yaml"), "-o", str(tmp_path / "o.nc")]) == 2
     assert "file not found" in capsys.readouterr().err
-    assert main(["simulate", str(scene_file(GOOD)), "-o", str(tmp_path / "o.nc"), "--set", "e"]) == 2
+    assert (
+        main(["simulate", str(scene_file(GOOD)), "-o", str(tmp_path / "o.nc"), "--set", "e"]) == 2
+    )
     assert "KEY=VALUE" in capsys.readouterr().err
 
 
@@ -132,8 +161,17 @@ def test_console_script_prints_no_traceback(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text("parameters: {e: 2}\n")
     proc = subprocess.run(
-        [sys.executable, "-m", "bouncedisk.cli", "simulate", str(bad), "-o", str(tmp_path / "o.nc")],
-        capture_output=True, text=True,
+        [
+            sys.executable,
+            "-m",
+            "bouncedisk.cli",
+            "simulate",
+            str(bad),
+            "-o",
+            str(tmp_path / "o.nc"),
+        ],
+        capture_output=True,
+        text=True,
     )
     assert proc.returncode == 2
     assert "Traceback" not in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
@@ -145,15 +183,43 @@ def test_simulate_writes_interfaces_names_and_is_deterministic(scene_file, tmp_p
     assert main(["simulate", str(f), "-o", str(a), "-q"]) == 0
     assert main(["simulate", str(f), "-o", str(b), "-q"]) == 0
     da, db = xr.open_dataset(a), xr.open_dataset(b)
-    for name in ("t_impact", "phase", "v_rel", "omega_after", "kind", "u_rotor", "u_stator",
-                 "omega_rotor", "strobe_u"):
+    for name in (
+        "t_impact",
+        "phase",
+        "v_rel",
+        "omega_after",
+        "kind",
+        "u_rotor",
+        "u_stator",
+        "omega_rotor",
+        "strobe_u",
+    ):
         assert name in da, name
         assert da[name].attrs["units"] and da[name].attrs["long_name"]
         np.testing.assert_array_equal(da[name].values, db[name].values)
-    for att in ("e", "omega_s", "r_phi", "psi", "effects", "solver", "tol", "scene_name",
-                "scene_sha256", "run_id", "bouncedisk_version", "git_commit", "created",
-                "wall_time_s", "n_impacts", "status", "Conventions", "title", "history", "source",
-                "references"):
+    for att in (
+        "e",
+        "omega_s",
+        "r_phi",
+        "psi",
+        "effects",
+        "solver",
+        "tol",
+        "scene_name",
+        "scene_sha256",
+        "run_id",
+        "bouncedisk_version",
+        "git_commit",
+        "created",
+        "wall_time_s",
+        "n_impacts",
+        "status",
+        "Conventions",
+        "title",
+        "history",
+        "source",
+        "references",
+    ):
         assert att in da.attrs, att
     assert da.attrs["run_id"] != db.attrs["run_id"]
     assert da.attrs["n_impacts"] == 50 and da.attrs["status"] == "completed"

@@ -272,11 +272,13 @@ class Regime:
 
     @property
     def code(self) -> int:
-        """Integer code for maps: period p -> p (1..16), chaotic 20, chattering 30, rest 40,
-        irregular (no period, exponent <= 0) 50."""
+        """Category code for maps: 1 periodic, 2 chaotic, 3 chattering, 4 rest, 5 irregular
+        (no period up to the maximum and a non-positive exponent)."""
+        if self.name == "chattering":
+            return 3
         if self.period is not None:
-            return self.period.p
-        return {"chaotic": 20, "chattering": 30, "rest": 40}.get(self.name, 50)
+            return 1
+        return {"chaotic": 2, "rest": 4}.get(self.name, 5)
 
 
 def classify(

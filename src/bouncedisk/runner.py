@@ -45,6 +45,7 @@ def engine_config(scene: Scene) -> EngineConfig:
         traj_t0=traj.t_start if traj and traj.t_start is not None else scene.initial.t,
         traj_t1=traj.t_stop if traj and traj.t_stop is not None else math.inf,
         stroboscopic=scene.outputs.stroboscopic,
+        clipped=scene.model == "clipped",
     )
 
 
@@ -147,6 +148,7 @@ def scene_attrs(scene: Scene) -> dict:
         "r_phi": p.r_phi,
         "psi": p.psi,
         "gamma": p.gamma,
+        "model": scene.model,
         "effects": ",".join(sorted(scene.effects)),
         "solver": scene.solver.method,
         "tol": scene.solver.tol,

@@ -24,10 +24,13 @@ from .params import Parameters, PhysicalParameters, Scales
 EFFECTS = ("impacts", "contact", "torsion", "impulse_cap", "stator_inertia", "kinetic_static")
 #: Solver methods: the exact engine, and comparators for the accuracy study.
 SOLVERS = ("exact", "rk45", "dop853", "lsoda", "moreau")
+#: Contact models: the bouncing disk (the paper) and the earlier clipped-sinusoid spring contact.
+MODELS = ("bouncing", "clipped")
 DEFAULT_MAX_EVENTS = 100_000_000
 TOP_KEYS = (
     "name",
     "description",
+    "model",
     "parameters",
     "physical",
     "initial",
@@ -101,6 +104,7 @@ class Scene:
     solver: Solver
     physical: PhysicalParameters | None = None
     description: str = ""
+    model: str = "bouncing"
     source: str = "<scene>"
     raw: dict = field(default_factory=dict, compare=False)
 
@@ -367,8 +371,22 @@ def scene_from_mapping(raw: dict, source: str = "<scene>") -> Scene:
         step = _num(src, "solver.step", step, positive=True)
     solver = Solver(method=method, tol=tol, step=step)
 
+    model = raw.get("model", "bouncing")
+    if model not in MODELS:
+        raise InputError(src, "model", f"unknown model {model!r} (known: {', '.join(MODELS)})")
+    if model == "clipped":
+        if stop.time is None:
+            raise InputError(
+                src, "stop", "the clipped model has no impacts: stop on time or periods"
+            )
+        if method != "exact":
+            raise InputError(
+                src, "solver.method", "the clipped model runs with the exact solver only"
+            )
+
     return Scene(
         name=name,
+        model=model,
         params=params,
         initial=initial,
         effects=effects,

@@ -52,6 +52,10 @@ class EngineConfig:
         Dense trajectory grid ``t0, t0 + dt, …, <= t1``; ``traj_dt = 0`` for none.
     stroboscopic : bool
         Sample the state at every stator period (phase 0).
+    clipped : bool
+        The earlier clipped-sinusoid spring-contact model (paper refs. [2, 3]) instead of the
+        bouncing model: the rotor never leaves the stator and the normal load is
+        ``max(0, 1 + a_s)``. Needs a time stop.
     """
 
     e: float
@@ -70,6 +74,7 @@ class EngineConfig:
     traj_t0: float = 0.0
     traj_t1: float = math.inf
     stroboscopic: bool = False
+    clipped: bool = False
 
 
 @dataclass(frozen=True)
@@ -149,6 +154,7 @@ def _pack(cfg: EngineConfig) -> tuple[np.ndarray, np.ndarray]:
     flg[K.F_TRAJ] = int(cfg.traj_dt > 0.0)
     flg[K.F_STROBE] = int(cfg.stroboscopic)
     flg[K.F_MAXEV] = int(cfg.max_events)
+    flg[K.F_CLIPPED] = int(cfg.clipped)
     return prm, flg
 
 

@@ -28,14 +28,16 @@ from .roots import TWO_PI, first_root
 P_E, P_W, P_R, P_PSI, P_TOL, P_INERTIA, P_RHO, P_TEND, P_DT, P_T0, P_T1 = range(11)
 N_PRM = 11
 # --- flags (int64) ----------------------------------------------------------------------------
-F_CONTACT, F_TORSION, F_CAP, F_TRAJ, F_STROBE, F_MAXEV = range(6)
-N_FLG = 6
+F_CONTACT, F_TORSION, F_CAP, F_TRAJ, F_STROBE, F_MAXEV, F_CLIPPED = range(7)
+N_FLG = 7
 # --- float state ------------------------------------------------------------------------------
 S_TH, S_U, S_V, S_OM, S_TA, S_GA, S_THC = range(7)
 N_ST = 7
 # --- int state --------------------------------------------------------------------------------
-I_N, I_MODE, I_SIG, I_GUARD, I_CHAT, I_NC, I_NEV, I_JTRAJ, I_KSTROBE, I_ZERO, I_STATUS = range(11)
-N_IST = 11
+I_N, I_MODE, I_SIG, I_GUARD, I_CHAT, I_NC, I_NEV, I_JTRAJ, I_KSTROBE, I_ZERO, I_STATUS, I_FREE = (
+    range(12)
+)
+N_IST = 12
 # --- modes ------------------------------------------------------------------------------------
 MODE_FLIGHT, MODE_CONTACT, MODE_DONE = 0, 1, 2
 # --- statuses ---------------------------------------------------------------------------------
@@ -270,6 +272,7 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
     torsion = flg[F_TORSION] != 0
     cap = flg[F_CAP] != 0
     max_ev = flg[F_MAXEV]
+    clipped = flg[F_CLIPPED] != 0
     xtol = tol
     per = TWO_PI / w
     w_eps = GRAZE_GAP * (1.0 + w)
@@ -425,6 +428,60 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
         # ---------------------------------------------------------------- contact
         om = st[S_OM]
         sig = ist[I_SIG]
+        if ist[I_FREE]:
+            # clipped spring-contact model: N is clipped to 0 while 1 + a_s < 0; no torque, the
+            # rotor keeps its angular velocity and rides the stator to the window's end
+            th_back = pi - th_sep
+            d = th_back - th
+            if d < 0.0:
+                d += TWO_PI
+            seg = min(d / w, t_end - t_now)
+            a, b = _sample(
+                SEG_CONTACT,
+                n,
+                th,
+                seg,
+                seg < d / w,
+                0.0,
+                0.0,
+                om,
+                0.0,
+                prm,
+                flg,
+                ist,
+                traj,
+                n_tr,
+                strobe,
+                n_sb,
+                info,
+            )
+            if a < 0:
+                info[1] = n_ev
+                info[2] = n_tr
+                info[3] = n_sb
+                return
+            n_tr = a
+            n_sb = b
+            if seg < d / w:
+                ist[I_N], st[S_TH] = _advance(n, th, w * seg)
+                st[S_U] = sin(st[S_TH])
+                st[S_V] = w * cos(st[S_TH])
+                _finish(ist, info, ST_TIME, n_ev, n_tr, n_sb)
+                return
+            ist[I_N] = n + (1 if th > th_back else 0)
+            st[S_TH] = th_back
+            ist[I_FREE] = 0
+            if torsion:
+                ist[I_SIG] = _contact_sigma(r, w, psi, rho, om, th_back)
+                ist[I_GUARD] = (
+                    1
+                    if ist[I_SIG] != 0
+                    and abs(r * om - w * cos(th_back + psi)) <= 1e-14 * (abs(r * om) + w)
+                    else 0
+                )
+                if ist[I_SIG] == 0:
+                    st[S_OM] = w * cos(th_back + psi) / r
+            continue
         if never_sep:
             tau_sep = inf
         else:
@@ -442,7 +499,7 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
             if tau_c < 0.0:
                 tau_c = 0.0
         tau_end = min(tau_sep, tau_t, tau_c)
-        if tau_end == inf:
+        if tau_end == inf or (clipped and t_end == inf):
             _finish(ist, info, ST_REST, n_ev, n_tr, n_sb)
             return
         seg = tau_end
@@ -606,6 +663,9 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
                 ist[I_NEV] += 1
                 if tau_c < tau_sep:
                     continue
+            if tau_end == tau_sep and clipped:
+                ist[I_FREE] = 1
+                continue
             if tau_end == tau_sep:
                 # separation: fly through the window where N < 0, then search from its end
                 ist[I_MODE] = MODE_FLIGHT

@@ -1,0 +1,107 @@
+"""Derived datasets: Poincaré maps of a run, and the bouncing vs clipped-contact comparison."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import xarray as xr
+
+from .engine.kernel import KIND_IMPACT
+from .provenance import base_attrs
+from .runner import run_scene_arrays, scene_attrs
+from .scene import Scene
+
+
+def poincare_dataset(sim: xr.Dataset, transient: int = 1000) -> xr.Dataset:
+    """Impact map ``(phase, v_rel)`` and stroboscopic map ``(u, v)`` at phase 0 of a run.
+
+    The first ``transient`` events (and stroboscopic points) are left out; chattering tails are
+    not impacts and are left out of the impact map.
+    """
+    kind = sim["kind"].values
+    keep = np.zeros(len(kind), dtype=bool)
+    keep[transient:] = True
+    keep &= kind == KIND_IMPACT
+    data = {
+        "t_impact": ("impact", sim["t_impact"].values[keep]),
+        "phase": ("impact", sim["phase"].values[keep]),
+        "v_rel": ("impact", sim["v_rel"].values[keep]),
+    }
+    if "strobe_u" in sim:
+        s = slice(min(transient, sim.sizes["period"]), None)
+        data.update(
+            {
+                "strobe_t": ("period", sim["strobe_t"].values[s]),
+                "strobe_u": ("period", sim["strobe_u"].values[s]),
+                "strobe_v": ("period", sim["strobe_v"].values[s]),
+            }
+        )
+    ds = xr.Dataset(data)
+    if "period" in sim and "strobe_u" in sim:
+        ds = ds.assign_coords(period=("period", sim["period"].values[s]))
+    ds.attrs.update(base_attrs(f"Poincaré maps of run {sim.attrs.get('run_id')}"))
+    for k in (
+        "e",
+        "omega_s",
+        "r_phi",
+        "psi",
+        "effects",
+        "solver",
+        "tol",
+        "scene_name",
+        "scene_sha256",
+        "run_id",
+        "status",
+    ):
+        if k in sim.attrs:
+            ds.attrs[k if k != "run_id" else "source_run_id"] = sim.attrs[k]
+    ds.attrs["run_id"] = f"{sim.attrs.get('run_id')}-poincare"
+    ds.attrs["transient_events"] = transient
+    ds.attrs["n_impacts"] = int(keep.sum())
+    return ds
+
+
+def clipped_comparison(scene: Scene, psis: list[float]) -> xr.Dataset:
+    """Rotor angular velocity ``omega_rotor(model, psi, time)`` of both contact models.
+
+    The scene must stop on time and ask for a trajectory; both models share its time grid.
+    """
+    if scene.stop.time is None or scene.outputs.trajectory is None:
+        from .errors import InputError
+
+        raise InputError(scene.source, "stop", "the comparison needs a time stop and a trajectory")
+    models = ("bouncing", "clipped")
+    series = {}
+    time = None
+    for model in models:
+        for p in psis:
+            sc = dataclasses.replace(
+                scene, model=model, params=dataclasses.replace(scene.params, psi=p)
+            )
+            res = run_scene_arrays(sc)
+            if time is None:
+                time = res.traj[:, 0]
+            series[model, p] = np.interp(time, res.traj[:, 0], res.traj[:, 4])
+    om = np.array([[series[m, p] for p in psis] for m in models])
+    ds = xr.Dataset(
+        {
+            "omega_rotor": (
+                ("model", "psi", "time"),
+                om,
+                {"long_name": "rotor angular velocity", "units": "1"},
+            )
+        },
+        coords={
+            "model": ("model", list(models), {"long_name": "contact model"}),
+            "psi": ("psi", np.asarray(psis, float), {"units": "rad", "long_name": "psi"}),
+            "time": ("time", time, {"units": "1", "long_name": "time"}),
+        },
+    )
+    ds.attrs.update(base_attrs("bouncing disk vs clipped spring-contact model"))
+    attrs = scene_attrs(scene)
+    attrs.pop("psi", None)
+    attrs.pop("model", None)
+    ds.attrs.update(attrs)
+    ds.attrs["run_id"] = f"{scene.name}-{scene.sha256[:8]}-comparison"
+    return ds

@@ -1,0 +1,359 @@
+"""Figures: one function per figure, each a pure function of Datasets returning a Figure.
+
+Figures are built on :class:`matplotlib.figure.Figure` (no pyplot state), so they work under any
+backend; :func:`save_figure` writes PDF and PNG atomically.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+from matplotlib.colors import BoundaryNorm, ListedColormap
+from matplotlib.figure import Figure
+from matplotlib.patches import Ellipse, FancyArrowPatch, Rectangle
+
+from .atomic import atomic_path
+
+TWO_PI = 2 * math.pi
+COLORS = {"rotor": "#1f77b4", "stator": "#7f7f7f", "fit": "#d62728", "data": "#2ca02c"}
+
+
+def save_figure(fig: Figure, *paths: str | Path, dpi: int = 150) -> None:
+    """Save ``fig`` to each path (format from the suffix), atomically."""
+    for p in paths:
+        with atomic_path(p) as tmp:
+            fig.savefig(tmp, dpi=dpi, format=Path(p).suffix.lstrip("."), bbox_inches="tight")
+
+
+def _title(ds: xr.Dataset) -> str:
+    a = ds.attrs
+    return (
+        f"e = {a.get('e'):.3g}, ω_s = {a.get('omega_s'):.3g}, R_φ = {a.get('r_phi'):.3g}, "
+        f"ψ = {a.get('psi'):.3g}"
+    )
+
+
+def fig2_schematic() -> Figure:
+    """Paper Fig. 2: the stator–rotor interface, the rotor simplified as a bouncing disk."""
+    fig = Figure(figsize=(6.0, 4.2))
+    ax = fig.add_subplot()
+    ax.set_xlim(-3, 3)
+    ax.set_ylim(-2.6, 2.4)
+    ax.set_aspect("equal")
+    ax.axis("off")
+    # pretwisted beam (stator) and its tip
+    ax.add_patch(Rectangle((-0.6, -2.5), 1.2, 2.0, fc="#d9d9d9", ec="k"))
+    for y in np.linspace(-2.4, -0.6, 7):
+        ax.plot([-0.6, 0.6], [y, y + 0.25], color="#9e9e9e", lw=0.8)
+    ax.add_patch(Rectangle((-1.2, -0.5), 2.4, 0.35, fc="#bdbdbd", ec="k"))
+    # rotor disk in flight above the stator
+    ax.add_patch(Ellipse((0, 0.55), 3.4, 0.5, fc="#9ecae1", ec="k"))
+    ax.add_patch(Rectangle((-1.7, 0.55), 3.4, 0.45, fc="#9ecae1", ec="none"))
+    ax.add_patch(Ellipse((0, 1.0), 3.4, 0.5, fc="#c6dbef", ec="k"))
+    ax.plot([-1.7, -1.7], [0.55, 1.0], "k", lw=1)
+    ax.plot([1.7, 1.7], [0.55, 1.0], "k", lw=1)
+    # contact radius on the stator face
+    ax.annotate("", xy=(1.2, -0.32), xytext=(0, -0.32), arrowprops=dict(arrowstyle="<->", lw=1))
+    ax.text(0.6, -0.28, "$r_c$", ha="center", va="bottom", fontsize=10)
+
+    def arrow(x0, y0, x1, y1, **kw):
+        ax.add_patch(FancyArrowPatch((x0, y0), (x1, y1), mutation_scale=12, lw=1.4, **kw))
+
+    arrow(-2.3, -1.3, -2.3, -0.3, arrowstyle="<->", color="k")
+    ax.text(-2.45, -0.8, r"$u_s = U_0\sin\omega t$", ha="right", va="center", fontsize=10)
+    arrow(1.6, -1.45, 2.5, -1.15, arrowstyle="<->", color="k", connectionstyle="arc3,rad=0.4")
+    ax.text(2.55, -1.55, r"$\phi_s = \Phi_0\sin(\omega t+\psi)$", ha="left", fontsize=10)
+    arrow(0, 2.2, 0, 1.45, arrowstyle="->", color="k")
+    ax.text(0.12, 1.85, r"$m_r g$ (+ preload)", fontsize=10)
+    arrow(-2.2, 0.75, -2.2, 1.55, arrowstyle="->", color=COLORS["rotor"])
+    ax.text(-2.3, 1.6, r"$u_r$", color=COLORS["rotor"], ha="right", fontsize=11)
+    arrow(
+        1.9, 1.2, 2.6, 0.7, arrowstyle="->", color=COLORS["rotor"], connectionstyle="arc3,rad=-0.5"
+    )
+    ax.text(2.65, 0.95, r"$\dot\phi_r$", color=COLORS["rotor"], fontsize=11)
+    ax.text(0, 0.3, "rotor ($m_r$, $J_r = m_r r_g^2$)", ha="center", va="top", fontsize=9)
+    ax.text(0, -1.5, "pretwisted beam\n(stator)", ha="center", fontsize=9)
+    ax.text(-2.9, 2.2, "impact: $e$, friction: $\\mu$, $r_{eff} = 2r_c/3$", fontsize=9)
+    return fig
+
+
+def fig_trajectory(ds: xr.Dataset, window: float = 40.0) -> Figure:
+    """Paper Figs. 3–4: rotor and stator flight paths and the rotor angular velocity."""
+    t = ds["time"].values
+    fig = Figure(figsize=(8.0, 7.0), layout="constrained")
+    axes = fig.subplots(3, 1)
+    first = t <= t[0] + window
+    last = t >= t[-1] - window
+    for ax, sel, label in ((axes[0], first, "start"), (axes[1], last, "end of the run")):
+        ax.plot(t[sel], ds["u_stator"].values[sel], color=COLORS["stator"], lw=0.8, label="stator")
+        ax.plot(t[sel], ds["u_rotor"].values[sel], color=COLORS["rotor"], lw=1.0, label="rotor")
+        ax.set_ylabel("axial position $u/U_0$")
+        ax.set_title(f"flight paths, {label}", fontsize=10)
+        ax.legend(loc="upper right", fontsize=8)
+    axes[1].set_xlabel("time $t/t_c$")
+    if "omega_rotor" in ds:
+        axes[2].plot(t, ds["omega_rotor"].values, color=COLORS["rotor"], lw=0.8)
+        if "t_impact" in ds:
+            axes[2].plot(
+                ds["t_impact"].values,
+                ds["omega_after"].values,
+                ".",
+                ms=2,
+                color="k",
+                label="after each impact",
+            )
+            axes[2].legend(loc="lower right", fontsize=8)
+        axes[2].set_ylabel(r"rotor angular velocity $\Omega$")
+    axes[2].set_xlabel("time $t/t_c$")
+    fig.suptitle(f"Bouncing disk: {_title(ds)}", fontsize=11)
+    return fig
+
+
+def fig5_motor(
+    curve: pd.DataFrame,
+    simulated: pd.DataFrame | None = None,
+    fitted: xr.Dataset | None = None,
+    sim_label: str = "simulation",
+) -> Figure:
+    """Paper Fig. 5: measured rotor speed beside the bouncing-disk model (fitted if available).
+
+    Parameters
+    ----------
+    curve : DataFrame
+        Measured ``time_s``, ``omega_rad_s``.
+    simulated : DataFrame, optional
+        Model speed ``time_s``, ``omega_rad_s`` (unfitted scales) when no fit is given.
+    fitted : Dataset, optional
+        A fit file (INTERFACES.md): ``omega_measured``, ``omega_fitted`` on ``time``.
+    """
+    fig = Figure(figsize=(8.0, 5.5 if fitted is not None else 4.0), layout="constrained")
+    if fitted is not None:
+        ax, axr = fig.subplots(2, 1, sharex=True, height_ratios=[3, 1])
+    else:
+        ax, axr = fig.add_subplot(), None
+    ax.plot(
+        curve["time_s"],
+        curve["omega_rad_s"],
+        color=COLORS["data"],
+        lw=0.8,
+        label="measured (prototype curve)",
+    )
+    if fitted is not None:
+        t = fitted["time"].values
+        ax.plot(
+            t,
+            fitted["omega_fitted"].values,
+            color=COLORS["fit"],
+            lw=0.9,
+            label="bouncing-disk model, fitted",
+        )
+        if "trend_fitted" in fitted:
+            ax.plot(
+                t,
+                fitted["trend_fitted"].values,
+                "--",
+                color="k",
+                lw=1,
+                label="first-order trend of the fit",
+            )
+        axr.plot(
+            t, fitted["omega_measured"].values - fitted["omega_fitted"].values, color="k", lw=0.5
+        )
+        axr.axhline(0, color=COLORS["fit"], lw=0.8)
+        axr.set_ylabel("residual [rad/s]")
+        axr.set_xlabel("time [s]")
+        a = fitted.attrs
+        ax.set_title(
+            f"steady speed {a.get('steady_speed_rad_s', float('nan')):.4g} rad/s, "
+            f"time constant {a.get('time_constant_s', float('nan')):.3g} s",
+            fontsize=10,
+        )
+    elif simulated is not None:
+        ax.plot(
+            simulated["time_s"],
+            simulated["omega_rad_s"],
+            color=COLORS["rotor"],
+            lw=0.8,
+            label=sim_label,
+        )
+        ax.set_xlabel("time [s]")
+    ax.set_ylabel("rotor angular velocity [rad/s]")
+    ax.legend(loc="lower right", fontsize=8)
+    return fig
+
+
+def fig_poincare(datasets: dict[str, xr.Dataset]) -> Figure:
+    """Impact maps (phase vs relative impact velocity) and stroboscopic maps, one column each."""
+    fig = Figure(figsize=(4.2 * len(datasets), 7.5), layout="constrained")
+    axes = fig.subplots(2, len(datasets), squeeze=False)
+    for j, (label, ds) in enumerate(datasets.items()):
+        impacts = ds["kind"].values == 0 if "kind" in ds else slice(None)
+        ax = axes[0, j]
+        ax.plot(ds["phase"].values[impacts], ds["v_rel"].values[impacts], ",", color="k", alpha=0.6)
+        ax.plot(
+            ds["phase"].values[impacts][-50:],
+            ds["v_rel"].values[impacts][-50:],
+            "o",
+            ms=3,
+            color=COLORS["fit"],
+            label="last 50 impacts",
+        )
+        ax.set_xlim(0, TWO_PI)
+        ax.set_xlabel(r"impact phase $\omega_s t$ mod $2\pi$")
+        ax.set_ylabel(r"relative impact velocity $v_s - v^-$")
+        ax.set_title(f"impact map, {label}", fontsize=10)
+        ax.legend(fontsize=8, loc="upper right")
+        ax = axes[1, j]
+        if "strobe_u" in ds:
+            ax.plot(ds["strobe_u"].values, ds["strobe_v"].values, ",", color=COLORS["rotor"])
+        ax.set_xlabel("rotor position at phase 0")
+        ax.set_ylabel("rotor velocity at phase 0")
+        ax.set_title(f"stroboscopic map, {label}", fontsize=10)
+    return fig
+
+
+def fig_bifurcation(ds: xr.Dataset) -> Figure:
+    """Impact phase of the attractor against ``e`` (tail of each run), with the Lyapunov exponent."""
+    fig = Figure(figsize=(8.0, 6.5), layout="constrained")
+    ax, ax2 = fig.subplots(2, 1, sharex=True, height_ratios=[3, 1])
+    e = ds["e"].values
+    ph = ds["phase"].values
+    ee = np.broadcast_to(e[:, None], ph.shape)
+    ax.plot(ee.ravel(), ph.ravel(), ",", color="k", alpha=0.7)
+    ax.set_ylim(0, TWO_PI)
+    ax.set_ylabel(r"impact phase $\omega_s t$ mod $2\pi$")
+    ax.set_title(f"bifurcation diagram, ω_s = {ds.attrs.get('omega_s'):.3g}", fontsize=10)
+    lam = ds["lyapunov"].values
+    ax2.plot(e, lam, ".-", color=COLORS["fit"], ms=3, lw=0.8)
+    ax2.axhline(0, color="k", lw=0.6)
+    ax2.set_ylabel("Lyapunov\n(per impact)")
+    ax2.set_xlabel("coefficient of restitution $e$")
+    return fig
+
+
+REGIME_COLORS = {1: "#4daf4a", 2: "#e41a1c", 3: "#377eb8", 4: "#984ea3", 5: "#ff7f00"}
+
+
+def fig_regime_map(ds: xr.Dataset) -> Figure:
+    """Regimes over ``(e, omega_s)`` and the largest Lyapunov exponent."""
+    from .sweeps import REGIME_MEANINGS
+
+    fig = Figure(figsize=(11.0, 4.6), layout="constrained")
+    ax, ax2 = fig.subplots(1, 2)
+    e = ds["e"].values
+    w = ds["omega_s"].values
+    reg = ds["regime"].transpose("omega_s", "e").values
+    codes = sorted(REGIME_COLORS)
+    cmap = ListedColormap([REGIME_COLORS[c] for c in codes])
+    norm = BoundaryNorm(np.arange(0.5, len(codes) + 1.5), cmap.N)
+    m = ax.pcolormesh(e, w, reg, cmap=cmap, norm=norm, shading="nearest")
+    cb = fig.colorbar(m, ax=ax, ticks=codes)
+    cb.ax.set_yticklabels([REGIME_MEANINGS[c] for c in codes], fontsize=8)
+    per = ds["period"].transpose("omega_s", "e").values
+    for i, wi in enumerate(w):
+        for j, ej in enumerate(e):
+            if reg[i, j] == 1 and per[i, j] > 1 and len(e) <= 30:
+                ax.text(ej, wi, str(int(per[i, j])), ha="center", va="center", fontsize=5)
+    ax.set_xlabel("coefficient of restitution $e$")
+    ax.set_ylabel(r"stator frequency $\omega_s$")
+    ax.set_title("regime (numbers: impacts per cycle)", fontsize=10)
+    lam = ds["lyapunov"].transpose("omega_s", "e").values
+    vmax = np.nanmax(np.abs(lam)) if np.isfinite(lam).any() else 1.0
+    m2 = ax2.pcolormesh(e, w, lam, cmap="RdBu_r", vmin=-vmax, vmax=vmax, shading="nearest")
+    fig.colorbar(m2, ax=ax2, label="largest Lyapunov exponent (per impact)")
+    ax2.set_xlabel("coefficient of restitution $e$")
+    ax2.set_ylabel(r"stator frequency $\omega_s$")
+    ax2.set_title("Lyapunov exponent of the impact map", fontsize=10)
+    return fig
+
+
+def fig_speed_vs_psi(ds: xr.Dataset) -> Figure:
+    """Mean rotor speed against the torsional phase ``psi`` for several ``r_phi``."""
+    fig = Figure(figsize=(7.0, 4.5), layout="constrained")
+    ax = fig.add_subplot()
+    psi = ds["psi"].values
+    for r in ds["r_phi"].values:
+        y = ds["mean_slip_speed"].sel(r_phi=r).values
+        ax.plot(psi, y, ".-", lw=1, ms=3, label=f"$R_\\phi$ = {r:g}")
+    ax.axhline(0, color="k", lw=0.6)
+    ax.set_xlabel(r"torsional phase $\psi$ [rad]")
+    ax.set_ylabel(r"mean rotor speed $R_\phi\bar\Omega$ (stator units)")
+    ax.set_title(
+        f"motor curve: e = {ds.attrs.get('e'):.3g}, ω_s = {ds.attrs.get('omega_s'):.3g}",
+        fontsize=10,
+    )
+    ax.legend(fontsize=8)
+    return fig
+
+
+def fig_clipped_vs_bouncing(ds: xr.Dataset) -> Figure:
+    """Rotor speed of the bouncing model beside the clipped-sinusoid spring-contact model."""
+    psis = ds["psi"].values
+    fig = Figure(figsize=(8.0, 2.6 * len(psis)), layout="constrained")
+    axes = fig.subplots(len(psis), 1, sharex=True, squeeze=False)[:, 0]
+    t = ds["time"].values
+    for ax, p in zip(axes, psis, strict=True):
+        for model, color in (("bouncing", COLORS["rotor"]), ("clipped", COLORS["fit"])):
+            ax.plot(
+                t,
+                ds["omega_rotor"].sel(model=model, psi=p).values,
+                color=color,
+                lw=0.8,
+                label=f"{model} model",
+            )
+        ax.set_ylabel(r"$\Omega$")
+        ax.set_title(f"ψ = {p:.3g}", fontsize=10)
+        ax.legend(fontsize=8, loc="upper left")
+    axes[-1].set_xlabel("time $t/t_c$")
+    fig.suptitle(
+        "bouncing disk vs clipped spring contact (refs. [2, 3] of the paper): "
+        f"e = {ds.attrs.get('e'):.3g}, ω_s = {ds.attrs.get('omega_s'):.3g}",
+        fontsize=10,
+    )
+    return fig
+
+
+def fig_work_precision(table: pd.DataFrame) -> Figure:
+    """Error against CPU time, one line per solver and case (log–log)."""
+    cases = list(dict.fromkeys(table["case"]))
+    fig = Figure(figsize=(5.5 * len(cases), 4.5), layout="constrained")
+    axes = fig.subplots(1, len(cases), squeeze=False)[0]
+    for ax, case in zip(axes, cases, strict=True):
+        sub = table[table["case"] == case]
+        for solver, g in sub.groupby("solver", sort=False):
+            g = g.sort_values("cpu_s")
+            ax.loglog(g["cpu_s"], g["error"].clip(lower=1e-17), "o-", ms=4, lw=1, label=solver)
+        ax.set_xlabel("CPU time [s]")
+        ax.set_ylabel("max error in impact times (first 20)")
+        ax.set_title(case, fontsize=10)
+        ax.grid(True, which="both", lw=0.3)
+        ax.legend(fontsize=8)
+    return fig
+
+
+def fig_scaling(table: pd.DataFrame) -> Figure:
+    """Cost per impact against omega_s, total time and memory against the number of impacts."""
+    fig = Figure(figsize=(13.0, 4.0), layout="constrained")
+    a1, a2, a3 = fig.subplots(1, 3)
+    w = table[table["study"] == "omega"]
+    a1.semilogx(w["omega_s"], 1e9 * w["s_per_impact"], "o-")
+    a1.set_xlabel(r"$\omega_s$")
+    a1.set_ylabel("time per impact [ns]")
+    a1.set_ylim(bottom=0)
+    n = table[table["study"] == "impacts"]
+    a2.loglog(n["n_impacts"], n["seconds"], "o-", label="measured")
+    if len(n):
+        x = n["n_impacts"].values
+        a2.loglog(x, n["seconds"].values[-1] * x / x[-1], "--", color="k", lw=0.8, label="linear")
+    a2.set_xlabel("impacts")
+    a2.set_ylabel("wall time [s]")
+    a2.legend(fontsize=8)
+    m = table[table["study"] == "memory"]
+    a3.loglog(m["n_impacts"], m["peak_mb"], "o-")
+    a3.set_xlabel("impacts (events only, streamed to netCDF)")
+    a3.set_ylabel("peak memory [MB]")
+    return fig

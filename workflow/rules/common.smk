@@ -1,0 +1,98 @@
+# Shared helpers: paths, config checks that must fail before any job runs.
+import math
+
+RES = config["results"]
+SCENES = "workflow/config/scenes"
+# every result depends on the code that made it: editing the package reruns what it affects
+CODE = sorted(str(p) for p in Path("src/bouncedisk").rglob("*.py"))
+
+
+wildcard_constraints:
+    scene=r"[A-Za-z0-9][A-Za-z0-9_.-]*",
+    sweep=r"[A-Za-z0-9][A-Za-z0-9_.-]*",
+
+
+def scene_path(name):
+    return f"{SCENES}/{name}.yaml"
+
+
+def _check_config():
+    """Fail early, naming the key, when the config refers to something that does not exist."""
+    wanted = {f"simulations[{i}]": s for i, s in enumerate(config["simulations"])}
+    wanted.update({f"sweeps.{k}.scene": v["scene"] for k, v in config["sweeps"].items()})
+    wanted["clipped_comparison.scene"] = config["clipped_comparison"]["scene"]
+    for key, name in wanted.items():
+        if not Path(scene_path(name)).is_file():
+            raise ValueError(
+                f"workflow/config/config.yaml: {key}: unknown scene {name!r} "
+                f"(no file {scene_path(name)})"
+            )
+    for key in config["poincare"]:
+        if key not in config["simulations"]:
+            raise ValueError(
+                f"workflow/config/config.yaml: poincare.{key}: not listed in 'simulations'"
+            )
+    for name, spec in config["sweeps"].items():
+        first = next(iter(spec["axes"].values()))
+        n = len(first["values"]) if "values" in first else first["n"]
+        if spec["shards"] > n:
+            raise ValueError(
+                f"workflow/config/config.yaml: sweeps.{name}.shards: {spec['shards']} shards "
+                f"for only {n} values of the first axis"
+            )
+    for key in ("fig3", "fig4", "fig5"):
+        if key not in config["simulations"]:
+            raise ValueError(
+                f"workflow/config/config.yaml: simulations: must include {key!r} (a paper figure)"
+            )
+    if False and not Path(config["prototype"]["curve"]).is_file():
+        raise ValueError(
+            f"workflow/config/config.yaml: prototype.curve: no file {config['prototype']['curve']}"
+        )
+
+
+_check_config()
+
+FIGURES = [
+    "fig2_schematic",
+    "fig3_trajectory_e03",
+    "fig4_trajectory_e06",
+    "poincare_maps",
+    "bifurcation_e",
+    "regime_map",
+    "speed_vs_psi",
+    "clipped_vs_bouncing",
+]
+
+
+def sweep_shards(wildcards):
+    n = config["sweeps"][wildcards.sweep]["shards"]
+    return [f"{RES}/sweeps/{wildcards.sweep}/shard-{i}.nc" for i in range(n)]
+
+
+def all_targets():
+    figs = expand(f"{RES}/figures/{{fig}}.{{ext}}", fig=FIGURES, ext=["pdf", "png"])
+    return figs + [
+        f"{RES}/runs.csv",
+        f"{RES}/reproduction.md",
+    ] + expand(f"{RES}/poincare/{{s}}.nc", s=list(config["poincare"]))
+
+
+FIGCAT = "Figures of the paper"
+STUDY = "Studies beyond the paper"
+
+
+def fig_out(name, caption, category):
+    return {
+        "pdf": f"{RES}/figures/{name}.pdf",
+        "png": report(f"{RES}/figures/{name}.png", caption=f"../report/{caption}.rst",
+                      category=category),
+    }
+
+
+def registry_inputs(wildcards):
+    files = expand(f"{RES}/simulations/{{s}}.nc", s=config["simulations"])
+    files += expand(f"{RES}/sweeps/{{s}}.nc", s=list(config["sweeps"]))
+    files += expand(f"{RES}/poincare/{{s}}.nc", s=list(config["poincare"]))
+    files += [f"{RES}/studies/clipped_vs_bouncing.nc"]
+    return files

@@ -1,0 +1,144 @@
+# Stage 5: figures (PDF and PNG), each a pure function of the built netCDF files.
+
+rule fig2_schematic:
+    input:
+        code=CODE,
+    output:
+        **fig_out("fig2_schematic", "fig2", FIGCAT),
+    conda:
+        "../envs/bouncedisk.yaml"
+    log:
+        f"{RES}/logs/figures/fig2_schematic.log",
+    benchmark:
+        f"{RES}/benchmarks/figures/fig2_schematic.tsv"
+    params:
+        figure="fig2",
+    script:
+        "../scripts/figure.py"
+
+
+rule fig3_trajectory:
+    input:
+        code=CODE,
+        sim=f"{RES}/simulations/fig3.nc",
+    output:
+        **fig_out("fig3_trajectory_e03", "fig3", FIGCAT),
+    conda:
+        "../envs/bouncedisk.yaml"
+    log:
+        f"{RES}/logs/figures/fig3_trajectory_e03.log",
+    benchmark:
+        f"{RES}/benchmarks/figures/fig3_trajectory_e03.tsv"
+    params:
+        figure="trajectory",
+    script:
+        "../scripts/figure.py"
+
+
+rule fig4_trajectory:
+    input:
+        code=CODE,
+        sim=f"{RES}/simulations/fig4.nc",
+    output:
+        **fig_out("fig4_trajectory_e06", "fig4", FIGCAT),
+    conda:
+        "../envs/bouncedisk.yaml"
+    log:
+        f"{RES}/logs/figures/fig4_trajectory_e06.log",
+    benchmark:
+        f"{RES}/benchmarks/figures/fig4_trajectory_e06.tsv"
+    params:
+        figure="trajectory",
+    script:
+        "../scripts/figure.py"
+
+
+rule poincare_maps:
+    input:
+        code=CODE,
+        maps=expand(f"{RES}/poincare/{{s}}.nc", s=list(config["poincare"])),
+    output:
+        **fig_out("poincare_maps", "poincare", STUDY),
+    conda:
+        "../envs/bouncedisk.yaml"
+    log:
+        f"{RES}/logs/figures/poincare_maps.log",
+    benchmark:
+        f"{RES}/benchmarks/figures/poincare_maps.tsv"
+    params:
+        figure="poincare",
+        labels=list(config["poincare"].values()),
+    script:
+        "../scripts/figure.py"
+
+
+rule bifurcation_figure:
+    input:
+        code=CODE,
+        sweep=f"{RES}/sweeps/bifurcation.nc",
+    output:
+        **fig_out("bifurcation_e", "bifurcation", STUDY),
+    conda:
+        "../envs/bouncedisk.yaml"
+    log:
+        f"{RES}/logs/figures/bifurcation_e.log",
+    benchmark:
+        f"{RES}/benchmarks/figures/bifurcation_e.tsv"
+    params:
+        figure="bifurcation",
+    script:
+        "../scripts/figure.py"
+
+
+rule regime_map_figure:
+    input:
+        code=CODE,
+        sweep=f"{RES}/sweeps/regime_map.nc",
+    output:
+        **fig_out("regime_map", "regime_map", STUDY),
+    conda:
+        "../envs/bouncedisk.yaml"
+    log:
+        f"{RES}/logs/figures/regime_map.log",
+    benchmark:
+        f"{RES}/benchmarks/figures/regime_map.tsv"
+    params:
+        figure="regime_map",
+    script:
+        "../scripts/figure.py"
+
+
+rule speed_vs_psi_figure:
+    input:
+        code=CODE,
+        sweep=f"{RES}/sweeps/psi_speed.nc",
+    output:
+        **fig_out("speed_vs_psi", "speed_vs_psi", STUDY),
+    conda:
+        "../envs/bouncedisk.yaml"
+    log:
+        f"{RES}/logs/figures/speed_vs_psi.log",
+    benchmark:
+        f"{RES}/benchmarks/figures/speed_vs_psi.tsv"
+    params:
+        figure="speed_vs_psi",
+    script:
+        "../scripts/figure.py"
+
+
+rule clipped_figure:
+    input:
+        code=CODE,
+        study=f"{RES}/studies/clipped_vs_bouncing.nc",
+    output:
+        **fig_out("clipped_vs_bouncing", "clipped", STUDY),
+    conda:
+        "../envs/bouncedisk.yaml"
+    log:
+        f"{RES}/logs/figures/clipped_vs_bouncing.log",
+    benchmark:
+        f"{RES}/benchmarks/figures/clipped_vs_bouncing.tsv"
+    params:
+        figure="clipped",
+    script:
+        "../scripts/figure.py"

@@ -1,0 +1,28 @@
+"""Adapter: draw one figure from built netCDF files (PDF and PNG, written atomically)."""
+
+from bouncedisk import plotting
+from bouncedisk.datasets import open_checked, open_simulation
+from bouncedisk.logutil import log_to
+
+with log_to(snakemake.log[0]) as log:
+    kind = snakemake.params.figure
+    inp = snakemake.input
+    if kind == "fig2":
+        fig = plotting.fig2_schematic()
+    elif kind == "trajectory":
+        fig = plotting.fig_trajectory(open_simulation(inp.sim))
+    elif kind == "poincare":
+        maps = [open_checked(p, required=("phase", "v_rel")) for p in inp.maps]
+        fig = plotting.fig_poincare(dict(zip(snakemake.params.labels, maps, strict=True)))
+    elif kind == "bifurcation":
+        fig = plotting.fig_bifurcation(open_checked(inp.sweep, required=("phase", "lyapunov")))
+    elif kind == "regime_map":
+        fig = plotting.fig_regime_map(open_checked(inp.sweep, required=("regime", "lyapunov")))
+    elif kind == "speed_vs_psi":
+        fig = plotting.fig_speed_vs_psi(open_checked(inp.sweep, required=("mean_slip_speed",)))
+    elif kind == "clipped":
+        fig = plotting.fig_clipped_vs_bouncing(open_checked(inp.study, required=("omega_rotor",)))
+    else:
+        raise ValueError(f"unknown figure {kind!r}")
+    plotting.save_figure(fig, snakemake.output.pdf, snakemake.output.png)
+    log.info("wrote %s and %s", snakemake.output.pdf, snakemake.output.png)

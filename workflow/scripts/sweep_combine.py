@@ -1,0 +1,17 @@
+"""Adapter: join the shards of a sweep into one netCDF file."""
+
+import xarray as xr
+
+from bouncedisk.datasets import open_checked, write_dataset
+from bouncedisk.logutil import log_to
+from bouncedisk.sweeps import combine_shards
+
+with log_to(snakemake.log[0]) as log:
+    shards = [open_checked(p, required=("regime",)) for p in snakemake.input.shards]
+    ds = combine_shards(shards)
+    ds.attrs["history"] = f"combined from {len(shards)} shards"
+    write_dataset(ds, snakemake.output[0])
+    # the shards join the same way with open_mfdataset, as users will do on a cluster
+    with xr.open_mfdataset(list(snakemake.input.shards), combine="by_coords") as mf:
+        assert mf.sizes == ds.sizes, (mf.sizes, ds.sizes)
+    log.info("%s: %s", snakemake.output[0], dict(ds.sizes))
