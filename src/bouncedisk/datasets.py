@@ -54,6 +54,10 @@ def _attr_value(v: Any) -> Any:
         return "none"
     if isinstance(v, float | int | str | np.integer | np.floating):
         return v
+    if isinstance(v, np.ndarray) and v.ndim == 1 and v.dtype.kind in "fiu":
+        return v
+    if isinstance(v, list | tuple) and v and all(isinstance(x, int | float) for x in v):
+        return np.asarray(v)
     return str(v)
 
 

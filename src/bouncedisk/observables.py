@@ -225,40 +225,40 @@ class FirstOrderTrend:
 def first_order_trend(t: np.ndarray, omega: np.ndarray) -> FirstOrderTrend:
     """Least-squares first-order response (steady value and time constant) through ``(t, Ω)``.
 
-    The ripple is the RMS of the residual about the trend.
+    For a fixed ``τ`` the model is linear in ``(Ω∞, Ω0)``, so the fit is a bounded 1-D search
+    over ``log τ`` with a 2-parameter linear solve inside (variable projection). The ripple is
+    the RMS of the residual about the trend.
     """
-    from scipy.optimize import curve_fit
+    from scipy.optimize import minimize_scalar
 
     t = np.asarray(t, float)
     y = np.asarray(omega, float)
     t0 = float(t[0])
     span = float(t[-1] - t0) or 1.0
-    tail = y[int(0.8 * len(y)) :]
-    steady0 = float(np.mean(tail)) if len(tail) else float(y[-1])
-    # initial time constant: time to reach 63 % of the steady value
-    target = y[0] + 0.632 * (steady0 - y[0])
-    cross = np.nonzero((y - target) * np.sign(steady0 - y[0] or 1.0) >= 0)[0]
-    tau0 = float(t[cross[0]] - t0) if len(cross) and t[cross[0]] > t0 else 0.2 * span
-    tau0 = max(tau0, 1e-6 * span)
+    dt = t - t0
 
-    def model(tt, s, tau, o0):
-        x = np.exp(-(tt - t0) / tau)
-        return s * (1.0 - x) + o0 * x
+    def solve(log_tau: float) -> tuple[float, np.ndarray]:
+        x = np.exp(-dt / math.exp(log_tau))
+        a = np.column_stack([1.0 - x, x])
+        coef, *_ = np.linalg.lstsq(a, y, rcond=None)
+        r = y - a @ coef
+        return float(r @ r), coef
 
-    try:
-        popt, _ = curve_fit(
-            model,
-            t,
-            y,
-            p0=[steady0, tau0, float(y[0])],
-            bounds=([-np.inf, 1e-9 * span, -np.inf], [np.inf, 1e3 * span, np.inf]),
-            maxfev=20000,
-        )
-    except (RuntimeError, ValueError):
-        popt = np.array([steady0, tau0, float(y[0])])
-    s, tau, o0 = (float(x) for x in popt)
-    resid = y - model(t, s, tau, o0)
-    return FirstOrderTrend(steady=s, tau=tau, omega0=o0, t0=t0, ripple_rms=float(np.std(resid)))
+    lo, hi = math.log(1e-4 * span), math.log(10.0 * span)
+    grid = np.linspace(lo, hi, 25)
+    costs = [solve(g)[0] for g in grid]
+    k = int(np.argmin(costs))
+    a, b = grid[max(0, k - 1)], grid[min(len(grid) - 1, k + 1)]
+    best = minimize_scalar(
+        lambda g: solve(g)[0], bounds=(a, b), method="bounded", options={"xatol": 1e-6}
+    )
+    log_tau = float(best.x) if best.fun <= costs[k] else float(grid[k])
+    cost, (s, o0) = solve(log_tau)
+    tau = math.exp(log_tau)
+    resid = y - (s * (1.0 - np.exp(-dt / tau)) + o0 * np.exp(-dt / tau))
+    return FirstOrderTrend(
+        steady=float(s), tau=tau, omega0=float(o0), t0=t0, ripple_rms=float(np.std(resid))
+    )
 
 
 @dataclass(frozen=True)

@@ -151,15 +151,12 @@ def fig5_motor(
             lw=0.9,
             label="bouncing-disk model, fitted",
         )
-        if "trend_fitted" in fitted:
-            ax.plot(
-                t,
-                fitted["trend_fitted"].values,
-                "--",
-                color="k",
-                lw=1,
-                label="first-order trend of the fit",
-            )
+        for name, style, label in (
+            ("trend_measured", "--", "first-order trend of the data"),
+            ("trend_fitted", ":", "first-order trend of the fitted model"),
+        ):
+            if name in fitted:
+                ax.plot(t, fitted[name].values, style, color="k", lw=1, label=label)
         axr.plot(
             t, fitted["omega_measured"].values - fitted["omega_fitted"].values, color="k", lw=0.5
         )
@@ -168,9 +165,10 @@ def fig5_motor(
         axr.set_xlabel("time [s]")
         a = fitted.attrs
         ax.set_title(
-            f"steady speed {a.get('steady_speed_rad_s', float('nan')):.4g} rad/s, "
-            f"time constant {a.get('time_constant_s', float('nan')):.3g} s",
-            fontsize=10,
+            f"trend of the data: steady speed {a.get('steady_speed_rad_s', float('nan')):.4g} "
+            f"rad/s, time constant {a.get('time_constant_s', float('nan')):.3g} s; "
+            f"not identified: {a.get('not_identified', '?')}",
+            fontsize=9,
         )
     elif simulated is not None:
         ax.plot(

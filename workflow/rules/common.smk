@@ -45,7 +45,7 @@ def _check_config():
             raise ValueError(
                 f"workflow/config/config.yaml: simulations: must include {key!r} (a paper figure)"
             )
-    if False and not Path(config["prototype"]["curve"]).is_file():
+    if not Path(config["prototype"]["curve"]).is_file():
         raise ValueError(
             f"workflow/config/config.yaml: prototype.curve: no file {config['prototype']['curve']}"
         )
@@ -57,6 +57,7 @@ FIGURES = [
     "fig2_schematic",
     "fig3_trajectory_e03",
     "fig4_trajectory_e06",
+    "fig5_prototype_fit",
     "poincare_maps",
     "bifurcation_e",
     "regime_map",
@@ -75,6 +76,8 @@ def all_targets():
     return figs + [
         f"{RES}/runs.csv",
         f"{RES}/reproduction.md",
+        f"{RES}/fit/prototype.nc",
+        f"{RES}/prototype/synthetic_motor.csv",
     ] + expand(f"{RES}/poincare/{{s}}.nc", s=list(config["poincare"]))
 
 
@@ -94,5 +97,5 @@ def registry_inputs(wildcards):
     files = expand(f"{RES}/simulations/{{s}}.nc", s=config["simulations"])
     files += expand(f"{RES}/sweeps/{{s}}.nc", s=list(config["sweeps"]))
     files += expand(f"{RES}/poincare/{{s}}.nc", s=list(config["poincare"]))
-    files += [f"{RES}/studies/clipped_vs_bouncing.nc"]
+    files += [f"{RES}/studies/clipped_vs_bouncing.nc", f"{RES}/fit/prototype.nc"]
     return files

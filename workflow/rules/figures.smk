@@ -142,3 +142,22 @@ rule clipped_figure:
         figure="clipped",
     script:
         "../scripts/figure.py"
+
+
+rule fig5_prototype:
+    input:
+        code=CODE,
+        curve=config["prototype"]["curve"],
+        fit=f"{RES}/fit/prototype.nc",
+    output:
+        **fig_out("fig5_prototype_fit", "fig5", FIGCAT),
+    conda:
+        "../envs/bouncedisk.yaml"
+    log:
+        f"{RES}/logs/figures/fig5_prototype_fit.log",
+    benchmark:
+        f"{RES}/benchmarks/figures/fig5_prototype_fit.tsv"
+    params:
+        figure="fig5",
+    script:
+        "../scripts/figure.py"

@@ -20,6 +20,13 @@ with log_to(snakemake.log[0]) as log:
         fig = plotting.fig_regime_map(open_checked(inp.sweep, required=("regime", "lyapunov")))
     elif kind == "speed_vs_psi":
         fig = plotting.fig_speed_vs_psi(open_checked(inp.sweep, required=("mean_slip_speed",)))
+    elif kind == "fig5":
+        from bouncedisk.curves import read_curve
+
+        curve = read_curve(inp.curve)
+        df = {"time_s": curve.time, "omega_rad_s": curve.omega}
+        fit = open_checked(inp.fit, required=("omega_measured", "omega_fitted"), what="fit")
+        fig = plotting.fig5_motor(df, fitted=fit)
     elif kind == "clipped":
         fig = plotting.fig_clipped_vs_bouncing(open_checked(inp.study, required=("omega_rotor",)))
     else:

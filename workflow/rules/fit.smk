@@ -1,0 +1,43 @@
+# Stage 4: the prototype motor curve (synthetic stand-in) and the fit of the model to it.
+
+
+rule synthetic_curve:
+    """Regenerate the shipped synthetic curve (and log whether it is byte-identical)."""
+    input:
+        code=CODE,
+        spec="workflow/config/synthetic_motor.yaml",
+        compiled=rules.compile_engine.output,
+    output:
+        csv=f"{RES}/prototype/synthetic_motor.csv",
+        yaml=f"{RES}/prototype/synthetic_motor.yaml",
+    conda:
+        "../envs/bouncedisk.yaml"
+    log:
+        f"{RES}/logs/synthetic_curve.log",
+    benchmark:
+        f"{RES}/benchmarks/synthetic_curve.tsv"
+    params:
+        shipped=config["prototype"]["curve"],
+    script:
+        "../scripts/make_synthetic_curve.py"
+
+
+rule fit_prototype:
+    """Fit the model to the prototype curve: results/fit/prototype.nc."""
+    input:
+        code=CODE,
+        curve=config["prototype"]["curve"],
+        compiled=rules.compile_engine.output,
+    output:
+        f"{RES}/fit/prototype.nc",
+    conda:
+        "../envs/bouncedisk.yaml"
+    log:
+        f"{RES}/logs/fit_prototype.log",
+    benchmark:
+        f"{RES}/benchmarks/fit_prototype.tsv"
+    params:
+        seed=config["prototype"]["seed"],
+        bootstrap=config["prototype"]["bootstrap"],
+    script:
+        "../scripts/fit_prototype.py"

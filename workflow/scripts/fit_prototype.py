@@ -1,0 +1,14 @@
+"""Adapter: fit the model to the prototype velocity-time curve."""
+
+from bouncedisk.curves import read_curve
+from bouncedisk.datasets import write_dataset
+from bouncedisk.fitting import FitSettings, fit_curve, fit_dataset, summary_text
+from bouncedisk.logutil import log_to
+
+with log_to(snakemake.log[0]) as log:
+    curve = read_curve(snakemake.input.curve)
+    settings = FitSettings(seed=snakemake.params.seed, bootstrap=snakemake.params.bootstrap)
+    fit = fit_curve(curve, settings, progress=log.info)
+    ds = fit_dataset(curve, fit)
+    write_dataset(ds, snakemake.output[0])
+    log.info("\n%s", summary_text(ds))
