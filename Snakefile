@@ -18,6 +18,7 @@ include: "workflow/rules/simulate.smk"
 include: "workflow/rules/sweep.smk"
 include: "workflow/rules/analyse.smk"
 include: "workflow/rules/fit.smk"
+include: "workflow/rules/accuracy.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/check.smk"
 

@@ -96,6 +96,9 @@ class SimulationWriter:
         var = self._nc.createVariable(
             name, dtype, (dim,), zlib=True, complevel=4, chunksizes=(self.chunk,), fill_value=False
         )
+        # writes only append: a two-chunk cache is enough and keeps memory flat on long runs
+        # (HDF5's default per-variable cache grows to tens of MB each)
+        var.set_var_chunk_cache(size=2 * self.chunk * 8, nelems=17, preemption=1.0)
         long_name, units = VARIABLES[name]
         var.long_name = long_name
         var.units = units

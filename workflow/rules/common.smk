@@ -63,6 +63,8 @@ FIGURES = [
     "regime_map",
     "speed_vs_psi",
     "clipped_vs_bouncing",
+    "work_precision",
+    "scaling",
 ]
 
 
@@ -78,6 +80,8 @@ def all_targets():
         f"{RES}/reproduction.md",
         f"{RES}/fit/prototype.nc",
         f"{RES}/prototype/synthetic_motor.csv",
+        f"{RES}/tables/work_precision.csv",
+        f"{RES}/tables/scaling.csv",
     ] + expand(f"{RES}/poincare/{{s}}.nc", s=list(config["poincare"]))
 
 

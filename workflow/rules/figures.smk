@@ -161,3 +161,39 @@ rule fig5_prototype:
         figure="fig5",
     script:
         "../scripts/figure.py"
+
+
+rule work_precision_figure:
+    input:
+        code=CODE,
+        table=f"{RES}/tables/work_precision.csv",
+    output:
+        **fig_out("work_precision", "work_precision", "Accuracy and cost"),
+    conda:
+        "../envs/bouncedisk.yaml"
+    log:
+        f"{RES}/logs/figures/work_precision.log",
+    benchmark:
+        f"{RES}/benchmarks/figures/work_precision.tsv"
+    params:
+        figure="work_precision",
+    script:
+        "../scripts/figure.py"
+
+
+rule scaling_figure:
+    input:
+        code=CODE,
+        table=f"{RES}/tables/scaling.csv",
+    output:
+        **fig_out("scaling", "scaling", "Accuracy and cost"),
+    conda:
+        "../envs/bouncedisk.yaml"
+    log:
+        f"{RES}/logs/figures/scaling.log",
+    benchmark:
+        f"{RES}/benchmarks/figures/scaling.tsv"
+    params:
+        figure="scaling",
+    script:
+        "../scripts/figure.py"

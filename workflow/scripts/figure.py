@@ -27,6 +27,13 @@ with log_to(snakemake.log[0]) as log:
         df = {"time_s": curve.time, "omega_rad_s": curve.omega}
         fit = open_checked(inp.fit, required=("omega_measured", "omega_fitted"), what="fit")
         fig = plotting.fig5_motor(df, fitted=fit)
+    elif kind in ("work_precision", "scaling"):
+        import pandas as pd
+
+        table = pd.read_csv(inp.table)
+        fig = (plotting.fig_work_precision if kind == "work_precision" else plotting.fig_scaling)(
+            table
+        )
     elif kind == "clipped":
         fig = plotting.fig_clipped_vs_bouncing(open_checked(inp.study, required=("omega_rotor",)))
     else:

@@ -1,0 +1,320 @@
+"""What accuracy costs in time: the work–precision study and the scaling measurements.
+
+Work–precision: for each case (a periodic orbit and a chattering rotor), each solver and each
+tolerance or step, the CPU time of a run and its errors against a reference (the exact engine at
+``tol = 1e-14``): the largest error in the first impact times, the error in the attractor's
+impact phases (periodic case) and in the time the rotor comes to rest (chattering case).
+
+Scaling: engine cost per impact against ``omega_s``, total time against the number of impacts,
+peak memory of a streamed events-only run against the number of impacts (each in a fresh
+process), and the cost of each effect.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from .engine import EngineConfig, InitialState, simulate_arrays
+from .engine.kernel import KIND_CHATTER, KIND_IMPACT
+from .observables import circular_distance
+from .solvers import ivp_events, moreau_events
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str
+    e: float
+    omega_s: float
+    init: InitialState | None
+    n_events: int
+    first: int  # impact times compared
+    attractor: int  # tail impacts whose phases are compared (0: none)
+    t_end: float = math.inf  # end of every run of the case
+
+
+CASES = (
+    Case("periodic (e = 0.3, omega_s = 1.5)", 0.3, 1.5, None, 240, 20, 2),
+    Case(
+        "chattering (e = 0.5, omega_s = 0.8)",
+        0.5,
+        0.8,
+        InitialState(t=0.0, u=0.5, v=0.0),
+        200,
+        10,
+        0,
+        t_end=10.0,
+    ),
+)
+IVP_TOLS = tuple(10.0**-k for k in range(3, 13))
+MOREAU_STEPS = (1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5)
+EXACT_TOLS = (1e-6, 1e-8, 1e-10, 1e-12, 1e-14)
+
+
+def _cpu(fn: Callable[[], dict], min_time: float = 0.05) -> tuple[dict, float]:
+    """Result and CPU seconds per call (repeated until ``min_time`` is spent)."""
+    start = time.process_time()
+    out = fn()
+    el = time.process_time() - start
+    if el >= min_time:
+        return out, el
+    n = 0
+    start = time.process_time()
+    while True:
+        fn()
+        n += 1
+        el = time.process_time() - start
+        if el >= min_time:
+            return out, el / n
+
+
+def _rest_time(ev: dict) -> float:
+    """When the rotor comes to rest: the accumulation point (engine) or the last impact."""
+    if len(ev["t"]) == 0:
+        return math.nan
+    chat = np.nonzero(ev["kind"] == KIND_CHATTER)[0]
+    return float(ev["t"][chat[0]]) if len(chat) else float(ev["t"][-1])
+
+
+def _errors(case: Case, ev: dict, ref: dict) -> dict[str, float]:
+    imp = ev["kind"] == KIND_IMPACT
+    rimp = ref["kind"] == KIND_IMPACT
+    t, rt = ev["t"][imp], ref["t"][rimp]
+    n = min(case.first, len(rt))
+    if len(t) < n:
+        err = math.inf
+    else:
+        err = float(np.max(np.abs(t[:n] - rt[:n])))
+    out = {"error": err, "phase_error": math.nan, "rest_error": math.nan}
+    if case.attractor:
+        k = case.attractor
+        a = np.sort(ev["phase"][imp][-k:])
+        b = np.sort(ref["phase"][rimp][-k:])
+        if len(a) == k and len(ev["t"]) >= min(case.n_events, len(ref["t"])):
+            out["phase_error"] = float(np.max(circular_distance(a, b)))
+        else:
+            out["phase_error"] = math.inf
+    else:
+        out["rest_error"] = abs(_rest_time(ev) - _rest_time(ref))
+        out["error"] = max(out["error"], out["rest_error"])
+    return out
+
+
+def work_precision(
+    cases=CASES,
+    ivp_tols=IVP_TOLS,
+    moreau_steps=MOREAU_STEPS,
+    exact_tols=EXACT_TOLS,
+    methods=("rk45", "dop853", "lsoda"),
+    progress: Callable[[str], None] | None = None,
+) -> pd.DataFrame:
+    """The work–precision table (module docstring)."""
+    rows = []
+    for case in cases:
+        init = case.init or InitialState()
+
+        def exact(tol, case=case, init=init):
+            return simulate_arrays(
+                EngineConfig(
+                    e=case.e,
+                    omega_s=case.omega_s,
+                    tol=tol,
+                    max_events=case.n_events,
+                    t_end=case.t_end,
+                ),
+                init,
+            ).events
+
+        ref = exact(1e-14)
+        u0, v0 = init.u, init.v
+        configs = [("exact", "tol", tol, lambda tol=tol: exact(tol)) for tol in exact_tols]
+        for m in methods:
+            configs += [
+                (
+                    f"solve_ivp {m.upper()}",
+                    "rtol",
+                    tol,
+                    lambda m=m, tol=tol, case=case, init=init, u0=u0, v0=v0: ivp_events(
+                        case.e, case.omega_s, m, tol, init.t, u0, v0, case.n_events, case.t_end
+                    )[0],
+                )
+                for tol in ivp_tols
+            ]
+        configs += [
+            (
+                "Moreau-Jean",
+                "h",
+                h,
+                lambda h=h, case=case, init=init, u0=u0, v0=v0: moreau_events(
+                    case.e, case.omega_s, h, init.t, u0, v0, case.n_events, case.t_end
+                )[0],
+            )
+            for h in moreau_steps
+        ]
+        for solver, knob, value, fn in configs:
+            ev, cpu = _cpu(fn)
+            err = _errors(case, ev, ref)
+            rows.append(
+                {
+                    "case": case.name,
+                    "solver": solver,
+                    "knob": knob,
+                    "value": value,
+                    "cpu_s": cpu,
+                    "n_impacts": int(np.sum(ev["kind"] == KIND_IMPACT)),
+                    **err,
+                }
+            )
+            if progress:
+                progress(
+                    f"{case.name}: {solver} {knob}={value:g}: error {err['error']:.2e}, {cpu:.4g} s"
+                )
+    return pd.DataFrame(rows)
+
+
+def work_precision_summary(table: pd.DataFrame, target: float = 1e-8) -> dict[str, float | bool]:
+    """The issue's targets, as ratios from one run.
+
+    ``speedup``: CPU time of the fastest solve_ivp configuration reaching ``target`` over that of
+    the cheapest exact configuration reaching it (periodic case). ``dominates``: for every
+    comparator configuration, the exact solver has a smaller error at no more CPU time (or at its
+    cheapest setting, when that is cheaper still).
+    """
+    periodic = table[table["case"] == CASES[0].name]
+    ivp = periodic[periodic["solver"].str.startswith("solve_ivp") & (periodic["error"] <= target)]
+    ex = periodic[(periodic["solver"] == "exact") & (periodic["error"] <= target)]
+    speedup = float(ivp["cpu_s"].min() / ex["cpu_s"].min()) if len(ivp) and len(ex) else math.nan
+    dominated = True
+    worst = ""
+    for case, sub in table.groupby("case"):
+        exact = sub[sub["solver"] == "exact"]
+        for _, row in sub[sub["solver"] != "exact"].iterrows():
+            within = exact[exact["cpu_s"] <= row["cpu_s"]]
+            if len(within) == 0:
+                within = exact.nsmallest(1, "cpu_s")
+            best = float(within["error"].min())
+            if not (best < row["error"] or best == 0.0):
+                dominated = False
+                worst = f"{case}: {row['solver']} {row['knob']}={row['value']:g}"
+    return {
+        "speedup_vs_fastest_ivp_at_1e-8": speedup,
+        "exact_more_accurate_at_every_budget": dominated,
+        "counterexample": worst,
+    }
+
+
+# ------------------------------------------------------------------------------------ scaling
+def _rate(cfg: EngineConfig, repeat: int = 2) -> float:
+    simulate_arrays(EngineConfig(**{**cfg.__dict__, "max_events": 10, "t_end": math.inf}))
+    best = math.inf
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        res = simulate_arrays(cfg)
+        best = min(best, time.perf_counter() - t0)
+    return best, len(res.events["t"])
+
+
+def _vm_hwm_mb() -> str:
+    return (
+        "def _hwm():\n"
+        "    for line in open('/proc/self/status'):\n"
+        "        if line.startswith('VmHWM:'):\n"
+        "            return int(line.split()[1]) / 1024.0\n"
+        "    import resource\n"
+        "    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0\n"
+    )
+
+
+def peak_memory_mb(n_events: int, e: float = 0.6, omega_s: float = 1.5) -> float:
+    """Peak RSS (MB) of a fresh process streaming an events-only run of ``n_events`` to netCDF.
+
+    Read from the child's own ``VmHWM`` (``ru_maxrss`` would include the parent's high-water
+    mark, which Linux keeps across fork and exec).
+    """
+    code = (
+        "import json,sys\n" + _vm_hwm_mb() + "from bouncedisk.scene import scene_from_mapping\n"
+        "from bouncedisk.runner import run_scene\n"
+        f"s=scene_from_mapping({{'name':'mem','parameters':{{'e':{e},'omega_s':{omega_s}}},"
+        f"'effects':['impacts','contact'],'stop':{{'impacts':{n_events}}}}})\n"
+        "run_scene(s, sys.argv[1], progress=False)\n"
+        "print(json.dumps(_hwm()))\n"
+    )
+    with tempfile.TemporaryDirectory() as d:
+        out = os.path.join(d, "mem.nc")
+        proc = subprocess.run(
+            [sys.executable, "-c", code, out], capture_output=True, text=True, check=True
+        )
+    return float(json.loads(proc.stdout.strip().splitlines()[-1]))
+
+
+def scaling(
+    omegas=(1.5, 3.0, 10.0, 30.0, 100.0, 300.0, 1000.0),
+    per_omega: int = 200_000,
+    sizes=(1_000, 10_000, 100_000, 1_000_000),
+    memory_sizes=(1_000, 100_000, 1_000_000),
+    effect_events: int = 200_000,
+    progress: Callable[[str], None] | None = None,
+) -> pd.DataFrame:
+    """The scaling table (module docstring); one row per measurement, ``study`` says which."""
+    rows = []
+    for w in omegas:
+        sec, n = _rate(EngineConfig(e=0.3, omega_s=w, max_events=per_omega))
+        rows.append(
+            {
+                "study": "omega",
+                "omega_s": w,
+                "n_impacts": n,
+                "seconds": sec,
+                "s_per_impact": sec / n,
+            }
+        )
+        if progress:
+            progress(f"omega_s = {w:g}: {1e9 * sec / n:.0f} ns per impact")
+    for n_ev in sizes:
+        sec, n = _rate(EngineConfig(e=0.6, omega_s=1.5, max_events=n_ev), repeat=1)
+        rows.append(
+            {
+                "study": "impacts",
+                "omega_s": 1.5,
+                "n_impacts": n,
+                "seconds": sec,
+                "s_per_impact": sec / n,
+            }
+        )
+        if progress:
+            progress(f"{n_ev} impacts: {sec:.4g} s")
+    for n_ev in memory_sizes:
+        mb = peak_memory_mb(n_ev)
+        rows.append({"study": "memory", "omega_s": 1.5, "n_impacts": n_ev, "peak_mb": mb})
+        if progress:
+            progress(f"{n_ev} impacts streamed: peak {mb:.0f} MB")
+    effects = {
+        "axial only": dict(torsion=False),
+        "+ torsion": dict(torsion=True, r_phi=0.01),
+        "+ torsion + trajectory (dt = 0.01)": dict(torsion=True, r_phi=0.01, traj_dt=0.01),
+    }
+    for label, kw in effects.items():
+        sec, n = _rate(EngineConfig(e=0.6, omega_s=1.5, max_events=effect_events, **kw))
+        rows.append(
+            {
+                "study": "effects",
+                "effect": label,
+                "omega_s": 1.5,
+                "n_impacts": n,
+                "seconds": sec,
+                "s_per_impact": sec / n,
+            }
+        )
+        if progress:
+            progress(f"{label}: {1e9 * sec / n:.0f} ns per impact")
+    return pd.DataFrame(rows)
