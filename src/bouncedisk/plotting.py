@@ -29,6 +29,15 @@ def save_figure(fig: Figure, *paths: str | Path, dpi: int = 150) -> None:
             fig.savefig(tmp, dpi=dpi, format=Path(p).suffix.lstrip("."), bbox_inches="tight")
 
 
+def _param(ds: xr.Dataset, name: str) -> float:
+    """A parameter from the attributes, or from a scalar coordinate (a slice of a sweep)."""
+    if name in ds.attrs:
+        return float(ds.attrs[name])
+    if name in ds.coords and ds[name].size == 1:
+        return float(ds[name].values)
+    return math.nan
+
+
 def _title(ds: xr.Dataset) -> str:
     a = ds.attrs
     return (
@@ -224,7 +233,7 @@ def fig_bifurcation(ds: xr.Dataset) -> Figure:
     ax.plot(ee.ravel(), ph.ravel(), ",", color="k", alpha=0.7)
     ax.set_ylim(0, TWO_PI)
     ax.set_ylabel(r"impact phase $\omega_s t$ mod $2\pi$")
-    ax.set_title(f"bifurcation diagram, ω_s = {ds.attrs.get('omega_s'):.3g}", fontsize=10)
+    ax.set_title(f"bifurcation diagram, ω_s = {_param(ds, 'omega_s'):.3g}", fontsize=10)
     lam = ds["lyapunov"].values
     ax2.plot(e, lam, ".-", color=COLORS["fit"], ms=3, lw=0.8)
     ax2.axhline(0, color="k", lw=0.6)
@@ -281,7 +290,7 @@ def fig_speed_vs_psi(ds: xr.Dataset) -> Figure:
     ax.set_xlabel(r"torsional phase $\psi$ [rad]")
     ax.set_ylabel(r"mean rotor speed $R_\phi\bar\Omega$ (stator units)")
     ax.set_title(
-        f"motor curve: e = {ds.attrs.get('e'):.3g}, ω_s = {ds.attrs.get('omega_s'):.3g}",
+        f"motor curve: e = {_param(ds, 'e'):.3g}, ω_s = {_param(ds, 'omega_s'):.3g}",
         fontsize=10,
     )
     ax.legend(fontsize=8)
@@ -309,7 +318,7 @@ def fig_clipped_vs_bouncing(ds: xr.Dataset) -> Figure:
     axes[-1].set_xlabel("time $t/t_c$")
     fig.suptitle(
         "bouncing disk vs clipped spring contact (refs. [2, 3] of the paper): "
-        f"e = {ds.attrs.get('e'):.3g}, ω_s = {ds.attrs.get('omega_s'):.3g}",
+        f"e = {_param(ds, 'e'):.3g}, ω_s = {_param(ds, 'omega_s'):.3g}",
         fontsize=10,
     )
     return fig

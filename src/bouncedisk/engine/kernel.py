@@ -233,14 +233,20 @@ def _sample(
     return n_tr, n_sb
 
 
+@njit(cache=True, inline="always")
+def _report(info, n_ev, n_tr, n_sb):
+    """Record how many rows of each buffer this call wrote."""
+    info[1] = n_ev
+    info[2] = n_tr
+    info[3] = n_sb
+
+
 @njit(cache=True)
 def _finish(ist, info, status, n_ev, n_tr, n_sb):
     ist[I_MODE] = MODE_DONE
     ist[I_STATUS] = status
     info[0] = status
-    info[1] = n_ev
-    info[2] = n_tr
-    info[3] = n_sb
+    _report(info, n_ev, n_tr, n_sb)
 
 
 @njit(cache=True)
@@ -300,9 +306,7 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
             return
         if n_ev >= ev.shape[0]:
             info[0] = ST_CHUNK
-            info[1] = n_ev
-            info[2] = n_tr
-            info[3] = n_sb
+            _report(info, n_ev, n_tr, n_sb)
             return
         n = ist[I_N]
         th = st[S_TH]
@@ -317,45 +321,14 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
                 return
             n_hit = n + dk
             t_hit = (n_hit * TWO_PI + ph) / w
-            if t_hit > t_end:
-                length = t_end - t_now
-                a, b = _sample(
-                    SEG_FLIGHT,
-                    n,
-                    th,
-                    length,
-                    True,
-                    u0,
-                    v0,
-                    om,
-                    0.0,
-                    prm,
-                    flg,
-                    ist,
-                    traj,
-                    n_tr,
-                    strobe,
-                    n_sb,
-                    info,
-                )
-                if a < 0:
-                    info[1] = n_ev
-                    info[2] = n_tr
-                    info[3] = n_sb
-                    return
-                n_tr = a
-                n_sb = b
-                st[S_U] = u0 + v0 * length - 0.5 * length * length
-                st[S_V] = v0 - length
-                ist[I_N], st[S_TH] = _advance(n, th, w * length)
-                _finish(ist, info, ST_TIME, n_ev, n_tr, n_sb)
-                return
+            ends = t_hit > t_end  # the run's end comes before the impact
+            length = t_end - t_now if ends else tau
             a, b = _sample(
                 SEG_FLIGHT,
                 n,
                 th,
-                tau,
-                False,
+                length,
+                ends,
                 u0,
                 v0,
                 om,
@@ -370,12 +343,16 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
                 info,
             )
             if a < 0:
-                info[1] = n_ev
-                info[2] = n_tr
-                info[3] = n_sb
+                _report(info, n_ev, n_tr, n_sb)
                 return
             n_tr = a
             n_sb = b
+            if ends:
+                st[S_U] = u0 + v0 * length - 0.5 * length * length
+                st[S_V] = v0 - length
+                ist[I_N], st[S_TH] = _advance(n, th, w * length)
+                _finish(ist, info, ST_TIME, n_ev, n_tr, n_sb)
+                return
             v_rel, v_plus, om_plus = impact_law(
                 e, w, r, psi, ph, v_minus, om, torsion, cap, inertia
             )
@@ -456,9 +433,7 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
                 info,
             )
             if a < 0:
-                info[1] = n_ev
-                info[2] = n_tr
-                info[3] = n_sb
+                _report(info, n_ev, n_tr, n_sb)
                 return
             n_tr = a
             n_sb = b
@@ -607,9 +582,7 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
             info,
         )
         if a < 0:
-            info[1] = n_ev
-            info[2] = n_tr
-            info[3] = n_sb
+            _report(info, n_ev, n_tr, n_sb)
             return
         n_tr = a
         n_sb = b

