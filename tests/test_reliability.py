@@ -48,7 +48,7 @@ def _wait_for_tmp(folder, proc, timeout=60.0):
     raise AssertionError("the run never started writing")
 
 
-@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGINT])
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGINT, signal.SIGTERM])
 def test_killed_run_leaves_previous_complete_file_or_none(tmp_path, sig):
     scene = tmp_path / "long.yaml"
     scene.write_text(LONG)
@@ -65,7 +65,7 @@ def test_killed_run_leaves_previous_complete_file_or_none(tmp_path, sig):
     assert out.read_bytes() == before  # untouched: never truncated, never half-written
     with xr.open_dataset(out) as ds:
         assert ds.sizes["impact"] == 1000
-    if sig == signal.SIGINT:
+    if sig in (signal.SIGINT, signal.SIGTERM):
         assert proc.returncode == 130
         assert "interrupted" in err and "Traceback" not in err
         assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out.nc.")]

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import shlex
+import signal
 import sys
 from pathlib import Path
 
@@ -160,8 +161,26 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt
+
+
+def _install_signal_handlers() -> None:
+    """Ctrl-C (SIGINT) and SIGTERM stop a run cleanly: temporaries removed, no output written.
+
+    SIGINT is set explicitly because a process started in the background by a non-interactive
+    shell inherits it ignored, and Python then installs no handler of its own.
+    """
+    try:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGTERM, _interrupt)
+    except ValueError:  # not the main thread (embedded use): leave the host's handlers alone
+        pass
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the console script."""
+    _install_signal_handlers()
     parser = build_parser()
     args = parser.parse_args(argv)
     try:

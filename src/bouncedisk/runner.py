@@ -6,7 +6,9 @@ the file writer; the CLI and the pipeline's scripts call :func:`run_scene`.
 
 from __future__ import annotations
 
+import contextlib
 import math
+import signal
 import sys
 import time
 from collections.abc import Callable, Iterator
@@ -127,6 +129,42 @@ class Progress:
             self.stream.flush()
 
 
+class StopRequest:
+    """Signal handler that only records the request; the run stops at a safe point."""
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+
+    def __call__(self, signum, frame) -> None:
+        self.signum = signum
+
+    def check(self) -> None:
+        """Raise ``KeyboardInterrupt`` (outside any file write) if a stop was requested."""
+        if self.signum is not None:
+            raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def deferred_interrupts() -> Iterator[StopRequest]:
+    """During the block, SIGINT and SIGTERM set a flag instead of interrupting the code.
+
+    A signal landing inside a netCDF/HDF5 call could leave the library unable to close the file;
+    the run loop calls :meth:`StopRequest.check` between chunks instead.
+    """
+    req = StopRequest()
+    old = {}
+    try:
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            old[sig] = signal.signal(sig, req)
+    except ValueError:  # not the main thread: the host keeps its handlers
+        pass
+    try:
+        yield req
+    finally:
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+
+
 @dataclass
 class RunSummary:
     path: Path
@@ -208,19 +246,24 @@ def run_scene(
     start = time.perf_counter()
     gen = _chunks(scene)
     try:
-        with SimulationWriter(
-            out,
-            torsion=torsion,
-            events=scene.outputs.events,
-            trajectory=scene.outputs.trajectory is not None,
-            strobe=scene.outputs.stroboscopic,
-        ) as writer:
+        with (
+            deferred_interrupts() as stop_request,
+            SimulationWriter(
+                out,
+                torsion=torsion,
+                events=scene.outputs.events,
+                trajectory=scene.outputs.trajectory is not None,
+                strobe=scene.outputs.stroboscopic,
+            ) as writer,
+        ):
             while True:
+                stop_request.check()
                 try:
                     c = next(gen)
                 except StopIteration as stop:
                     code, final = stop.value
                     break
+                stop_request.check()
                 writer.append(c)
                 if on_chunk is not None:
                     on_chunk(c)
