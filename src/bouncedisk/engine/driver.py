@@ -178,16 +178,7 @@ def initial_state(cfg: EngineConfig, init: InitialState) -> tuple[np.ndarray, np
     if in_contact and load >= 0.0 and cfg.contact:
         ist[K.I_MODE] = K.MODE_CONTACT
         if cfg.torsion:
-            sig = K._contact_sigma(cfg.r_phi, w, cfg.psi, cfg.mu_ratio, init.omega, th0)
-            ist[K.I_SIG] = sig
-            ist[K.I_GUARD] = (
-                1
-                if sig != 0
-                and abs(cfg.r_phi * init.omega - w * math.cos(th0 + cfg.psi)) < 1e-14 * (1 + w)
-                else 0
-            )
-            if sig == 0:
-                st[K.S_OM] = w * math.cos(th0 + cfg.psi) / cfg.r_phi
+            K._enter_contact_torsion(st, ist, cfg.r_phi, w, cfg.psi, cfg.mu_ratio, th0)
     else:
         ist[K.I_MODE] = K.MODE_FLIGHT
         u = us if init.u is None else max(init.u, us)

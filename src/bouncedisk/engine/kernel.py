@@ -391,9 +391,9 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
                     ist[I_NC], st[S_THC] = _advance(n_hit, ph, w * t_acc)
                 else:
                     ist[I_CHAT] = 0
-                ist[I_SIG] = _contact_sigma(r, w, psi, rho, om_plus, ph) if torsion else 0
-                if torsion and ist[I_SIG] == 0:
-                    st[S_OM] = w * cos(ph + psi) / r
+                ist[I_SIG] = 0
+                if torsion:
+                    _enter_contact_torsion(st, ist, r, w, psi, rho, ph)
             else:
                 ist[I_MODE] = MODE_FLIGHT
                 st[S_U] = sin(ph)
@@ -447,15 +447,7 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
             st[S_TH] = th_back
             ist[I_FREE] = 0
             if torsion:
-                ist[I_SIG] = _contact_sigma(r, w, psi, rho, om, th_back)
-                ist[I_GUARD] = (
-                    1
-                    if ist[I_SIG] != 0
-                    and abs(r * om - w * cos(th_back + psi)) <= 1e-14 * (abs(r * om) + w)
-                    else 0
-                )
-                if ist[I_SIG] == 0:
-                    st[S_OM] = w * cos(th_back + psi) / r
+                _enter_contact_torsion(st, ist, r, w, psi, rho, th_back)
             continue
         if never_sep:
             tau_sep = inf
@@ -611,8 +603,7 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
                 elif hit_event:
                     # the slip reached zero: stick, or slip on in the stator's direction (§2.5)
                     st[S_OM] = w * cos(th1 + psi) / r
-                    ist[I_SIG] = _contact_sigma(r, w, psi, rho, st[S_OM], th1)
-                    ist[I_GUARD] = 1 if ist[I_SIG] != 0 else 0
+                    _enter_contact_torsion(st, ist, r, w, psi, rho, th1)
             elif hit_event:
                 ist[I_SIG] = new_sig
                 ist[I_GUARD] = new_guard
@@ -649,18 +640,36 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
                 ist[I_CHAT] = 0
 
 
+@njit(cache=True, inline="always")
+def _slip_is_zero(r, w, psi, omega, phase):
+    """``s = RΩ − Ω_s`` is zero to rounding."""
+    return abs(r * omega - w * cos(phase + psi)) <= 1e-14 * (abs(r * omega) + w)
+
+
 @njit(cache=True)
 def _contact_sigma(r, w, psi, rho, omega, phase):
     """Slip direction in contact: ``sgn(s)``, or at ``s = 0`` stick (0) when ``|α_s| <= ρRN``,
     else the direction set by the stator's acceleration (paper §2.5, corrected)."""
-    s = r * omega - w * cos(phase + psi)
-    scale = 1e-14 * (abs(r * omega) + w)
-    if s > scale:
-        return 1
-    if s < -scale:
-        return -1
+    if not _slip_is_zero(r, w, psi, omega, phase):
+        return 1 if r * omega - w * cos(phase + psi) > 0.0 else -1
     n_load = 1.0 - w * w * sin(phase)
     alpha = -w * w * sin(phase + psi)
     if abs(alpha) <= rho * r * n_load:
         return 0
     return 1 if alpha < 0.0 else -1
+
+
+@njit(cache=True)
+def _enter_contact_torsion(st, ist, r, w, psi, rho, phase):
+    """Torsional state on entering contact at ``phase`` with the rotor's current ``Ω``.
+
+    Sets the slip direction (:func:`_contact_sigma`); when the rotor leaves ``s = 0`` the guard,
+    so the slip search starts once the slip has grown (module ``run_chunk``); when it sticks,
+    ``RΩ = Ω_s`` exactly.
+    """
+    om = st[S_OM]
+    sig = _contact_sigma(r, w, psi, rho, om, phase)
+    ist[I_SIG] = sig
+    ist[I_GUARD] = 1 if sig != 0 and _slip_is_zero(r, w, psi, om, phase) else 0
+    if sig == 0:
+        st[S_OM] = w * cos(phase + psi) / r
