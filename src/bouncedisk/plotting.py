@@ -216,7 +216,11 @@ def fig_poincare(datasets: dict[str, xr.Dataset]) -> Figure:
         ax.legend(fontsize=8, loc="upper right")
         ax = axes[1, j]
         if "strobe_u" in ds:
-            ax.plot(ds["strobe_u"].values, ds["strobe_v"].values, ",", color=COLORS["rotor"])
+            su, sv = ds["strobe_u"].values, ds["strobe_v"].values
+            ax.plot(su, sv, ".", ms=1.0, color=COLORS["rotor"])
+            ax.plot(su[-50:], sv[-50:], "o", ms=3, color=COLORS["fit"], label="last 50 periods")
+            ax.margins(0.08)
+            ax.legend(fontsize=8, loc="best")
         ax.set_xlabel("rotor position at phase 0")
         ax.set_ylabel("rotor velocity at phase 0")
         ax.set_title(f"stroboscopic map, {label}", fontsize=10)
