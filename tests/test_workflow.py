@@ -73,42 +73,31 @@ def test_lint_is_clean():
     assert p.returncode == 0 and "Congratulations" in p.stdout + p.stderr
 
 
+def dry_run(config: Path, res: Path) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [
+            "snakemake",
+            "--cores",
+            "1",
+            "--configfile",
+            str(config),
+            "--config",
+            f"results={res}",
+            "-n",
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+    )
+
+
 def test_bad_config_fails_before_any_job(tmp_path):
     bad = tmp_path / "bad.yaml"
-    text = SMALL.read_text().replace("scene: bifurcation", "scene: no_such_scene")
-    bad.write_text(text)
-    p = subprocess.run(
-        [
-            "snakemake",
-            "--cores",
-            "1",
-            "--configfile",
-            str(bad),
-            "--config",
-            f"results={tmp_path / 'r'}",
-            "-n",
-        ],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-    )
+    bad.write_text(SMALL.read_text().replace("scene: bifurcation", "scene: no_such_scene"))
+    p = dry_run(bad, tmp_path / "r")
     assert p.returncode != 0 and "sweeps.bifurcation.scene" in p.stdout + p.stderr
     bad.write_text(SMALL.read_text().replace("shards: 3", "shards: -1"))
-    p = subprocess.run(
-        [
-            "snakemake",
-            "--cores",
-            "1",
-            "--configfile",
-            str(bad),
-            "--config",
-            f"results={tmp_path / 'r'}",
-            "-n",
-        ],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-    )
+    p = dry_run(bad, tmp_path / "r")
     assert p.returncode != 0 and "shards" in p.stdout + p.stderr
     assert not (tmp_path / "r").exists()
 
