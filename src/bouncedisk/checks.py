@@ -45,6 +45,8 @@ SCENES = {
 
 @dataclass(frozen=True)
 class CheckResult:
+    """One claim of the paper: what was measured, what was expected, and whether it holds."""
+
     claim: str
     measured: str
     expected: str
@@ -253,6 +255,7 @@ def run_checks(results: Path | None = None) -> list[CheckResult]:
 
 
 def to_text(results: list[CheckResult]) -> str:
+    """The checks for a terminal, ending with the plain 'N passed, N failed' line."""
     lines = []
     for r in results:
         lines.append(f"[{'PASS' if r.passed else 'FAIL'}] {r.claim}")
@@ -264,6 +267,7 @@ def to_text(results: list[CheckResult]) -> str:
 
 
 def to_markdown(results: list[CheckResult]) -> str:
+    """The checks as the Markdown table of ``results/reproduction.md``."""
     from .provenance import git_commit, utc_now
 
     rows = [

@@ -109,6 +109,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``bouncedisk`` command and its subcommands."""
     parser = argparse.ArgumentParser(
         prog="bouncedisk",
         description="Exact event-driven simulation of a rotor bouncing on a vibrating, "

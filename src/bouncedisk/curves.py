@@ -48,6 +48,7 @@ class MotorCurve:
 
     @property
     def dt(self) -> float:
+        """Median sampling interval (s)."""
         return float(np.median(np.diff(self.time)))
 
 

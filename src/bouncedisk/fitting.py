@@ -80,6 +80,7 @@ class FitSettings:
 
 
 def param_names(curve: MotorCurve) -> list[str]:
+    """Search coordinates: ``e, log10 R_φ, ψ, omega_s`` (+ ``log10`` speed scale if Φ0 is unknown)."""
     names = ["e", "log10_r_phi", "psi", "omega_s"]
     if curve.phi0_rad is None:
         names.append("log10_speed_scale")
@@ -214,6 +215,8 @@ def block_bootstrap_stats(
 
 @dataclass
 class FitResult:
+    """Estimates (search coordinates), intervals, identifiability and diagnostics of a fit."""
+
     names: list[str]
     theta: dict[str, float]
     ci_low: dict[str, float]

@@ -32,6 +32,7 @@ class Periodicity:
 
     @property
     def label(self) -> str:
+        """``period-p``, or ``period-p/q`` when the cycle spans q != p stator periods."""
         return f"period-{self.p}" if self.p == self.q else f"period-{self.p}/{self.q}"
 
 
@@ -88,10 +89,12 @@ class ImpactJacobian:
 
     @property
     def trace(self) -> float:
+        """Trace of the Jacobian."""
         return float(np.trace(self.matrix))
 
     @property
     def det(self) -> float:
+        """Determinant of the Jacobian (``e²`` for any free flight between impacts)."""
         return float(np.linalg.det(self.matrix))
 
 

@@ -214,4 +214,5 @@ class PhysicalParameters:
         )
 
     def as_dict(self) -> dict:
+        """The SI values as a plain mapping."""
         return asdict(self)

@@ -52,6 +52,7 @@ def engine_config(scene: Scene) -> EngineConfig:
 
 
 def initial_state(scene: Scene) -> InitialState:
+    """The engine's initial state for a scene."""
     i = scene.initial
     return InitialState(t=i.t, omega=i.omega, u=i.u, v=i.v)
 
@@ -95,6 +96,7 @@ class Progress:
         self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
 
     def fraction(self, events: int, t_now: float) -> float:
+        """Fraction done, from events or time (nan when neither bounds the run)."""
         if self.total_events:
             return min(1.0, events / self.total_events)
         if self.t_end and math.isfinite(self.t_end) and self.t_end > self.t_start:
@@ -102,6 +104,7 @@ class Progress:
         return math.nan
 
     def update(self, events: int, t_now: float) -> None:
+        """Show progress (after ``delay`` s; twice a second on a terminal, every 10 s otherwise)."""
         now = time.monotonic()
         elapsed = now - self.start
         if elapsed < self.delay or now - self.last < (0.5 if self.tty else 10.0):
@@ -124,6 +127,7 @@ class Progress:
         self.shown = True
 
     def close(self) -> None:
+        """End the progress line."""
         if self.shown and self.tty:
             self.stream.write("\n")
             self.stream.flush()
@@ -167,6 +171,8 @@ def deferred_interrupts() -> Iterator[StopRequest]:
 
 @dataclass
 class RunSummary:
+    """What a run wrote: file, run id, status, event counts and wall time."""
+
     path: Path
     run_id: str
     status: str

@@ -65,6 +65,7 @@ class Stop:
 
     @property
     def kind(self) -> str:
+        """``impacts`` or ``time``: what ends the run."""
         return "impacts" if self.impacts is not None else "time"
 
 
@@ -79,6 +80,8 @@ class Trajectory:
 
 @dataclass(frozen=True)
 class Outputs:
+    """What a run writes: events, a dense trajectory, a stroboscopic section."""
+
     events: bool = True
     trajectory: Trajectory | None = None
     stroboscopic: bool = False
@@ -86,6 +89,8 @@ class Outputs:
 
 @dataclass(frozen=True)
 class Solver:
+    """The solver: ``exact`` (root tolerance ``tol``) or a comparator (``tol`` or ``step``)."""
+
     method: str = "exact"
     tol: float = 1e-12
     step: float | None = None  # fixed step of the Moreau–Jean comparator
@@ -120,6 +125,7 @@ class Scene:
         return self.physical.scales() if self.physical else None
 
     def has(self, effect: str) -> bool:
+        """Whether the scene asked for ``effect``."""
         return effect in self.effects
 
 

@@ -33,6 +33,8 @@ from .solvers import ivp_events, moreau_events
 
 @dataclass(frozen=True)
 class Case:
+    """A test problem of the work–precision study."""
+
     name: str
     e: float
     omega_s: float

@@ -71,9 +71,11 @@ def ivp_events(
     rtol, atol = tol, tol * 0.1
 
     def rhs(t, y):
+        """Gap dynamics in flight: ``z'' = −1 − a_s = −1 + w² sin(wt)`` (MODEL.md "Flight")."""
         return [y[1], -1.0 + w * w * math.sin(w * t)]
 
     def gap(t, y):
+        """Impact event: the gap ``z = u − u_s`` reaches 0 from above (eq. 20)."""
         return y[0]
 
     gap.terminal = True
