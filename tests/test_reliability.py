@@ -106,20 +106,6 @@ values = st.one_of(
     st.text(max_size=12),
     st.lists(st.integers(), max_size=3),
 )
-keys = st.sampled_from(
-    [
-        "name",
-        "parameters",
-        "physical",
-        "initial",
-        "effects",
-        "stop",
-        "outputs",
-        "solver",
-        "model",
-        "bogus",
-    ]
-)
 param_maps = st.fixed_dictionaries(
     {},
     optional={
