@@ -38,6 +38,12 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_stats(args: argparse.Namespace) -> int:
+    from .statscli import stats_command
+
+    return stats_command(args)
+
+
 def _cmd_info(args: argparse.Namespace) -> int:
     from .datasets import open_simulation
 
@@ -129,6 +135,24 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress or summary")
     p.set_defaults(func=_cmd_simulate)
+
+    p = sub.add_parser(
+        "stats", help="long-run statistics of a scene's ensemble, with 95%% confidence intervals"
+    )
+    p.add_argument("scene", help="scene file (YAML) with stop.time; ensemble: {members, seed}")
+    p.add_argument("-o", "--output", help="also write per-member values to this netCDF file")
+    p.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        help="override a scene field, e.g. --set ensemble.members=32 (repeatable)",
+    )
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    p.add_argument(
+        "--cores", type=int, default=None, help="members run on this many cores (default: all)"
+    )
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress")
+    p.set_defaults(func=_cmd_stats)
 
     p = sub.add_parser("info", help="summarise a simulation netCDF file")
     p.add_argument("file")

@@ -8,8 +8,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from math import isfinite, log, sqrt
 
 import numpy as np
+from numba import njit
 
 from .engine.kernel import KIND_CHATTER, KIND_IMPACT
 
@@ -150,6 +152,56 @@ def impact_jacobians(
     return jac, idx
 
 
+@njit(cache=True, nogil=True)
+def benettin(jac, idx, vec, prev, skip):
+    """Benettin's tangent-vector iteration over impact-map Jacobians, resetting at every reset.
+
+    ``jac[j]`` maps the tangent vector across the free flight from impact ``idx[j]`` to
+    ``idx[j] + 1``. A pair that does not follow the previous one (``idx[j] != prev + 1``: contact
+    or a complete chatter in between) starts a fresh vector: the chatter's Jacobian is zero
+    (MODEL.md "Long-run statistics"), so growth is only measured between resets.
+
+    Parameters
+    ----------
+    jac : ndarray, shape (m, 2, 2)
+    idx : ndarray of int64, shape (m,)
+        Global index of the first impact of each pair.
+    vec : ndarray, shape (2,)
+        Tangent vector carried in (updated in place, so a stream can continue).
+    prev : int
+        Global index of the pair before ``idx[0]`` (``-2`` for none).
+    skip : int
+        Leading pairs left out of the sum (transient of the vector's alignment).
+
+    Returns
+    -------
+    total, count, prev
+        Sum of ``log |J v|`` and number of terms, and the last pair's index.
+    """
+    total = 0.0
+    count = 0
+    c = 1.0 / sqrt(2.0)
+    for j in range(len(idx)):
+        k = idx[j]
+        if k != prev + 1:
+            vec[0] = c
+            vec[1] = c
+        prev = k
+        x = jac[j, 0, 0] * vec[0] + jac[j, 0, 1] * vec[1]
+        y = jac[j, 1, 0] * vec[0] + jac[j, 1, 1] * vec[1]
+        norm = sqrt(x * x + y * y)
+        if norm == 0.0 or not isfinite(norm):
+            vec[0] = c
+            vec[1] = c
+            continue
+        vec[0] = x / norm
+        vec[1] = y / norm
+        if j >= skip:
+            total += log(norm)
+            count += 1
+    return total, count, prev
+
+
 def lyapunov_exponent(
     t: np.ndarray,
     phase: np.ndarray,
@@ -159,10 +211,10 @@ def lyapunov_exponent(
     omega_s: float,
     skip: int = 100,
 ) -> tuple[float, float]:
-    """Largest Lyapunov exponent of the impact map (Benettin's method with the exact Jacobian).
+    """Largest Lyapunov exponent of the impact map between resets (Benettin, exact Jacobian).
 
-    Contact and chattering episodes collapse all perturbations; they reset the tangent vector
-    and are left out of the average, so the value is the mean expansion rate over free flights.
+    Contact and chattering episodes collapse all perturbations (:func:`benettin`); they are
+    left out of the average, so the value is the mean expansion rate over free flights.
 
     Returns
     -------
@@ -172,28 +224,11 @@ def lyapunov_exponent(
     jac, idx = impact_jacobians(t, phase, v_rel, kind, e, omega_s)
     if len(idx) <= skip + 10:
         return math.nan, math.nan
-    vec = np.array([1.0, 1.0]) / math.sqrt(2.0)
-    total = 0.0
-    count = 0
-    elapsed = 0.0
-    prev = -2
-    for j in range(len(idx)):
-        k = idx[j]
-        if k != prev + 1:
-            vec = np.array([1.0, 1.0]) / math.sqrt(2.0)
-        prev = k
-        vec = jac[j] @ vec
-        norm = math.hypot(vec[0], vec[1])
-        if norm == 0.0 or not math.isfinite(norm):
-            vec = np.array([1.0, 1.0]) / math.sqrt(2.0)
-            continue
-        vec /= norm
-        if j >= skip:
-            total += math.log(norm)
-            count += 1
-            elapsed += t[k + 1] - t[k]
+    vec = np.full(2, 1.0 / math.sqrt(2.0))
+    total, count, _ = benettin(jac, idx.astype(np.int64), vec, -2, skip)
     if count == 0:
         return math.nan, math.nan
+    elapsed = float(np.sum(t[idx[skip:] + 1] - t[idx[skip:]]))
     return total / count, total / elapsed
 
 
@@ -264,24 +299,60 @@ def first_order_trend(t: np.ndarray, omega: np.ndarray) -> FirstOrderTrend:
     )
 
 
+#: Regime codes and names (MODEL.md "Long-run statistics of chaotic motion"); ``unresolved``:
+#: no period up to the search limit, no chatter and no positive exponent (run longer).
+REGIMES: dict[int, str] = {
+    0: "unresolved",
+    1: "periodic",
+    2: "chattering-periodic",
+    3: "chaotic-reinjection",
+    4: "chaotic",
+    5: "rest",
+}
+REGIME_CODES: dict[str, int] = {name: code for code, name in REGIMES.items()}
+
+
 @dataclass(frozen=True)
 class Regime:
-    """Dynamical regime of a run's tail."""
+    """Dynamical regime of a run's tail: a name of :data:`REGIMES`, and ``[p, q]`` if periodic."""
 
-    name: str  # "period-p[/q]", "chaotic", "chattering", "rest", "irregular"
-    period: Periodicity | None
-    lyapunov: float  # per impact (nan when undefined)
-    chatter_fraction: float
+    name: str
+    p: int = 0  # impacts per cycle (chatter tails not counted)
+    q: int = 0  # stator periods per cycle
 
     @property
     def code(self) -> int:
-        """Category code for maps: 1 periodic, 2 chaotic, 3 chattering, 4 rest, 5 irregular
-        (no period up to the maximum and a non-positive exponent)."""
-        if self.name == "chattering":
-            return 3
-        if self.period is not None:
-            return 1
-        return {"chaotic": 2, "rest": 4}.get(self.name, 5)
+        """The regime's code in :data:`REGIMES`."""
+        return REGIME_CODES[self.name]
+
+
+def chatter_cycle(
+    t: np.ndarray,
+    phase: np.ndarray,
+    v_rel: np.ndarray,
+    kind: np.ndarray,
+    omega_s: float,
+    tol: float = 1e-6,
+) -> tuple[int, int] | None:
+    """``(p, q)`` if the tail repeats one chatter-to-chatter cycle, else ``None``.
+
+    A complete chatter resets the state (MODEL.md), so a cycle that contains one repeats exactly:
+    the last three chatters must be equally spaced in events, and the events of the last two
+    cycles must agree in kind, phase and relative velocity within ``tol``.
+    """
+    where = np.nonzero(kind == KIND_CHATTER)[0]
+    if len(where) < 3:
+        return None
+    a, b, c = where[-3], where[-2], where[-1]
+    if c - b != b - a:
+        return None
+    m = c - b
+    dph = circular_distance(phase[b + 1 : c + 1], phase[a + 1 : b + 1])
+    dv = np.abs(v_rel[b + 1 : c + 1] - v_rel[a + 1 : b + 1])
+    if np.any(kind[b + 1 : c + 1] != kind[a + 1 : b + 1]) or np.any(dph > tol) or np.any(dv > tol):
+        return None
+    q = int(round((t[c] - t[b]) * omega_s / TWO_PI))
+    return int(m - 1), q
 
 
 def classify(
@@ -289,28 +360,47 @@ def classify(
     phase: np.ndarray,
     v_rel: np.ndarray,
     kind: np.ndarray,
-    e: float,
     omega_s: float,
-    at_rest: bool = False,
-    max_period: int = 16,
-    tail: int = 400,
+    lyapunov: float,
+    chatters: int | None = None,
+    max_period: int = 32,
 ) -> Regime:
-    """Classify the tail of a run: periodic, chaotic (positive exponent), chattering or at rest."""
-    if at_rest:
-        return Regime("rest", None, math.nan, 1.0)
-    n = min(tail, len(t))
-    sl = slice(len(t) - n, len(t))
-    chat = float(np.mean(kind[sl] == KIND_CHATTER)) if n else 0.0
-    per = find_period(t, phase, v_rel, kind, omega_s, max_period=max_period, tail=n)
-    lam, _ = lyapunov_exponent(t, phase, v_rel, kind, e, omega_s, skip=min(100, len(t) // 4))
+    """Classify the tail of a run (MODEL.md "Regimes").
+
+    Parameters
+    ----------
+    t, phase, v_rel, kind : ndarray
+        The last events of a run, after its transient.
+    lyapunov : float
+        Exponent per impact between resets (:func:`lyapunov_exponent`), ``nan`` if unknown.
+    chatters : int, optional
+        Complete chatters over the whole averaging window, when longer than the tail (a rare
+        reinjection may fall outside the tail); default: those in the tail.
+
+    Returns
+    -------
+    Regime
+        ``rest`` (no event), ``periodic`` (``p`` impacts every ``q`` periods, no chatter in the
+        tail), ``chattering-periodic`` (one chatter-to-chatter cycle repeating),
+        ``chaotic-reinjection`` (chatters, no repeating cycle), ``chaotic`` (positive exponent),
+        else ``unresolved``.
+    """
+    if len(t) == 0:
+        return Regime("rest")
+    in_tail = bool(np.any(kind == KIND_CHATTER))
+    if in_tail:
+        cyc = chatter_cycle(t, phase, v_rel, kind, omega_s)
+        if cyc is not None:
+            return Regime("chattering-periodic", *cyc)
+        return Regime("chaotic-reinjection")
+    per = find_period(t, phase, v_rel, kind, omega_s, max_period=max_period, tail=len(t))
     if per is not None:
-        name = per.label if chat == 0.0 else "chattering"
-        return Regime(name, per, lam, chat)
-    if math.isfinite(lam) and lam > 0.0:
-        return Regime("chaotic", None, lam, chat)
-    if chat > 0.0:
-        return Regime("chattering", None, lam, chat)
-    return Regime("irregular", None, lam, chat)
+        return Regime("periodic", per.p, per.q)
+    if chatters:
+        return Regime("chaotic-reinjection")
+    if math.isfinite(lyapunov) and lyapunov > 0.0:
+        return Regime("chaotic")
+    return Regime("unresolved")
 
 
 def period_n_threshold(n: int, e: float) -> float:

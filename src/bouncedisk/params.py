@@ -42,6 +42,9 @@ class Parameters:
         ``J_s / J_r > 0`` for the ``stator_inertia`` effect (eq. 11); ``inf`` means eq. 19.
     mu_ratio : float
         ``μ_static / μ_kinetic >= 1`` for the ``kinetic_static`` effect.
+    e_sigma : float
+        ``σ_e >= 0``, standard deviation of the per-impact restitution for the
+        ``restitution_noise`` effect (MODEL.md "Long-run statistics of chaotic motion").
     """
 
     e: float
@@ -50,11 +53,12 @@ class Parameters:
     psi: float = 0.0
     inertia_ratio: float = math.inf
     mu_ratio: float = 1.0
+    e_sigma: float = 0.0
 
     @classmethod
     def from_mapping(cls, data: dict, source: str = "", prefix: str = "parameters") -> Parameters:
         """Validate a mapping (e.g. a scene's ``parameters:``) into :class:`Parameters`."""
-        known = {"e", "omega_s", "r_phi", "psi", "inertia_ratio", "mu_ratio"}
+        known = {"e", "omega_s", "r_phi", "psi", "inertia_ratio", "mu_ratio", "e_sigma"}
         for key in data:
             if key not in known:
                 raise InputError(
@@ -92,6 +96,8 @@ class Parameters:
             raise InputError(
                 source, f"{prefix}.inertia_ratio", f"must be > 0, got {self.inertia_ratio}"
             )
+        if not self.e_sigma >= 0.0:
+            raise InputError(source, f"{prefix}.e_sigma", f"must be >= 0, got {self.e_sigma}")
         if not self.mu_ratio >= 1.0:
             raise InputError(source, f"{prefix}.mu_ratio", f"must be >= 1, got {self.mu_ratio}")
         if abs(self.psi) > 1e3:

@@ -48,6 +48,8 @@ def engine_config(scene: Scene) -> EngineConfig:
         traj_t1=traj.t_stop if traj and traj.t_stop is not None else math.inf,
         stroboscopic=scene.outputs.stroboscopic,
         clipped=scene.model == "clipped",
+        e_sigma=p.e_sigma if "restitution_noise" in eff else 0.0,
+        seed=scene.ensemble.seed,
     )
 
 
@@ -216,6 +218,10 @@ def scene_attrs(scene: Scene) -> dict:
         attrs["inertia_ratio"] = p.inertia_ratio
     if "kinetic_static" in scene.effects:
         attrs["mu_ratio"] = p.mu_ratio
+    if "restitution_noise" in scene.effects:
+        attrs.update({"e_sigma": p.e_sigma, "ensemble_seed": scene.ensemble.seed})
+    if scene.ensemble.members > 1:
+        attrs["ensemble_members"] = scene.ensemble.members
     if scene.solver.step is not None:
         attrs["step"] = scene.solver.step
     if scene.physical is not None:

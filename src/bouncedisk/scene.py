@@ -21,7 +21,15 @@ from .errors import InputError
 from .params import Parameters, PhysicalParameters, Scales
 
 #: Effects a scene may name (MODEL.md "Optional effects").
-EFFECTS = ("impacts", "contact", "torsion", "impulse_cap", "stator_inertia", "kinetic_static")
+EFFECTS = (
+    "impacts",
+    "contact",
+    "torsion",
+    "impulse_cap",
+    "stator_inertia",
+    "kinetic_static",
+    "restitution_noise",
+)
 #: Solver methods: the exact engine, and comparators for the accuracy study.
 SOLVERS = ("exact", "rk45", "dop853", "lsoda", "moreau")
 #: Contact models: the bouncing disk (the paper) and the earlier clipped-sinusoid spring contact.
@@ -38,7 +46,11 @@ TOP_KEYS = (
     "stop",
     "outputs",
     "solver",
+    "ensemble",
+    "stats",
 )
+#: Largest ensemble a scene may ask for (members run one after another on each core).
+MAX_MEMBERS = 100_000
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 
 
@@ -97,6 +109,21 @@ class Solver:
 
 
 @dataclass(frozen=True)
+class Ensemble:
+    """Ensemble of ``members`` runs differing by their restitution-noise streams under ``seed``."""
+
+    members: int = 1
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class StatsSettings:
+    """Long-run statistics: the transient ``discard`` (time) left out of every average."""
+
+    discard: float = 0.0
+
+
+@dataclass(frozen=True)
 class Scene:
     """A validated scene. ``raw`` is the resolved mapping (after overrides) that ``sha256`` hashes."""
 
@@ -110,6 +137,8 @@ class Scene:
     physical: PhysicalParameters | None = None
     description: str = ""
     model: str = "bouncing"
+    ensemble: Ensemble = Ensemble()
+    stats: StatsSettings = StatsSettings()
     source: str = "<scene>"
     raw: dict = field(default_factory=dict, compare=False)
 
@@ -302,6 +331,7 @@ def scene_from_mapping(raw: dict, source: str = "<scene>") -> Scene:
         and "mu_ratio" not in (raw.get("parameters") or {})
     ):
         raise InputError(src, "parameters.mu_ratio", "is required by the 'kinetic_static' effect")
+    _check_noise(src, raw, effects)
 
     im = _mapping(src, "initial", raw.get("initial"), ("t", "omega", "u", "v"))
     t0 = _num(src, "initial.t", im.get("t", 0.0))
@@ -390,9 +420,13 @@ def scene_from_mapping(raw: dict, source: str = "<scene>") -> Scene:
                 src, "solver.method", "the clipped model runs with the exact solver only"
             )
 
+    ensemble = _ensemble(src, raw.get("ensemble"), effects, params)
+    stats = _stats(src, raw.get("stats"), stop, initial)
     return Scene(
         name=name,
         model=model,
+        ensemble=ensemble,
+        stats=stats,
         params=params,
         initial=initial,
         effects=effects,
@@ -404,6 +438,47 @@ def scene_from_mapping(raw: dict, source: str = "<scene>") -> Scene:
         source=src,
         raw=raw,
     )
+
+
+def _check_noise(src: str, raw: dict, effects: frozenset[str]) -> None:
+    """``parameters.e_sigma`` goes with the ``restitution_noise`` effect, both or neither."""
+    given = "e_sigma" in (raw.get("parameters") or {})
+    if "restitution_noise" in effects and not given:
+        raise InputError(src, "parameters.e_sigma", "is required by the 'restitution_noise' effect")
+    if given and "restitution_noise" not in effects:
+        raise InputError(src, "parameters.e_sigma", "needs the 'restitution_noise' effect")
+
+
+def _ensemble(src: str, v: Any, effects: frozenset[str], params: Parameters) -> Ensemble:
+    """Validate ``ensemble: {members, seed}`` (INTERFACES.md)."""
+    em = _mapping(src, "ensemble", v, ("members", "seed"))
+    members = _int(src, "ensemble.members", em.get("members", 1))
+    if members > MAX_MEMBERS:
+        raise InputError(src, "ensemble.members", f"must be <= {MAX_MEMBERS}, got {members}")
+    seed = _int(src, "ensemble.seed", em.get("seed", 0), minimum=0)
+    if seed >= 2**63:
+        raise InputError(src, "ensemble.seed", f"must be < 2**63, got {seed}")
+    if members > 1 and "restitution_noise" not in effects:
+        raise InputError(
+            src,
+            "ensemble.members",
+            "members differ only by their restitution noise: add the 'restitution_noise' "
+            "effect and parameters.e_sigma (e.g. 1e-9)",
+        )
+    return Ensemble(members=members, seed=seed)
+
+
+def _stats(src: str, v: Any, stop: Stop, initial: Initial) -> StatsSettings:
+    """Validate ``stats: {discard}``: a transient shorter than the run."""
+    sm = _mapping(src, "stats", v, ("discard",))
+    discard = _num(src, "stats.discard", sm.get("discard", 0.0), nonneg=True)
+    if stop.time is not None and discard >= stop.time - initial.t:
+        raise InputError(
+            src,
+            "stats.discard",
+            f"must be shorter than the run ({stop.time - initial.t:g} time units), got {discard:g}",
+        )
+    return StatsSettings(discard=discard)
 
 
 def load_scene(path: str | Path, overrides: list[str] | None = None) -> Scene:

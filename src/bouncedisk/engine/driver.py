@@ -56,6 +56,15 @@ class EngineConfig:
         The earlier clipped-sinusoid spring-contact model (paper refs. [2, 3]) instead of the
         bouncing model: the rotor never leaves the stator and the normal load is
         ``max(0, 1 + a_s)``. Needs a time stop.
+    e_sigma : float
+        Standard deviation ``σ_e`` of the per-impact restitution (effect ``restitution_noise``,
+        MODEL.md "Long-run statistics"); 0 for none. The ``k``-th event draws
+        ``e_k = e + σ_e ξ_k`` clipped to ``[0, 1]``, ``ξ_k`` from the counter-based stream
+        ``(seed, member)`` (:mod:`bouncedisk.engine.noise`).
+    seed, member : int
+        The noise stream: ensemble seed and member index (both ``>= 0``).
+    stats_from : float
+        Accumulate ``∫Ω dt`` from this time on (``final["omega_integral"]``); ``inf`` for none.
     """
 
     e: float
@@ -75,6 +84,10 @@ class EngineConfig:
     traj_t1: float = math.inf
     stroboscopic: bool = False
     clipped: bool = False
+    e_sigma: float = 0.0
+    seed: int = 0
+    member: int = 0
+    stats_from: float = math.inf
 
 
 @dataclass(frozen=True)
@@ -147,6 +160,8 @@ def _pack(cfg: EngineConfig) -> tuple[np.ndarray, np.ndarray]:
     prm[K.P_DT] = cfg.traj_dt
     prm[K.P_T0] = cfg.traj_t0
     prm[K.P_T1] = min(cfg.traj_t1, cfg.t_end)
+    prm[K.P_ESIG] = cfg.e_sigma
+    prm[K.P_TSTAT] = cfg.stats_from
     flg = np.zeros(K.N_FLG, dtype=np.int64)
     flg[K.F_CONTACT] = int(cfg.contact)
     flg[K.F_TORSION] = int(cfg.torsion)
@@ -155,6 +170,10 @@ def _pack(cfg: EngineConfig) -> tuple[np.ndarray, np.ndarray]:
     flg[K.F_STROBE] = int(cfg.stroboscopic)
     flg[K.F_MAXEV] = int(cfg.max_events)
     flg[K.F_CLIPPED] = int(cfg.clipped)
+    flg[K.F_NOISE] = int(cfg.e_sigma > 0.0)
+    flg[K.F_SEED] = int(cfg.seed)
+    flg[K.F_MEMBER] = int(cfg.member)
+    flg[K.F_STATS] = int(math.isfinite(cfg.stats_from))
     return prm, flg
 
 
@@ -253,6 +272,7 @@ def iterate(
             "v": float(st[K.S_V]),
             "omega": float(st[K.S_OM]),
             "in_contact": float(ist[K.I_MODE] == K.MODE_CONTACT),
+            "omega_integral": float(st[K.S_IOM]),
         }
         return status, final
 

@@ -21,18 +21,25 @@ from .laws import (
     separation_phase,
     separation_window,
     slip_omega,
+    slip_omega_integral,
+    stick_omega_integral,
 )
+from .noise import member_key, noisy_restitution
 from .roots import TWO_PI, first_root
 
 # --- parameter vector (float64) ---------------------------------------------------------------
 P_E, P_W, P_R, P_PSI, P_TOL, P_INERTIA, P_RHO, P_TEND, P_DT, P_T0, P_T1 = range(11)
-N_PRM = 11
+P_ESIG = 11  # restitution noise σ_e (effect `restitution_noise`)
+P_TSTAT = 12  # time from which ∫Ω dt is accumulated (ensemble statistics)
+N_PRM = 13
 # --- flags (int64) ----------------------------------------------------------------------------
 F_CONTACT, F_TORSION, F_CAP, F_TRAJ, F_STROBE, F_MAXEV, F_CLIPPED = range(7)
-N_FLG = 7
+F_NOISE, F_SEED, F_MEMBER, F_STATS = range(7, 11)  # restitution noise stream; accumulate ∫Ω dt
+N_FLG = 11
 # --- float state ------------------------------------------------------------------------------
 S_TH, S_U, S_V, S_OM, S_TA, S_GA, S_THC = range(7)
-N_ST = 7
+S_IOM = 7  # ∫Ω dt since prm[P_TSTAT] (when flg[F_STATS])
+N_ST = 8
 # --- int state --------------------------------------------------------------------------------
 I_N, I_MODE, I_SIG, I_GUARD, I_CHAT, I_NC, I_NEV, I_JTRAJ, I_KSTROBE, I_ZERO, I_STATUS, I_FREE = (
     range(12)
@@ -234,6 +241,31 @@ def _sample(
 
 
 @njit(cache=True, inline="always")
+def _omega_integral(kind, om0, sig, w, r, psi, th0, tau):
+    """``∫_0^τ Ω dτ'`` over the first ``τ`` of a segment (closed forms; see :func:`_seg_state`)."""
+    if kind == SEG_SLIP:
+        return slip_omega_integral(om0, sig, w, th0, tau)
+    if kind == SEG_STICK:
+        return stick_omega_integral(w, r, psi, th0, tau)
+    return om0 * tau
+
+
+@njit(cache=True)
+def _accumulate_omega(st, prm, kind, n_a, th_a, length, om0, sig):
+    """Add ``∫Ω dt`` over the part of a segment after ``prm[P_TSTAT]`` to ``st[S_IOM]``."""
+    w = prm[P_W]
+    tau0 = prm[P_TSTAT] - (n_a * TWO_PI + th_a) / w
+    if tau0 >= length:
+        return
+    r = prm[P_R]
+    psi = prm[P_PSI]
+    total = _omega_integral(kind, om0, sig, w, r, psi, th_a, length)
+    if tau0 > 0.0:
+        total -= _omega_integral(kind, om0, sig, w, r, psi, th_a, tau0)
+    st[S_IOM] += total
+
+
+@njit(cache=True, inline="always")
 def _report(info, n_ev, n_tr, n_sb):
     """Record how many rows of each buffer this call wrote."""
     info[1] = n_ev
@@ -249,7 +281,7 @@ def _finish(ist, info, status, n_ev, n_tr, n_sb):
     _report(info, n_ev, n_tr, n_sb)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
     """Advance the simulation; see the module docstring.
 
@@ -279,6 +311,10 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
     cap = flg[F_CAP] != 0
     max_ev = flg[F_MAXEV]
     clipped = flg[F_CLIPPED] != 0
+    noise = flg[F_NOISE] != 0
+    e_sigma = prm[P_ESIG]
+    noise_key = member_key(flg[F_SEED], flg[F_MEMBER])
+    stats = flg[F_STATS] != 0
     xtol = tol
     per = TWO_PI / w
     w_eps = GRAZE_GAP * (1.0 + w)
@@ -347,14 +383,17 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
                 return
             n_tr = a
             n_sb = b
+            if stats:
+                _accumulate_omega(st, prm, SEG_FLIGHT, n, th, length, om, 0.0)
             if ends:
                 st[S_U] = u0 + v0 * length - 0.5 * length * length
                 st[S_V] = v0 - length
                 ist[I_N], st[S_TH] = _advance(n, th, w * length)
                 _finish(ist, info, ST_TIME, n_ev, n_tr, n_sb)
                 return
+            e_k = noisy_restitution(e, e_sigma, noise_key, ist[I_NEV]) if noise else e
             v_rel, v_plus, om_plus = impact_law(
-                e, w, r, psi, ph, v_minus, om, torsion, cap, inertia
+                e_k, w, r, psi, ph, v_minus, om, torsion, cap, inertia
             )
             ev[n_ev, 0] = t_hit
             ev[n_ev, 1] = ph
@@ -369,7 +408,7 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
             st[S_TH] = ph
             st[S_OM] = om_plus
             n_load = 1.0 - w * w * sin(ph)
-            w_rel = e * v_rel
+            w_rel = e_k * v_rel
             go_contact = False
             t_acc = -1.0
             if n_load >= 0.0:
@@ -437,6 +476,8 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
                 return
             n_tr = a
             n_sb = b
+            if stats:
+                _accumulate_omega(st, prm, SEG_CONTACT, n, th, seg, om, 0.0)
             if seg < d / w:
                 ist[I_N], st[S_TH] = _advance(n, th, w * seg)
                 st[S_U] = sin(st[S_TH])
@@ -578,6 +619,8 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
             return
         n_tr = a
         n_sb = b
+        if stats:
+            _accumulate_omega(st, prm, kind, n, th, seg, om, float(sig))
         # advance the state to the end of the segment
         if at_end and tau_end == tau_sep and tau_sep < tau_t and tau_sep <= tau_c:
             n1 = n + (1 if th > th_sep else 0)

@@ -128,3 +128,21 @@ def slip_omega(omega0, sigma, w, th0, tau):
     half = 0.5 * w * tau
     dv = -2.0 * w * sin(th0 + half) * sin(half)
     return omega0 - sigma * (tau + dv)
+
+
+@njit(cache=True, inline="always")
+def slip_omega_integral(omega0, sigma, w, th0, tau):
+    """``∫_0^τ Ω dτ'`` while slipping: the integral of :func:`slip_omega` (eq. 23 corrected).
+
+    ``Ω0 τ − σ [τ²/2 + (u_s(τ) − u_s(0)) − v_s(0) τ]`` with ``u_s = sin φ``, ``v_s = w cos φ``.
+    """
+    half = 0.5 * w * tau
+    du = 2.0 * cos(th0 + half) * sin(half)
+    return omega0 * tau - sigma * (0.5 * tau * tau + du - w * cos(th0) * tau)
+
+
+@njit(cache=True, inline="always")
+def stick_omega_integral(w, r, psi, th0, tau):
+    """``∫_0^τ Ω dτ'`` while sticking, ``RΩ = Ω_s = w cos(φ + ψ)``: ``(φ_s(τ) − φ_s(0))/R``."""
+    half = 0.5 * w * tau
+    return 2.0 * cos(th0 + psi + half) * sin(half) / r

@@ -1,0 +1,210 @@
+"""Ensembles: members that differ by their restitution-noise streams, run in parallel.
+
+Every member is one run of the engine (:func:`bouncedisk.engine.iterate`) with its own noise
+stream ``(seed, member)`` (:mod:`bouncedisk.engine.noise`), reduced chunk by chunk to the
+long-run observables of MODEL.md "Long-run statistics of chaotic motion": the time-averaged
+rotor speed and slip, impact and chatter rates, the Lyapunov exponent between resets, and the
+regime. Memory per member is bounded (a tail of events), whatever the run's length. Members run
+on a thread pool: the compiled kernel releases the GIL, so ``cores`` threads use ``cores`` cores,
+and a member's numbers do not depend on how many run at once.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import observables as ob
+from .engine import EngineConfig, InitialState, iterate
+from .engine.kernel import KIND_CHATTER, KIND_IMPACT
+
+#: Events kept from the end of each member's run to classify its regime.
+TAIL_EVENTS = 1200
+#: Leading Jacobian pairs of a member left out of its Lyapunov sum (vector alignment).
+LYAPUNOV_SKIP = 20
+
+
+@dataclass(frozen=True)
+class MemberStats:
+    """Long-run observables of one member over ``[t_from, t_end]`` (nondimensional).
+
+    ``lyapunov`` is ``-inf`` for a chattering-periodic member (its cycle passes through a reset,
+    whose Jacobian is zero) and ``nan`` when too few free flights were seen.
+    """
+
+    member: int
+    mean_omega: float
+    mean_slip: float
+    impact_rate: float
+    chatter_rate: float
+    chatter_interval: float
+    lyapunov: float
+    regime: int
+    period_p: int
+    period_q: int
+    n_impacts: int
+    n_chatter: int
+    duration: float
+
+
+class _Reducer:
+    """Streams one member's events after ``t_from`` into counts, a Lyapunov sum and a tail."""
+
+    def __init__(self, e: float, omega_s: float, t_from: float):
+        self.e = e
+        self.w = omega_s
+        self.t_from = t_from
+        self.n_impacts = 0
+        self.n_chatter = 0
+        self.chatter_first = math.nan
+        self.chatter_last = math.nan
+        self.lyap_sum = 0.0
+        self.lyap_count = 0
+        self.vec = np.full(2, 1.0 / math.sqrt(2.0))
+        self.prev_pair = -2
+        self.offset = 0  # global index of the first event kept
+        self.tail = {k: np.empty(0) for k in ("t", "phase", "v_rel")}
+        self.tail["kind"] = np.empty(0, dtype=np.int8)
+
+    def add(self, t, phase, v_rel, kind) -> None:
+        """Add one chunk's events (those before ``t_from`` are ignored)."""
+        keep = t >= self.t_from
+        if not np.any(keep):
+            return
+        t, phase, v_rel, kind = t[keep], phase[keep], v_rel[keep], kind[keep]
+        self.n_impacts += int(np.count_nonzero(kind == KIND_IMPACT))
+        chat = t[kind == KIND_CHATTER]
+        if len(chat):
+            if self.n_chatter == 0:
+                self.chatter_first = float(chat[0])
+            self.chatter_last = float(chat[-1])
+            self.n_chatter += len(chat)
+        # pairs across the chunk boundary: prepend the previous chunk's last event
+        tl = self.tail
+        m = 1 if len(tl["t"]) else 0
+        cat = {
+            k: np.concatenate([tl[k][len(tl[k]) - m :], v])
+            for k, v in (("t", t), ("phase", phase), ("v_rel", v_rel), ("kind", kind))
+        }
+        jac, idx = ob.impact_jacobians(
+            cat["t"], cat["phase"], cat["v_rel"], cat["kind"], self.e, self.w
+        )
+        start = self.offset - m
+        skip = max(0, LYAPUNOV_SKIP - self.lyap_count)
+        total, count, self.prev_pair = ob.benettin(
+            jac, (idx + start).astype(np.int64), self.vec, self.prev_pair, skip
+        )
+        self.lyap_sum += total
+        self.lyap_count += count
+        self.offset += len(t)
+        for k in tl:
+            tl[k] = cat[k][-TAIL_EVENTS:]
+
+    def result(self, member: int, omega_integral: float, t_end: float, r_phi: float, psi: float):
+        """The member's :class:`MemberStats` (``omega_integral`` = ``∫Ω dt`` over the window)."""
+        dur = t_end - self.t_from
+        mean_om = omega_integral / dur
+        # ∫Ω_s dt = φ_s(t_end) − φ_s(t_from), φ_s = sin(w t + ψ): the mean slip s = RΩ − Ω_s
+        twist = math.sin(self.w * t_end + psi) - math.sin(self.w * self.t_from + psi)
+        tl = self.tail
+        lam = self.lyap_sum / self.lyap_count if self.lyap_count else math.nan
+        reg = ob.classify(
+            tl["t"], tl["phase"], tl["v_rel"], tl["kind"], self.w, lam, self.n_chatter
+        )
+        if reg.name == "chattering-periodic":
+            lam = -math.inf
+        interval = math.nan
+        if self.n_chatter >= 2:
+            interval = (self.chatter_last - self.chatter_first) / (self.n_chatter - 1)
+        return MemberStats(
+            member=member,
+            mean_omega=mean_om,
+            mean_slip=r_phi * mean_om - twist / dur,
+            impact_rate=self.n_impacts / dur,
+            chatter_rate=self.n_chatter / dur,
+            chatter_interval=interval,
+            lyapunov=lam,
+            regime=reg.code,
+            period_p=reg.p,
+            period_q=reg.q,
+            n_impacts=self.n_impacts,
+            n_chatter=self.n_chatter,
+            duration=dur,
+        )
+
+
+def run_member(
+    cfg: EngineConfig,
+    init: InitialState,
+    member: int,
+    t_from: float,
+    should_stop: Callable[[], bool] | None = None,
+) -> tuple[MemberStats, dict[str, float]]:
+    """Run member ``member`` of the ensemble of ``cfg`` and reduce it after ``t_from``.
+
+    ``cfg.t_end`` must be finite: the averages are over ``[t_from, t_end]``.
+
+    Returns
+    -------
+    stats, final
+        The member's observables and its final state (:func:`bouncedisk.engine.iterate`).
+    """
+    if not math.isfinite(cfg.t_end) or cfg.t_end <= t_from:
+        raise ValueError("an ensemble member needs a finite end time after t_from")
+    cfg = dataclasses.replace(cfg, member=member, stats_from=t_from, traj_dt=0.0)
+    cfg = dataclasses.replace(cfg, stroboscopic=False)
+    red = _Reducer(cfg.e, cfg.omega_s, t_from)
+    gen = iterate(cfg, init)
+    while True:
+        if should_stop is not None and should_stop():
+            raise KeyboardInterrupt
+        try:
+            c = next(gen)
+        except StopIteration as stop:
+            _, final = stop.value
+            break
+        red.add(c.t, c.phase, c.v_rel, c.kind)
+    stats = red.result(member, final["omega_integral"], cfg.t_end, cfg.r_phi, cfg.psi)
+    return stats, final
+
+
+def run_ensemble(
+    cfg: EngineConfig,
+    init: InitialState,
+    members: int,
+    t_from: float,
+    cores: int = 1,
+    on_member: Callable[[int, int], None] | None = None,
+    should_stop: Callable[[], bool] | None = None,
+) -> list[MemberStats]:
+    """Run members ``0 … members−1`` on ``cores`` threads; results in member order.
+
+    ``on_member(done, total)`` is called as members finish (progress); ``should_stop()`` is
+    polled between chunks and stops every member with ``KeyboardInterrupt``.
+    """
+    results: list[MemberStats | None] = [None] * members
+    done = 0
+
+    def one(m: int) -> tuple[int, MemberStats]:
+        return m, run_member(cfg, init, m, t_from, should_stop)[0]
+
+    if cores <= 1 or members == 1:
+        outcomes = map(one, range(members))
+        for m, st in outcomes:
+            results[m] = st
+            done += 1
+            if on_member:
+                on_member(done, members)
+    else:
+        with ThreadPoolExecutor(max_workers=cores) as pool:
+            for m, st in pool.map(one, range(members)):
+                results[m] = st
+                done += 1
+                if on_member:
+                    on_member(done, members)
+    return [r for r in results if r is not None]

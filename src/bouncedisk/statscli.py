@@ -1,0 +1,103 @@
+"""The ``bouncedisk stats`` command: run a scene's ensemble, print or write its statistics."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+from .errors import InputError
+
+
+def available_cores() -> int:
+    """Cores this process may use (its CPU affinity)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def _progress(quiet: bool, label: str):
+    """``on_member(done, total)`` printing to stderr after 2 s (never with ``quiet``)."""
+    start = time.monotonic()
+    last = [0.0]
+
+    def on_member(done: int, total: int) -> None:
+        now = time.monotonic()
+        if quiet or now - start < 2.0 or (now - last[0] < 1.0 and done < total):
+            return
+        last[0] = now
+        print(f"{label}: {done}/{total} members, {now - start:.0f} s", file=sys.stderr)
+
+    return on_member
+
+
+def format_summary(summary: dict) -> str:
+    """A human-readable table of ``EnsembleStats.summary()``."""
+    lines = [
+        f"{'members':>18}: {summary['members']}",
+        f"{'averaged over':>18}: {summary['duration']:g} time units after {summary['discard']:g}",
+    ]
+    for name in ("mean_omega", "mean_slip", "impact_rate", "chatter_rate", "chatter_interval"):
+        lines.append(_row(name, summary[name], summary[f"{name}_ci95"]))
+    lines.append(_row("lyapunov", summary["lyapunov"], summary["lyapunov_ci95"]))
+    if summary["lyapunov_reset_fraction"] > 0:
+        lines.append(
+            f"{'':>18}  ({100 * summary['lyapunov_reset_fraction']:.0f}% of members reset every "
+            "cycle: exponent -inf)"
+        )
+    period = summary["period"]
+    reg = summary["regime"] + (f" ({period[0]} impacts / {period[1]} periods)" if period else "")
+    frac = summary["regime_fraction"]
+    lines.append(f"{'regime':>18}: {reg}, {100 * frac:.0f}% of members")
+    return "\n".join(lines)
+
+
+def _row(name: str, value, ci) -> str:
+    if value is None:
+        return f"{name:>18}: n/a"
+    if ci[0] is None:
+        return f"{name:>18}: {value:.6g}  (one member: no interval)"
+    return f"{name:>18}: {value:.6g}  95% CI [{ci[0]:.6g}, {ci[1]:.6g}]"
+
+
+def stats_command(args: argparse.Namespace) -> int:
+    """Run ``bouncedisk stats``; see :mod:`bouncedisk.stats`."""
+    from .datasets import write_dataset
+    from .runner import deferred_interrupts
+    from .scene import load_scene
+    from .stats import ensemble_window, run_stats, to_dataset
+
+    if args.cores is not None and args.cores < 1:
+        raise InputError("<arguments>", "--cores", f"must be >= 1, got {args.cores}")
+    if args.output:
+        out = Path(args.output)
+        if out.is_dir():
+            raise InputError(str(out), "-o", "is a directory; give a file name such as stats.nc")
+        if out.resolve() == Path(args.scene).resolve():
+            raise InputError(str(out), "-o", "is the scene file itself; give another name")
+    scene = load_scene(args.scene, args.set or [])
+    ensemble_window(scene)
+    cores = args.cores or available_cores()
+    start = time.perf_counter()
+    with deferred_interrupts() as req:
+        result = run_stats(
+            scene,
+            cores=cores,
+            on_member=_progress(args.quiet, scene.name),
+            should_stop=lambda: req.signum is not None,
+        )
+        wall = time.perf_counter() - start
+        if args.output:
+            write_dataset(to_dataset(scene, result, wall), args.output)
+    summary = result.summary()
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        print(format_summary(summary))
+        if args.output:
+            print(f"{args.output}: per-member values ({wall:.2f} s on {cores} cores)")
+    return 0

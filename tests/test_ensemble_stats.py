@@ -1,0 +1,217 @@
+"""Ensemble statistics (MODEL.md "Long-run statistics of chaotic motion"; INTERFACES.md "Statistics").
+
+Restitution noise, members, confidence intervals, regimes and the ``bouncedisk stats`` command.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from bouncedisk.cli import main
+from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
+from bouncedisk.engine.noise import noisy_restitution, normals
+from bouncedisk.ensemble import run_ensemble
+from bouncedisk.scene import load_scene
+from bouncedisk.stats import confidence_interval, run_stats
+
+CHAOTIC = """\
+name: chaotic
+parameters: {e: 0.6, omega_s: 1.5, r_phi: 0.01, psi: 0.0, e_sigma: 1.0e-9}
+effects: [impacts, contact, torsion, restitution_noise]
+stop: {time: 53000.0}
+ensemble: {members: 32, seed: 1}
+stats: {discard: 3000.0}
+"""
+SINGLE = """\
+name: single
+parameters: {e: 0.6, omega_s: 1.5, r_phi: 0.01, psi: 0.0}
+effects: [impacts, contact, torsion]
+stop: {time: 53000.0}
+stats: {discard: 3000.0}
+"""
+
+
+def _json_stats(capsys, path, *sets: str) -> dict:
+    args = ["stats", str(path), "--json", "-q"]
+    for s in sets:
+        args += ["--set", s]
+    assert main(args) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+# ------------------------------------------------------------------------------------ the noise
+def test_noise_stream_is_standard_normal_and_counter_based():
+    x = normals(1, 0, 0, 200_000)
+    assert abs(x.mean()) < 0.01 and abs(x.std() - 1.0) < 0.01
+    assert abs(np.mean(np.abs(x) > 1.959964) - 0.05) < 0.003
+    # the k-th deviate depends on (seed, member, k) only
+    assert np.array_equal(normals(7, 3, 5, 10)[2:], normals(7, 3, 7, 8))
+    y = normals(1, 1, 0, 200_000)
+    assert abs(np.corrcoef(x, y)[0, 1]) < 0.01
+    assert not np.array_equal(normals(2, 0, 0, 10), x[:10])
+
+
+def test_noisy_restitution_is_clipped_to_the_unit_interval():
+    from bouncedisk.engine.noise import member_key
+
+    key = member_key(1, 0)
+    high = [noisy_restitution(1.0, 0.5, key, k) for k in range(200)]
+    low = [noisy_restitution(0.0, 0.5, key, k) for k in range(200)]
+    assert max(high) == 1.0 and min(high) < 0.9
+    assert min(low) == 0.0 and max(low) > 0.1
+
+
+def test_noise_of_zero_width_changes_nothing():
+    base = EngineConfig(e=0.6, omega_s=1.5, torsion=True, max_events=3000)
+    a = simulate_arrays(base)
+    # sigma 0 switches the effect off; any sigma > 0 draws the stream
+    b = simulate_arrays(EngineConfig(e=0.6, omega_s=1.5, torsion=True, max_events=3000, seed=9))
+    assert a.events["t"].tobytes() == b.events["t"].tobytes()
+    c = simulate_arrays(
+        EngineConfig(e=0.6, omega_s=1.5, torsion=True, max_events=3000, e_sigma=1e-9)
+    )
+    assert not np.array_equal(a.events["t"], c.events["t"])
+
+
+# ---------------------------------------------------------------------- the time average of Ω
+@pytest.mark.parametrize("e, psi", [(0.6, 0.0), (0.3, 1.0), (0.0, 1.0)])
+def test_omega_integral_is_the_integral_of_the_dense_trajectory(e, psi):
+    """∫Ω dt from the closed forms converges to the trapezoid sum of the samples as dt → 0."""
+    errors = []
+    for dt in (2e-4, 2e-5):
+        cfg = EngineConfig(
+            e=e, omega_s=1.5, torsion=True, psi=psi, t_end=300.0, max_events=10**6,
+            traj_dt=dt, stats_from=50.0,
+        )  # fmt: skip
+        res = simulate_arrays(cfg)
+        t, om = res.traj[:, 0], res.traj[:, 4]
+        sel = t >= 50.0
+        jumps = np.abs(res.events["omega_after"] - res.events["omega_before"]).sum()
+        err = abs(res.final["omega_integral"] - np.trapezoid(om[sel], t[sel]))
+        assert err <= dt * (jumps + 1.0)
+        errors.append(err)
+    assert errors[1] < errors[0] / 5
+
+
+# ----------------------------------------------------------------- determinism and parallelism
+def test_same_seed_is_bit_identical_other_seeds_differ_cores_do_not_matter():
+    cfg = EngineConfig(
+        e=0.6, omega_s=1.5, torsion=True, t_end=6000.0, max_events=10**8, e_sigma=1e-9, seed=4
+    )
+    one = run_ensemble(cfg, InitialState(), 6, 1000.0, cores=1)
+    two = run_ensemble(cfg, InitialState(), 6, 1000.0, cores=2)
+    assert one == two
+    means = [m.mean_omega for m in one]
+    assert len(set(means)) == len(means)  # members differ
+    other = run_ensemble(
+        EngineConfig(**{**cfg.__dict__, "seed": 5}), InitialState(), 6, 1000.0, cores=2
+    )
+    assert [m.mean_omega for m in other] != means
+
+
+def test_stats_files_are_identical_on_one_and_two_cores(scene_file, tmp_path):
+    f = scene_file(CHAOTIC)
+    outs = []
+    for cores in (1, 2):
+        out = tmp_path / f"c{cores}.nc"
+        args = ["stats", str(f), "-o", str(out), "--cores", str(cores), "-q"]
+        assert main(args + ["--set", "ensemble.members=6", "--set", "stop.time=13000"]) == 0
+        outs.append(xr.open_dataset(out))
+    a, b = outs
+    assert a.sizes["member"] == 6
+    for name in a.data_vars:
+        assert a[name].values.tobytes() == b[name].values.tobytes(), name
+
+
+# --------------------------------------------------------------------- statistics that hold up
+def test_ensemble_mean_is_robust_where_single_runs_jump(scene_file, capsys):
+    """e and e + 1e-9 (e = 0.6, omega_s = 1.5): ensemble means agree within their intervals,
+    single runs from the same start differ by far more than those intervals."""
+    ens = scene_file(CHAOTIC, "ens.yaml")
+    single = scene_file(SINGLE, "single.yaml")
+    a = _json_stats(capsys, ens)
+    b = _json_stats(capsys, ens, "parameters.e=0.600000001")
+    half_a = (a["mean_omega_ci95"][1] - a["mean_omega_ci95"][0]) / 2
+    half_b = (b["mean_omega_ci95"][1] - b["mean_omega_ci95"][0]) / 2
+    assert 0 < half_a <= 1.5 and 0 < half_b <= 1.5  # the issue's target width
+    assert abs(a["mean_omega"] - b["mean_omega"]) <= math.hypot(half_a, half_b)
+    s1 = _json_stats(capsys, single)["mean_omega"]
+    s2 = _json_stats(capsys, single, "parameters.e=0.600000001")["mean_omega"]
+    assert abs(s1 - s2) > 2 * math.hypot(half_a, half_b)
+    assert a["regime"] == "chaotic-reinjection" and a["lyapunov_ci95"][0] > 0.5
+
+
+def test_periodic_orbit_gives_the_single_run_value_with_a_zero_width_interval(scene_file, capsys):
+    ens = scene_file(CHAOTIC, "ens.yaml")
+    single = scene_file(SINGLE, "single.yaml")
+    sets = ("parameters.e=0.3", "stop.time=13000", "ensemble.members=8")
+    a = _json_stats(capsys, ens, *sets)
+    s = _json_stats(capsys, single, "parameters.e=0.3", "stop.time=13000")
+    low, high = a["mean_omega_ci95"]
+    assert high - low < 1e-6 * abs(a["mean_omega"])
+    assert a["mean_omega"] == pytest.approx(s["mean_omega"], rel=1e-9)
+    assert a["regime"] == "periodic" and a["period"] == [2, 2]
+    assert a["lyapunov"] < 0 and s["mean_omega_ci95"] == [None, None]
+
+
+def test_regime_of_a_locked_chattering_cycle_and_its_exponent(scene_file, capsys):
+    ens = scene_file(CHAOTIC, "ens.yaml")
+    sets = ("parameters.e=0.5", "parameters.omega_s=1.126", "stop.time=8000")
+    a = _json_stats(capsys, ens, *sets, "ensemble.members=4")
+    assert a["regime"] == "chattering-periodic" and a["regime_fraction"] == 1.0
+    # the cycle passes through a reset: exponent -inf, never positive
+    assert a["lyapunov"] is None and a["lyapunov_reset_fraction"] == 1.0
+    assert a["chatter_rate"] > 0.1
+
+
+def test_confidence_interval_is_student_t():
+    mean, low, high = confidence_interval([1.0, 2.0, 3.0, 4.0])
+    # t_{0.975, 3} = 3.182446, s = 1.290994
+    assert mean == 2.5 and high - mean == pytest.approx(3.182446 * 1.290994 / 2, rel=1e-6)
+    assert all(math.isnan(x) for x in confidence_interval([5.0])[1:])
+    assert confidence_interval([2.0, 2.0, 2.0])[1:] == (2.0, 2.0)
+
+
+def test_run_stats_needs_a_time_stop(scene_file):
+    f = scene_file(CHAOTIC.replace("stop: {time: 53000.0}", "stop: {impacts: 100}"))
+    from bouncedisk.errors import InputError
+
+    scene = load_scene(f, ["stats.discard=0"])
+    with pytest.raises(InputError, match="stop.time"):
+        run_stats(scene)
+
+
+# -------------------------------------------------------------------------------- bad input
+@pytest.mark.parametrize(
+    "override, field",
+    [
+        ("ensemble.members=0", "ensemble.members"),
+        ("ensemble.members=-3", "ensemble.members"),
+        ("ensemble.members=2.5", "ensemble.members"),
+        ("parameters.e_sigma=-1.0e-9", "parameters.e_sigma"),
+        ("parameters.e_sigma=.nan", "parameters.e_sigma"),
+        ("stats.discard=53000.0", "stats.discard"),
+        ("stats.discard=90000.0", "stats.discard"),
+        ("effects=[impacts, contact, torsion]", "parameters.e_sigma"),
+    ],
+)
+def test_bad_ensemble_input_exits_2_with_one_line_and_no_output(
+    scene_file, tmp_path, capsys, override, field
+):
+    f = scene_file(CHAOTIC)
+    out = tmp_path / "s.nc"
+    assert main(["stats", str(f), "-o", str(out), "--set", override, "-q"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(f) in err[0] and field in err[0]
+    assert not out.exists() and list(tmp_path.iterdir()) == [f]
+
+
+def test_members_without_noise_are_refused(scene_file, capsys):
+    f = scene_file(SINGLE)
+    assert main(["stats", str(f), "--set", "ensemble.members=4", "-q"]) == 2
+    assert "restitution_noise" in capsys.readouterr().err
