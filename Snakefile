@@ -16,6 +16,7 @@ validate(config, "workflow/schemas/config.schema.yaml")
 include: "workflow/rules/common.smk"
 include: "workflow/rules/simulate.smk"
 include: "workflow/rules/sweep.smk"
+include: "workflow/rules/ensemble.smk"
 include: "workflow/rules/analyse.smk"
 include: "workflow/rules/fit.smk"
 include: "workflow/rules/accuracy.smk"

@@ -62,11 +62,18 @@ def poincare_dataset(sim: xr.Dataset, transient: int = 1000) -> xr.Dataset:
     return ds
 
 
-def clipped_comparison(scene: Scene, psis: list[float]) -> xr.Dataset:
+def clipped_comparison(
+    scene: Scene, psis: list[float], members: int = 16, seed: int = 1, e_sigma: float = 1e-9
+) -> xr.Dataset:
     """Rotor angular velocity ``omega_rotor(model, psi, time)`` of both contact models.
 
     The scene must stop on time and ask for a trajectory; both models share its time grid.
+    The bouncing model is chaotic, so its ensemble band is added
+    (``omega_bouncing_{mean,ci_low,ci_high,p025,p975}(psi, time)``, :func:`bands.omega_band`);
+    the clipped model has no impacts and no noise.
     """
+    from .bands import omega_band
+
     if scene.stop.time is None or scene.outputs.trajectory is None:
         from .errors import InputError
 
@@ -84,13 +91,31 @@ def clipped_comparison(scene: Scene, psis: list[float]) -> xr.Dataset:
                 time = res.traj[:, 0]
             series[model, p] = np.interp(time, res.traj[:, 0], res.traj[:, 4])
     om = np.array([[series[m, p] for p in psis] for m in models])
+    band_vars = {}
+    bands = [
+        omega_band(
+            dataclasses.replace(scene, params=dataclasses.replace(scene.params, psi=p)),
+            members,
+            seed=seed,
+            e_sigma=e_sigma,
+        )
+        for p in psis
+    ]
+    for key in ("mean", "ci_low", "ci_high", "p025", "p975"):
+        rows = [np.interp(time, b["time"].values, b[f"omega_{key}"].values) for b in bands]
+        band_vars[f"omega_bouncing_{key}"] = (
+            ("psi", "time"),
+            np.array(rows),
+            {**bands[0][f"omega_{key}"].attrs, "comment": "bouncing model, ensemble"},
+        )
     ds = xr.Dataset(
         {
             "omega_rotor": (
                 ("model", "psi", "time"),
                 om,
                 {"long_name": "rotor angular velocity", "units": "1"},
-            )
+            ),
+            **band_vars,
         },
         coords={
             "model": ("model", list(models), {"long_name": "contact model"}),
@@ -104,4 +129,5 @@ def clipped_comparison(scene: Scene, psis: list[float]) -> xr.Dataset:
     attrs.pop("model", None)
     ds.attrs.update(attrs)
     ds.attrs["run_id"] = f"{scene.name}-{scene.sha256[:8]}-comparison"
+    ds.attrs.update({"ensemble_members": members, "ensemble_seed": seed, "band_e_sigma": e_sigma})
     return ds

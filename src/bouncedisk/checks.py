@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from . import observables as ob
-from .datasets import open_simulation
+from .datasets import open_checked, open_simulation
 from .engine import EngineConfig, InitialState, simulate_arrays
 from .runner import run_scene_arrays
 from .scene import scene_from_mapping
@@ -41,6 +41,27 @@ SCENES = {
         "outputs": {"events": True, "trajectory": {"dt": 0.05}},
     },
 }
+
+
+def _stats_scene(name: str, e: float, w: float, members: int, t_end: float) -> dict:
+    return {
+        "name": name,
+        "parameters": {"e": e, "omega_s": w, "r_phi": 0.01, "psi": 0.0, "e_sigma": 1e-9},
+        "effects": ["impacts", "contact", "torsion", "restitution_noise"],
+        "stop": {"time": t_end},
+        "ensemble": {"members": members, "seed": 1},
+        "stats": {"discard": 3000.0},
+    }
+
+
+#: Ensemble statistics the checks read (the pipeline's workflow/config/scenes/<name>.yaml).
+STATS_SCENES = {
+    "stats_e03": _stats_scene("stats_e03", 0.3, 1.5, 8, 13000.0),
+    "stats_e06": _stats_scene("stats_e06", 0.6, 1.5, 32, 53000.0),
+    "stats_locked": _stats_scene("stats_locked", 0.5, 1.126, 8, 13000.0),
+}
+#: Members of the rotor-speed band of Fig. 5 when simulated here (the pipeline's ``bands``).
+BAND_MEMBERS = 16
 
 
 @dataclass(frozen=True)
@@ -84,45 +105,102 @@ class _Source:
         self.cache[name] = out
         return out
 
+    def stats(self, name: str) -> tuple[dict, str]:
+        """Ensemble statistics (:meth:`EnsembleStats.summary`) of a scene, and where they came from."""
+        key = f"stats:{name}"
+        if key in self.cache:
+            return self.cache[key]
+        path = self.results / "stats" / f"{name}.nc" if self.results else None
+        if path is not None and path.exists():
+            ds = open_checked(path, required=("mean_omega", "regime"), what="statistics")
+            out = (_summary_of(ds), str(path))
+        else:
+            from .stats import run_stats
+
+            scene = scene_from_mapping(STATS_SCENES[name], f"<built-in scene {name}>")
+            out = (run_stats(scene, cores=2).summary(), f"ensemble ({name} scene)")
+        self.cache[key] = out
+        return out
+
+    def band(self, name: str) -> tuple[dict, np.ndarray, str]:
+        """Per-member first-order trends of a band, and the mean-trend attributes."""
+        key = f"band:{name}"
+        if key in self.cache:
+            return self.cache[key]
+        path = self.results / "bands" / f"{name}.nc" if self.results else None
+        if path is not None and path.exists():
+            ds = open_checked(path, required=("trend_steady", "omega_mean"), what="band")
+            where = str(path)
+        else:
+            from .bands import omega_band
+
+            scene = scene_from_mapping(SCENES[name], f"<built-in scene {name}>")
+            ds = omega_band(scene, BAND_MEMBERS, seed=1, cores=2)
+            where = f"ensemble band ({name} scene, {BAND_MEMBERS} members)"
+        out = (dict(ds.attrs), ds["trend_steady"].values, where)
+        self.cache[key] = out
+        return out
+
+
+def _summary_of(ds) -> dict:
+    """The statistics summary stored as ``stats_*`` attributes of a ``bouncedisk stats`` file."""
+    out = {}
+    for k, v in ds.attrs.items():
+        if k.startswith("stats_"):
+            v = v.tolist() if isinstance(v, np.ndarray) else v
+            if isinstance(v, list):
+                v = [None if (isinstance(x, float) and math.isnan(x)) else x for x in v]
+            elif isinstance(v, float) and math.isnan(v):
+                v = None
+            out[k[len("stats_") :]] = v
+    if out.get("period") == "none":
+        out["period"] = None
+    return out
+
+
+def _ci(summary: dict, name: str) -> str:
+    low, high = summary[f"{name}_ci95"]
+    return f"{summary[name]:.4g} (95% CI [{low:.4g}, {high:.4g}], {summary['members']} members)"
+
 
 def _period_check(src: _Source) -> CheckResult:
-    ev, _, where = src.get("poincare_e03")
-    per = ob.find_period(
-        ev["t"], ev["phase"], ev["v_rel"], ev["kind"], 1.5, max_period=16, tail=2000
-    )
-    measured = (
-        "no period <= 16"
-        if per is None
-        else (
-            f"{per.label}: {per.p} impacts per {per.q} stator periods, phases "
-            + ", ".join(f"{x:.6f}" for x in per.phases)
-        )
-    )
-    ok = per is not None and per.p == 2 and per.q == 2
+    st, where = src.stats("stats_e03")
+    low, high = st["mean_omega_ci95"]
+    width = high - low
+    ok = st["regime"] == "periodic" and st["period"] == [2, 2] and st["regime_fraction"] == 1.0
+    ok = ok and width <= 1e-6 * abs(st["mean_omega"])
     return CheckResult(
         "e = 0.3, omega_s = 1.5 settles on a period-2 orbit (paper §3, Fig. 3)",
-        measured,
-        "period-2: 2 impacts per 2 stator periods",
+        f"regime {st['regime']} {st['period']} in {100 * st['regime_fraction']:.0f}% of "
+        f"{st['members']} members; mean Omega {_ci(st, 'mean_omega')}",
+        "periodic [2 impacts, 2 stator periods] in every member; interval of zero width",
         ok,
         where,
     )
 
 
 def _chaos_check(src: _Source) -> CheckResult:
-    ev, _, where = src.get("poincare_e06")
-    per = ob.find_period(
-        ev["t"], ev["phase"], ev["v_rel"], ev["kind"], 1.5, max_period=16, tail=2000
-    )
-    lam, lam_t = ob.lyapunov_exponent(ev["t"], ev["phase"], ev["v_rel"], ev["kind"], 0.6, 1.5)
-    ok = per is None and lam > 0.0
-    measured = (
-        f"{'no period <= 16' if per is None else per.label}; largest Lyapunov exponent "
-        f"{lam:.4f} per impact ({lam_t:.4f} per unit time)"
-    )
+    st, where = src.stats("stats_e06")
+    ok = st["lyapunov_ci95"][0] is not None and st["lyapunov_ci95"][0] > 0.0
+    ok = ok and st["regime"] in ("chaotic", "chaotic-reinjection")
     return CheckResult(
         "e = 0.6, omega_s = 1.5 is chaotic (paper §3, Fig. 4)",
-        measured,
-        "no period <= 16 and Lyapunov exponent > 0",
+        f"regime {st['regime']} ({100 * st['regime_fraction']:.0f}% of members); Lyapunov "
+        f"exponent between resets {_ci(st, 'lyapunov')} per impact",
+        "chaotic, the 95% interval of the Lyapunov exponent above 0",
+        ok,
+        where,
+    )
+
+
+def _locked_check(src: _Source) -> CheckResult:
+    st, where = src.stats("stats_locked")
+    ok = st["regime"] == "chattering-periodic" and st["lyapunov_reset_fraction"] == 1.0
+    return CheckResult(
+        "e = 0.5, omega_s = 1.126 is a locked chattering cycle, not chaos (MODEL.md, Regimes)",
+        f"regime {st['regime']} {st['period']} in {100 * st['regime_fraction']:.0f}% of "
+        f"members; {100 * st['lyapunov_reset_fraction']:.0f}% reset every cycle (exponent -inf)",
+        "chattering-periodic in the majority, every member's exponent -inf (reset)",
         ok,
         where,
     )
@@ -208,37 +286,42 @@ def _threshold_checks(_src: _Source) -> list[CheckResult]:
 
 def _rise_check(src: _Source) -> CheckResult:
     _, traj, where = src.get("fig5")
+    claim = (
+        "rotor speed after 300 collisions: first-order rise with a high-frequency ripple "
+        "(paper §3, Fig. 5; e = 0.6, omega_s = 1.5, R_phi = 0.01, psi = 0)"
+    )
     if traj is None or len(traj) < 10:
-        return CheckResult(
-            "rotor speed rises as a first-order system with a ripple (Fig. 5)",
-            "no trajectory",
-            "trajectory with omega_rotor",
-            False,
-            where,
-        )
+        return CheckResult(claim, "no trajectory", "trajectory with omega_rotor", False, where)
     t, om = traj[:, 0], traj[:, 1]
     trend = ob.first_order_trend(t, om)
-    resid = om - trend(t)
-    r2 = 1.0 - float(np.var(resid) / np.var(om))
     ripple = trend.ripple_rms / abs(trend.steady)
+    attrs, steady, band_where = src.band("fig5")
+    from .stats import confidence_interval
+
+    mean, low, high = confidence_interval(steady)
+    r2 = float(attrs["mean_trend_r2"])
+    long_run, lr_where = src.stats("stats_e06")
     ok = r2 > 0.8 and trend.tau > 0 and 0.005 < ripple < 0.3 and t[-1] > 2 * trend.tau
+    ok = ok and low <= long_run["mean_omega_ci95"][1] and high >= long_run["mean_omega_ci95"][0]
     measured = (
-        f"steady Omega = {trend.steady:.4g}, time constant {trend.tau:.4g}, "
-        f"R^2 of the first-order trend {r2:.3f}, ripple RMS {100 * ripple:.2f}% of steady"
+        f"steady Omega of the members' first-order trends {mean:.4g} (95% CI [{low:.4g}, "
+        f"{high:.4g}], {len(steady)} members), R^2 of the ensemble-mean trend {r2:.3f}; long-run "
+        f"mean {_ci(long_run, 'mean_omega')}; one run's ripple RMS {100 * ripple:.2f}% of steady"
     )
     return CheckResult(
-        "rotor speed after 300 collisions: first-order rise with a high-frequency ripple "
-        "(paper §3, Fig. 5; e = 0.6, omega_s = 1.5, R_phi = 0.01, psi = 0)",
+        claim,
         measured,
-        "R^2 > 0.8, ripple 0.5%-30% of steady, run longer than 2 time constants",
+        "R^2 > 0.8, ripple 0.5%-30% of steady, run longer than 2 time constants, steady-speed "
+        "interval overlapping the long-run ensemble mean's",
         ok,
-        where,
+        f"{where}; {band_where}; {lr_where}",
     )
 
 
 CHECKS: list[Callable[[_Source], CheckResult | list[CheckResult]]] = [
     _period_check,
     _chaos_check,
+    _locked_check,
     _threshold_checks,
     _rise_check,
 ]

@@ -144,15 +144,16 @@ def run_member(
     member: int,
     t_from: float,
     should_stop: Callable[[], bool] | None = None,
-) -> tuple[MemberStats, dict[str, float]]:
+) -> tuple[MemberStats, dict[str, float], dict[str, np.ndarray]]:
     """Run member ``member`` of the ensemble of ``cfg`` and reduce it after ``t_from``.
 
     ``cfg.t_end`` must be finite: the averages are over ``[t_from, t_end]``.
 
     Returns
     -------
-    stats, final
-        The member's observables and its final state (:func:`bouncedisk.engine.iterate`).
+    stats, final, tail
+        The member's observables, its final state (:func:`bouncedisk.engine.iterate`) and its
+        last :data:`TAIL_EVENTS` events (``t``, ``phase``, ``v_rel``, ``kind``).
     """
     if not math.isfinite(cfg.t_end) or cfg.t_end <= t_from:
         raise ValueError("an ensemble member needs a finite end time after t_from")
@@ -170,7 +171,7 @@ def run_member(
             break
         red.add(c.t, c.phase, c.v_rel, c.kind)
     stats = red.result(member, final["omega_integral"], cfg.t_end, cfg.r_phi, cfg.psi)
-    return stats, final
+    return stats, final, red.tail
 
 
 def run_ensemble(

@@ -90,8 +90,17 @@ def fig2_schematic() -> Figure:
     return fig
 
 
-def fig_trajectory(ds: xr.Dataset, window: float = 40.0) -> Figure:
-    """Paper Figs. 3–4: rotor and stator flight paths and the rotor angular velocity."""
+def _band(ax, t, low, high, color, label, alpha=0.25) -> None:
+    """A shaded band between ``low`` and ``high``."""
+    ax.fill_between(t, low, high, color=color, alpha=alpha, lw=0, label=label)
+
+
+def fig_trajectory(ds: xr.Dataset, band: xr.Dataset | None = None, window: float = 40.0) -> Figure:
+    """Paper Figs. 3–4: rotor and stator flight paths and the rotor angular velocity.
+
+    With ``band`` (:func:`bouncedisk.bands.omega_band`), the ensemble's spread of ``Ω`` (central
+    95 % of the members) and the 95 % interval of its mean are drawn behind the single run.
+    """
     t = ds["time"].values
     fig = Figure(figsize=(8.0, 7.0), layout="constrained")
     axes = fig.subplots(3, 1)
@@ -105,7 +114,14 @@ def fig_trajectory(ds: xr.Dataset, window: float = 40.0) -> Figure:
         ax.legend(loc="upper right", fontsize=8)
     axes[1].set_xlabel("time $t/t_c$")
     if "omega_rotor" in ds:
-        axes[2].plot(t, ds["omega_rotor"].values, color=COLORS["rotor"], lw=0.8)
+        if band is not None:
+            bt = band["time"].values
+            k = band.sizes["member"]
+            _band(axes[2], bt, band["omega_p025"], band["omega_p975"], "0.6",
+                  f"central 95% of {k} members", alpha=0.3)  # fmt: skip
+            _band(axes[2], bt, band["omega_ci_low"], band["omega_ci_high"], COLORS["fit"],
+                  "95% interval of the ensemble mean", alpha=0.45)  # fmt: skip
+        axes[2].plot(t, ds["omega_rotor"].values, color=COLORS["rotor"], lw=0.8, label="this run")
         if "t_impact" in ds:
             axes[2].plot(
                 ds["t_impact"].values,
@@ -115,7 +131,7 @@ def fig_trajectory(ds: xr.Dataset, window: float = 40.0) -> Figure:
                 color="k",
                 label="after each impact",
             )
-            axes[2].legend(loc="lower right", fontsize=8)
+        axes[2].legend(loc="lower right", fontsize=7)
         axes[2].set_ylabel(r"rotor angular velocity $\Omega$")
     axes[2].set_xlabel("time $t/t_c$")
     fig.suptitle(f"Bouncing disk: {_title(ds)}", fontsize=11)
@@ -227,75 +243,135 @@ def fig_poincare(datasets: dict[str, xr.Dataset]) -> Figure:
     return fig
 
 
-def fig_bifurcation(ds: xr.Dataset) -> Figure:
-    """Impact phase of the attractor against ``e`` (tail of each run), with the Lyapunov exponent."""
-    fig = Figure(figsize=(8.0, 6.5), layout="constrained")
-    ax, ax2 = fig.subplots(2, 1, sharex=True, height_ratios=[3, 1])
-    e = ds["e"].values
-    ph = ds["phase"].values
-    ee = np.broadcast_to(e[:, None], ph.shape)
-    ax.plot(ee.ravel(), ph.ravel(), ",", color="k", alpha=0.7)
+def _param_where(gamma_of_e, target: float) -> float:
+    """``e`` in (0, 1) where the decreasing threshold ``gamma_of_e(e)`` equals ``target``."""
+    from scipy.optimize import brentq
+
+    f = lambda e: gamma_of_e(e) - target  # noqa: E731
+    return brentq(f, 1e-9, 1 - 1e-9) if f(1e-9) > 0 > f(1 - 1e-9) else math.nan
+
+
+def fig_bifurcation(up: xr.Dataset, down: xr.Dataset) -> Figure:
+    """Impact phase against ``e`` by continuation up and down, with the Lyapunov exponent.
+
+    Coexisting attractors appear as two branches; complete chatters (resets) are marked ×.
+    The exponent is the ensemble mean with its 95 % interval; a cycle through a reset has
+    exponent ``−∞`` (drawn as ▼ at the bottom). Dashed lines: the period-1 orbit's existence
+    ``Γ_1 = π(1−e)/(1+e)`` and its doubling (MODEL.md "Classic results") at ``Γ = ω_s²``.
+    """
+    from .observables import period_doubling_threshold, period_n_threshold
+
+    fig = Figure(figsize=(8.0, 7.0), layout="constrained")
+    ax, ax2 = fig.subplots(2, 1, sharex=True, height_ratios=[3, 1.3])
+    w = _param(up, "omega_s")
+    styles = {"up": ("k", "sweep up"), "down": ("#e6550d", "sweep down")}
+    for ds, key in ((up, "up"), (down, "down")):
+        color, label = styles[key]
+        e = ds["e"].values
+        ph = ds["phase"].values
+        chat = ds["is_chatter"].values.astype(bool)
+        ee = np.broadcast_to(e[:, None], ph.shape)
+        imp = ~chat & np.isfinite(ph)
+        ax.plot(ee[imp], ph[imp], "o", ms=1.2, mew=0, color=color, alpha=0.6, label=label)
+        ax.plot(ee[chat], ph[chat], "x", ms=4, mew=0.8, color="#3182bd",
+                label="complete chatter (reset)" if key == "up" else None)  # fmt: skip
+        lam = ds["lyapunov"].values
+        ax2.fill_between(e, ds["lyapunov_ci_low"].values, ds["lyapunov_ci_high"].values,
+                         color=color, alpha=0.25, lw=0)  # fmt: skip
+        ax2.plot(e, lam, "-", color=color, lw=0.8, label=f"{label}, mean and 95% interval")
+        reset = ds["lyapunov_reset_fraction"].values > 0.5
+        ax2.plot(e[reset], np.full(reset.sum(), -2.4), "v", ms=3, color=color)
+    g = w * w
+    e1 = _param_where(lambda e: period_n_threshold(1, e), g)
+    epd = _param_where(lambda e: period_doubling_threshold(1, e), g)
+    for x, text in ((e1, "Γ₁"), (epd, "Γ_PD")):
+        if math.isfinite(x):
+            for a in (ax, ax2):
+                a.axvline(x, color="0.4", lw=0.7, ls="--")
+            ax.text(x + 0.004, 3.0, text, ha="left", va="center", fontsize=8, color="0.3")
     ax.set_ylim(0, TWO_PI)
     ax.set_ylabel(r"impact phase $\omega_s t$ mod $2\pi$")
-    ax.set_title(f"bifurcation diagram, ω_s = {_param(ds, 'omega_s'):.3g}", fontsize=10)
-    lam = ds["lyapunov"].values
-    ax2.plot(e, lam, ".-", color=COLORS["fit"], ms=3, lw=0.8)
+    ax.set_title(f"bifurcation diagram by continuation, ω_s = {w:.3g} (Γ = {g:.3g})", fontsize=10)
+    ax.legend(loc="upper right", fontsize=7, markerscale=3)
     ax2.axhline(0, color="k", lw=0.6)
-    ax2.set_ylabel("Lyapunov\n(per impact)")
+    ax2.set_ylim(-2.6, 1.5)
+    ax2.set_ylabel("Lyapunov exponent\n(per impact; ▼ = −∞)")
     ax2.set_xlabel("coefficient of restitution $e$")
+    ax2.legend(loc="upper left", fontsize=7)
     return fig
 
 
-REGIME_COLORS = {1: "#4daf4a", 2: "#e41a1c", 3: "#377eb8", 4: "#984ea3", 5: "#ff7f00"}
+REGIME_COLORS = {
+    0: "#bdbdbd",
+    1: "#4daf4a",
+    2: "#377eb8",
+    3: "#ff7f00",
+    4: "#e41a1c",
+    5: "#984ea3",
+}
 
 
 def fig_regime_map(ds: xr.Dataset) -> Figure:
-    """Regimes over ``(e, omega_s)`` and the largest Lyapunov exponent."""
-    from .sweeps import REGIME_MEANINGS
+    """Regimes over ``(e, omega_s)``, the Lyapunov exponent and the chatter rate (ensembles)."""
+    from .observables import REGIMES
 
-    fig = Figure(figsize=(11.0, 4.6), layout="constrained")
-    ax, ax2 = fig.subplots(1, 2)
+    fig = Figure(figsize=(15.0, 4.6), layout="constrained")
+    ax, ax2, ax3 = fig.subplots(1, 3)
     e = ds["e"].values
     w = ds["omega_s"].values
     reg = ds["regime"].transpose("omega_s", "e").values
     codes = sorted(REGIME_COLORS)
     cmap = ListedColormap([REGIME_COLORS[c] for c in codes])
-    norm = BoundaryNorm(np.arange(0.5, len(codes) + 1.5), cmap.N)
+    norm = BoundaryNorm(np.arange(-0.5, len(codes) + 0.5), cmap.N)
     m = ax.pcolormesh(e, w, reg, cmap=cmap, norm=norm, shading="nearest")
     cb = fig.colorbar(m, ax=ax, ticks=codes)
-    cb.ax.set_yticklabels([REGIME_MEANINGS[c] for c in codes], fontsize=8)
-    per = ds["period"].transpose("omega_s", "e").values
+    cb.ax.set_yticklabels([REGIMES[c] for c in codes], fontsize=7)
+    per = ds["period_p"].transpose("omega_s", "e").values
     for i, wi in enumerate(w):
         for j, ej in enumerate(e):
-            if reg[i, j] == 1 and per[i, j] > 1 and len(e) <= 30:
+            if reg[i, j] == 1 and per[i, j] > 1 and len(e) <= 40:
                 ax.text(ej, wi, str(int(per[i, j])), ha="center", va="center", fontsize=5)
-    ax.set_xlabel("coefficient of restitution $e$")
-    ax.set_ylabel(r"stator frequency $\omega_s$")
-    ax.set_title("regime (numbers: impacts per cycle)", fontsize=10)
+    members = ds.attrs.get("ensemble_members", "?")
+    ax.set_title(f"regime, most common of {members} members (numbers: impacts per cycle)",
+                 fontsize=9)  # fmt: skip
     lam = ds["lyapunov"].transpose("omega_s", "e").values
     vmax = np.nanmax(np.abs(lam)) if np.isfinite(lam).any() else 1.0
     m2 = ax2.pcolormesh(e, w, lam, cmap="RdBu_r", vmin=-vmax, vmax=vmax, shading="nearest")
-    fig.colorbar(m2, ax=ax2, label="largest Lyapunov exponent (per impact)")
-    ax2.set_xlabel("coefficient of restitution $e$")
-    ax2.set_ylabel(r"stator frequency $\omega_s$")
-    ax2.set_title("Lyapunov exponent of the impact map", fontsize=10)
+    fig.colorbar(m2, ax=ax2, label="Lyapunov exponent per impact (ensemble mean)")
+    ax2.set_facecolor("0.8")
+    ax2.set_title("Lyapunov exponent between resets (grey: reset every cycle, −∞)", fontsize=9)
+    rate = ds["chatter_rate"].transpose("omega_s", "e").values
+    m3 = ax3.pcolormesh(e, w, rate, cmap="viridis", shading="nearest")
+    fig.colorbar(m3, ax=ax3, label="complete chatters per unit time (ensemble mean)")
+    ax3.set_title("chatter rate", fontsize=9)
+    for a in (ax, ax2, ax3):
+        a.set_xlabel("coefficient of restitution $e$")
+        a.set_ylabel(r"stator frequency $\omega_s$")
     return fig
 
 
 def fig_speed_vs_psi(ds: xr.Dataset) -> Figure:
-    """Mean rotor speed against the torsional phase ``psi`` for several ``r_phi``."""
+    """Ensemble-mean rotor speed ``R_φ Ω̄`` against ``psi`` for several ``r_phi``, 95 % bands."""
     fig = Figure(figsize=(7.0, 4.5), layout="constrained")
     ax = fig.add_subplot()
     psi = ds["psi"].values
     for r in ds["r_phi"].values:
-        y = ds["mean_slip_speed"].sel(r_phi=r).values
-        ax.plot(psi, y, ".-", lw=1, ms=3, label=f"$R_\\phi$ = {r:g}")
+        sel = ds.sel(r_phi=r)
+        line = ax.plot(psi, r * sel["mean_omega"].values, ".-", lw=1, ms=3,
+                       label=f"$R_\\phi$ = {r:g}")[0]  # fmt: skip
+        ax.fill_between(psi, r * sel["mean_omega_ci_low"].values,
+                        r * sel["mean_omega_ci_high"].values, color=line.get_color(),
+                        alpha=0.3, lw=0)  # fmt: skip
     ax.axhline(0, color="k", lw=0.6)
     ax.set_xlabel(r"torsional phase $\psi$ [rad]")
     ax.set_ylabel(r"mean rotor speed $R_\phi\bar\Omega$ (stator units)")
+    members = ds.attrs.get("ensemble_members", "?")
+    r = ds["r_phi"]
+    half = float(np.nanmax(r * (ds["mean_omega_ci_high"] - ds["mean_omega_ci_low"]) / 2))
     ax.set_title(
-        f"motor curve: e = {_param(ds, 'e'):.3g}, ω_s = {_param(ds, 'omega_s'):.3g}",
-        fontsize=10,
+        f"motor curve: e = {_param(ds, 'e'):.3g}, ω_s = {_param(ds, 'omega_s'):.3g}; bands: 95% "
+        f"interval over {members} members (half-width at most {half:.2g})",
+        fontsize=9,
     )
     ax.legend(fontsize=8)
     return fig
@@ -308,13 +384,19 @@ def fig_clipped_vs_bouncing(ds: xr.Dataset) -> Figure:
     axes = fig.subplots(len(psis), 1, sharex=True, squeeze=False)[:, 0]
     t = ds["time"].values
     for ax, p in zip(axes, psis, strict=True):
+        if "omega_bouncing_ci_low" in ds:
+            b = ds.sel(psi=p)
+            _band(ax, t, b["omega_bouncing_p025"], b["omega_bouncing_p975"], "0.6",
+                  "bouncing: central 95% of members", alpha=0.3)  # fmt: skip
+            _band(ax, t, b["omega_bouncing_ci_low"], b["omega_bouncing_ci_high"], COLORS["rotor"],
+                  "bouncing: 95% interval of the ensemble mean", alpha=0.5)  # fmt: skip
         for model, color in (("bouncing", COLORS["rotor"]), ("clipped", COLORS["fit"])):
             ax.plot(
                 t,
                 ds["omega_rotor"].sel(model=model, psi=p).values,
                 color=color,
                 lw=0.8,
-                label=f"{model} model",
+                label=f"{model} model" + (" (one run)" if model == "bouncing" else ""),
             )
         ax.set_ylabel(r"$\Omega$")
         ax.set_title(f"ψ = {p:.3g}", fontsize=10)
@@ -367,4 +449,40 @@ def fig_scaling(table: pd.DataFrame) -> Figure:
     a3.loglog(m["n_impacts"], m["peak_mb"], "o-")
     a3.set_xlabel("impacts (events only, streamed to netCDF)")
     a3.set_ylabel("peak memory [MB]")
+    return fig
+
+
+def fig_stats_cost(table: pd.DataFrame, singles: pd.DataFrame) -> Figure:
+    """What statistics cost: CI half-width of the mean rotor speed against CPU time.
+
+    Left: the half-width for each averaging time against the CPU time of the ensemble (members ×
+    duration), with the ``1/sqrt(cost)`` slope; the grey band is ± the standard deviation of
+    single runs whose ``e`` differs by 1e-9 steps. Right: those single runs' averages beside the
+    largest ensemble's mean and 95 % interval.
+    """
+    fig = Figure(figsize=(11.0, 4.3), layout="constrained")
+    ax, ax2 = fig.subplots(1, 2)
+    for d, grp in table.groupby("duration"):
+        ax.loglog(grp["cpu_s"], grp["half_width"], "o-", ms=4, label=f"duration {d:g}")
+    x = np.array([table["cpu_s"].min(), table["cpu_s"].max()])
+    ref = table.loc[table["cpu_s"].idxmin()]
+    ax.loglog(x, ref["half_width"] * np.sqrt(ref["cpu_s"] / x), "k--", lw=0.8,
+              label=r"$\propto 1/\sqrt{\mathrm{CPU}}$")  # fmt: skip
+    sd = float(singles["mean_omega"].std(ddof=1))
+    ax.axhspan(sd * 0.98, sd * 1.02, color="0.5", alpha=0.5,
+               label=f"scatter of single runs (sd {sd:.2f})")  # fmt: skip
+    ax.set_xlabel("CPU time of the ensemble [s] (one core)")
+    ax.set_ylabel(r"95% half-width of the mean rotor speed $\bar\Omega$")
+    ax.legend(fontsize=7)
+    ax.set_title("cost of a confidence interval", fontsize=10)
+    best = table.loc[table["member_time"].idxmax()]
+    ax2.axhspan(best["ci_low"], best["ci_high"], color=COLORS["fit"], alpha=0.3,
+                label=f"ensemble: {int(best['members'])} members × {best['duration']:g}, 95%")  # fmt: skip
+    ax2.axhline(best["mean_omega"], color=COLORS["fit"], lw=1)
+    ax2.plot(singles["de"] * 1e9, singles["mean_omega"], "o", color=COLORS["rotor"],
+             label="single runs (no noise)")  # fmt: skip
+    ax2.set_xlabel(r"change of $e$ [$10^{-9}$]")
+    ax2.set_ylabel(r"time-averaged rotor speed $\bar\Omega$")
+    ax2.set_title("single runs jump; the ensemble statistic does not", fontsize=10)
+    ax2.legend(fontsize=7)
     return fig

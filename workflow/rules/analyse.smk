@@ -36,5 +36,6 @@ rule clipped_comparison:
         f"{RES}/benchmarks/clipped_comparison.tsv"
     params:
         psi=config["clipped_comparison"]["psi"],
+        band=config["bands"],
     script:
         "../scripts/clipped_comparison.py"

@@ -5,7 +5,9 @@ rule reproduction_checks:
     """Verify the paper's claims from the built results: results/reproduction.md."""
     input:
         code=CODE,
-        sims=expand(f"{RES}/simulations/{{s}}.nc", s=["poincare_e03", "poincare_e06", "fig5"]),
+        sims=[f"{RES}/simulations/fig5.nc"],
+        stats=expand(f"{RES}/stats/{{s}}.nc", s=CHECKED_STATS),
+        band=f"{RES}/bands/fig5.nc",
     output:
         report(f"{RES}/reproduction.md", caption="../report/reproduction.rst",
                category="Reproduction"),

@@ -21,6 +21,10 @@ def _check_config():
     wanted = {f"simulations[{i}]": s for i, s in enumerate(config["simulations"])}
     wanted.update({f"sweeps.{k}.scene": v["scene"] for k, v in config["sweeps"].items()})
     wanted["clipped_comparison.scene"] = config["clipped_comparison"]["scene"]
+    wanted.update({f"statistics[{i}]": s for i, s in enumerate(config["statistics"])})
+    wanted.update({f"bands.scenes[{i}]": s for i, s in enumerate(config["bands"]["scenes"])})
+    wanted["continuation.scene"] = config["continuation"]["scene"]
+    wanted["stats_cost.scene"] = config["stats_cost"]["scene"]
     for key, name in wanted.items():
         if not Path(scene_path(name)).is_file():
             raise ValueError(
@@ -40,6 +44,17 @@ def _check_config():
                 f"workflow/config/config.yaml: sweeps.{name}.shards: {spec['shards']} shards "
                 f"for only {n} values of the first axis"
             )
+    for key in ("fig3", "fig4"):
+        if key not in config["bands"]["scenes"]:
+            raise ValueError(
+                f"workflow/config/config.yaml: bands.scenes: must include {key!r} (a paper figure)"
+            )
+    for key in CHECKED_STATS:
+        if key not in config["statistics"]:
+            raise ValueError(
+                f"workflow/config/config.yaml: statistics: must include {key!r} "
+                "(a reproduction check reads it)"
+            )
     for key in ("fig3", "fig4", "fig5"):
         if key not in config["simulations"]:
             raise ValueError(
@@ -51,6 +66,8 @@ def _check_config():
         )
 
 
+# ensemble statistics the reproduction checks read (bouncedisk.checks.STATS_SCENES)
+CHECKED_STATS = ["stats_e03", "stats_e06", "stats_locked"]
 _check_config()
 
 FIGURES = [
@@ -65,6 +82,7 @@ FIGURES = [
     "clipped_vs_bouncing",
     "work_precision",
     "scaling",
+    "stats_cost",
 ]
 
 
@@ -82,7 +100,10 @@ def all_targets():
         f"{RES}/prototype/synthetic_motor.csv",
         f"{RES}/tables/work_precision.csv",
         f"{RES}/tables/scaling.csv",
-    ] + expand(f"{RES}/poincare/{{s}}.nc", s=list(config["poincare"]))
+        f"{RES}/tables/stats_cost.csv",
+    ] + expand(f"{RES}/poincare/{{s}}.nc", s=list(config["poincare"])) + expand(
+        f"{RES}/stats/{{s}}.nc", s=config["statistics"]
+    )
 
 
 FIGCAT = "Figures of the paper"
@@ -102,4 +123,7 @@ def registry_inputs(wildcards):
     files += expand(f"{RES}/sweeps/{{s}}.nc", s=list(config["sweeps"]))
     files += expand(f"{RES}/poincare/{{s}}.nc", s=list(config["poincare"]))
     files += [f"{RES}/studies/clipped_vs_bouncing.nc", f"{RES}/fit/prototype.nc"]
+    files += expand(f"{RES}/stats/{{s}}.nc", s=config["statistics"])
+    files += expand(f"{RES}/bands/{{s}}.nc", s=config["bands"]["scenes"])
+    files += expand(f"{RES}/continuation/{{d}}.nc", d=["up", "down"])
     return files

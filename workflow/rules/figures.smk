@@ -21,6 +21,7 @@ rule fig3_trajectory:
     input:
         code=CODE,
         sim=f"{RES}/simulations/fig3.nc",
+        band=f"{RES}/bands/fig3.nc",
     output:
         **fig_out("fig3_trajectory_e03", "fig3", FIGCAT),
     conda:
@@ -39,6 +40,7 @@ rule fig4_trajectory:
     input:
         code=CODE,
         sim=f"{RES}/simulations/fig4.nc",
+        band=f"{RES}/bands/fig4.nc",
     output:
         **fig_out("fig4_trajectory_e06", "fig4", FIGCAT),
     conda:
@@ -75,7 +77,8 @@ rule poincare_maps:
 rule bifurcation_figure:
     input:
         code=CODE,
-        sweep=f"{RES}/sweeps/bifurcation.nc",
+        up=f"{RES}/continuation/up.nc",
+        down=f"{RES}/continuation/down.nc",
     output:
         **fig_out("bifurcation_e", "bifurcation", STUDY),
     conda:
@@ -195,5 +198,24 @@ rule scaling_figure:
         f"{RES}/benchmarks/figures/scaling.tsv"
     params:
         figure="scaling",
+    script:
+        "../scripts/figure.py"
+
+
+rule stats_cost_figure:
+    input:
+        code=CODE,
+        table=f"{RES}/tables/stats_cost.csv",
+        singles=f"{RES}/tables/stats_cost_single_runs.csv",
+    output:
+        **fig_out("stats_cost", "stats_cost", "Accuracy and cost"),
+    conda:
+        "../envs/bouncedisk.yaml"
+    log:
+        f"{RES}/logs/figures/stats_cost.log",
+    benchmark:
+        f"{RES}/benchmarks/figures/stats_cost.tsv"
+    params:
+        figure="stats_cost",
     script:
         "../scripts/figure.py"

@@ -7,6 +7,13 @@ from bouncedisk.scene import load_scene
 
 with log_to(snakemake.log[0]) as log:
     scene = load_scene(snakemake.input.scene)
-    ds = clipped_comparison(scene, [float(p) for p in snakemake.params.psi])
+    band = snakemake.params.band
+    ds = clipped_comparison(
+        scene,
+        [float(p) for p in snakemake.params.psi],
+        members=band["members"],
+        seed=band["seed"],
+        e_sigma=band["e_sigma"],
+    )
     write_dataset(ds, snakemake.output[0])
     log.info("%s written", snakemake.output[0])

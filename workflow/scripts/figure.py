@@ -10,16 +10,23 @@ with log_to(snakemake.log[0]) as log:
     if kind == "fig2":
         fig = plotting.fig2_schematic()
     elif kind == "trajectory":
-        fig = plotting.fig_trajectory(open_simulation(inp.sim))
+        band = open_checked(inp.band, required=("omega_mean", "omega_ci_low"), what="band")
+        fig = plotting.fig_trajectory(open_simulation(inp.sim), band=band)
     elif kind == "poincare":
         maps = [open_checked(p, required=("phase", "v_rel")) for p in inp.maps]
         fig = plotting.fig_poincare(dict(zip(snakemake.params.labels, maps, strict=True)))
     elif kind == "bifurcation":
-        fig = plotting.fig_bifurcation(open_checked(inp.sweep, required=("phase", "lyapunov")))
+        up, down = (
+            open_checked(p, required=("phase", "is_chatter", "lyapunov"))
+            for p in (inp.up, inp.down)
+        )
+        fig = plotting.fig_bifurcation(up, down)
     elif kind == "regime_map":
         fig = plotting.fig_regime_map(open_checked(inp.sweep, required=("regime", "lyapunov")))
     elif kind == "speed_vs_psi":
-        fig = plotting.fig_speed_vs_psi(open_checked(inp.sweep, required=("mean_slip_speed",)))
+        fig = plotting.fig_speed_vs_psi(
+            open_checked(inp.sweep, required=("mean_omega", "mean_omega_ci_low"))
+        )
     elif kind == "fig5":
         from bouncedisk.curves import read_curve
 
@@ -34,6 +41,10 @@ with log_to(snakemake.log[0]) as log:
         fig = (plotting.fig_work_precision if kind == "work_precision" else plotting.fig_scaling)(
             table
         )
+    elif kind == "stats_cost":
+        import pandas as pd
+
+        fig = plotting.fig_stats_cost(pd.read_csv(inp.table), pd.read_csv(inp.singles))
     elif kind == "clipped":
         fig = plotting.fig_clipped_vs_bouncing(open_checked(inp.study, required=("omega_rotor",)))
     else:

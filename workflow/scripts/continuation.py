@@ -1,0 +1,24 @@
+"""Adapter: one direction of the continuation (bifurcation diagram)."""
+
+from bouncedisk.datasets import write_dataset
+from bouncedisk.logutil import log_to
+from bouncedisk.scene import load_scene
+from bouncedisk.sweeps import grid_values, run_continuation
+
+with log_to(snakemake.log[0]) as log:
+    spec = snakemake.params.spec
+    scene = load_scene(snakemake.input.scene)
+
+    def progress(done, total):
+        if done % 25 == 0 or done == total:
+            log.info("%d / %d points", done, total)
+
+    ds = run_continuation(
+        scene,
+        spec["parameter"],
+        grid_values(spec["axis"]),
+        direction=snakemake.wildcards.direction,
+        tail=spec["tail"],
+        progress=progress,
+    )
+    write_dataset(ds, snakemake.output[0])
