@@ -10,17 +10,26 @@ from matplotlib.figure import Figure
 
 from bouncedisk import plotting
 from bouncedisk.analysis import clipped_comparison, poincare_dataset
+from bouncedisk.bands import omega_band
 from bouncedisk.cli import main
 from bouncedisk.datasets import open_simulation
 from bouncedisk.engine import EngineConfig, simulate_arrays
+from bouncedisk.observables import REGIMES
 from bouncedisk.scene import scene_from_mapping
-from bouncedisk.sweeps import combine_shards, run_sweep
+from bouncedisk.sweeps import combine_shards, run_continuation, run_sweep
 
+TORSION = {
+    "name": "tq",
+    "parameters": {"e": 0.6, "omega_s": 1.5, "r_phi": 0.01},
+    "effects": ["impacts", "contact", "torsion"],
+}
 BASE = {
     "name": "sw",
-    "parameters": {"e": 0.3, "omega_s": 1.5, "r_phi": 0.01},
-    "effects": ["impacts", "contact"],
-    "stop": {"impacts": 600},
+    "parameters": {"e": 0.3, "omega_s": 1.5, "r_phi": 0.01, "e_sigma": 1e-9},
+    "effects": ["impacts", "contact", "restitution_noise"],
+    "stop": {"time": 1500.0},
+    "ensemble": {"members": 3, "seed": 1},
+    "stats": {"discard": 500.0},
 }
 
 
@@ -36,9 +45,37 @@ def test_shards_join_to_the_unsharded_sweep(tmp_path):
         p.to_netcdf(tmp_path / f"shard-{i}.nc")
     with xr.open_mfdataset(str(tmp_path / "shard-*.nc"), combine="by_coords") as mf:
         np.testing.assert_array_equal(mf["regime"].values, whole["regime"].values)
-    # the seed claims show up in the sweep: e = 0.3 periodic (2 impacts per cycle)
-    per = whole["period"].sel(e=0.4, omega_s=1.5, method="nearest")
-    assert int(whole["period"].sel(e=0.1, omega_s=1.5)) >= 0 and int(per) >= 0
+
+    # MODEL.md's regimes show up at omega_s = 1.5: a locked chattering cycle at e = 0.1 (exponent
+    # -inf in every member), the period-2 orbit at e = 0.3, chaos at e = 0.6
+    pts = run_sweep(scene, [("e", np.array([0.1, 0.3, 0.6])), ("omega_s", np.array([1.5]))])
+    pts = pts.isel(omega_s=0)
+    reg = pts["regime"].values
+    assert [REGIMES[int(c)] for c in reg] == ["chattering-periodic", "periodic", "chaotic"]
+    assert int(pts["period_p"].sel(e=0.3)) == 2 and int(pts["period_q"].sel(e=0.3)) == 2
+    assert float(pts["lyapunov_reset_fraction"].sel(e=0.1)) == 1.0
+    assert float(pts["lyapunov_ci_low"].sel(e=0.6)) > 0.5
+    # a periodic point: every member the same, an interval of zero width
+    w = pts.sel(e=0.3)
+    assert float(w["mean_omega_ci_high"] - w["mean_omega_ci_low"]) == pytest.approx(0, abs=1e-6)
+
+
+def test_continuation_follows_both_coexisting_attractors():
+    """e in [0.19, 0.25] at omega_s = 1.5: sweeping down follows the period-1 orbit, sweeping up
+    stays on the coexisting locked chattering cycles (MODEL.md "Regimes")."""
+    scene = scene_from_mapping(BASE)
+    values = np.linspace(0.12, 0.3, 10)
+    up = run_continuation(scene, "e", values, "up", tail=20)
+    down = run_continuation(scene, "e", values, "down", tail=20)
+    sel = dict(e=slice(0.19, 0.25))
+    # up: never the period-1 orbit there, and locked chattering cycles (the other attractor)
+    up_sel = up.sel(**sel)
+    assert not ((up_sel["regime"] == 1) & (up_sel["period_p"] == 1)).any()
+    assert "chattering-periodic" in {REGIMES[int(c)] for c in up_sel["regime"].values}
+    assert set(down["regime"].sel(**sel).values) == {1}  # periodic
+    assert set(down["period_p"].sel(**sel).values) == {1}
+    assert (down["lyapunov"].sel(**sel) < 0).all()
+    np.testing.assert_array_equal(up["e"].values, down["e"].values)
 
 
 def test_clipped_model_rides_the_stator_and_coasts_when_unloaded():
@@ -55,20 +92,20 @@ def test_clipped_model_rides_the_stator_and_coasts_when_unloaded():
     seg = slice(runs[0] + 2, runs[1] - 1)
     assert unloaded[seg].all() and np.ptp(tr[seg, 4]) < 1e-12
     with pytest.raises(Exception, match="stop"):
-        scene_from_mapping({**BASE, "model": "clipped"})
+        scene_from_mapping({**BASE, "model": "clipped", "stop": {"impacts": 600}, "stats": {}})
 
 
 def test_clipped_comparison_dataset():
     scene = scene_from_mapping(
-        {
-            **BASE,
-            "effects": ["impacts", "contact", "torsion"],
-            "stop": {"time": 50.0},
-            "outputs": {"trajectory": {"dt": 0.5}},
-        }
+        {**TORSION, "stop": {"time": 50.0}, "outputs": {"trajectory": {"dt": 0.5}}}
     )
-    ds = clipped_comparison(scene, [0.0, 1.0])
+    ds = clipped_comparison(scene, [0.0, 1.0], members=4)
     assert ds["omega_rotor"].dims == ("model", "psi", "time")
+    # the bouncing model's ensemble band brackets its mean
+    mean = ds["omega_bouncing_mean"]
+    assert (ds["omega_bouncing_ci_low"] <= mean + 1e-12).all()
+    assert (mean <= ds["omega_bouncing_ci_high"] + 1e-12).all()
+    assert (ds["omega_bouncing_p025"] <= ds["omega_bouncing_p975"]).all()
     assert not np.array_equal(
         ds["omega_rotor"].sel(model="bouncing").values,
         ds["omega_rotor"].sel(model="clipped").values,
@@ -120,7 +157,7 @@ def test_check_command_passes_and_writes_markdown(tmp_path, capsys):
     assert main(["check", "-o", str(md)]) == 0
     text = md.read_text()
     assert "period-2" in text and "**FAIL**" not in text
-    assert "6 passed, 0 failed" in capsys.readouterr().out
+    assert "7 passed, 0 failed" in capsys.readouterr().out
 
 
 def test_every_figure_function_returns_a_figure(sim_file, tmp_path):
@@ -130,11 +167,25 @@ def test_every_figure_function_returns_a_figure(sim_file, tmp_path):
         scene, [("e", np.array([0.2, 0.5])), ("omega_s", np.array([1.5, 2.0]))], tail=10
     )
     psi = run_sweep(
-        scene_from_mapping({**BASE, "effects": ["impacts", "contact", "torsion"]}),
+        scene_from_mapping(
+            {**BASE, "effects": ["impacts", "contact", "torsion", "restitution_noise"]}
+        ),
         [("psi", np.array([-1.0, 1.0])), ("r_phi", np.array([0.01, 0.1]))],
         tail=5,
     )
     pmap = poincare_dataset(sim, transient=100)
+    cont = [run_continuation(scene, "e", np.array([0.2, 0.3]), d, tail=5) for d in ("up", "down")]
+    traj = {"trajectory": {"dt": 0.1}}
+    band = omega_band(scene_from_mapping({**TORSION, "stop": {"impacts": 50}, "outputs": traj}), 3)
+    clipped = clipped_comparison(
+        scene_from_mapping({**TORSION, "stop": {"time": 30.0}, "outputs": traj}), [0.0], members=3
+    )
+    cost = pd.DataFrame(
+        {"members": [2, 4], "duration": [10.0, 10.0], "member_time": [20.0, 40.0],
+         "cpu_s": [0.1, 0.2], "mean_omega": [1.0, 1.1], "ci_low": [0.5, 0.8],
+         "ci_high": [1.5, 1.4], "half_width": [0.5, 0.3]}
+    )  # fmt: skip
+    singles = pd.DataFrame({"de": [0.0, 1e-9], "mean_omega": [1.0, 1.3]})
     wp = pd.DataFrame(
         {
             "case": ["c"] * 2,
@@ -157,8 +208,11 @@ def test_every_figure_function_returns_a_figure(sim_file, tmp_path):
     figs = [
         plotting.fig2_schematic(),
         plotting.fig_trajectory(sim),
+        plotting.fig_trajectory(sim, band=band),
+        plotting.fig_clipped_vs_bouncing(clipped),
+        plotting.fig_stats_cost(cost, singles),
         plotting.fig_poincare({"a": pmap}),
-        plotting.fig_bifurcation(sweep2.isel(omega_s=0)),
+        plotting.fig_bifurcation(*cont),
         plotting.fig_regime_map(sweep2),
         plotting.fig_speed_vs_psi(psi),
         plotting.fig_work_precision(wp),

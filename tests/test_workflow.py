@@ -18,7 +18,7 @@ pytestmark = pytest.mark.skipif(shutil.which("snakemake") is None, reason="snake
 
 def targets(res: Path) -> list[str]:
     names = [
-        "sweeps/bifurcation.nc",
+        "continuation/up.nc",
         "sweeps/regime_map.nc",
         "simulations/fig4.nc",
         "poincare/poincare_e06.nc",
@@ -93,9 +93,12 @@ def dry_run(config: Path, res: Path) -> subprocess.CompletedProcess:
 
 def test_bad_config_fails_before_any_job(tmp_path):
     bad = tmp_path / "bad.yaml"
+    bad.write_text(SMALL.read_text().replace("scene: regime_map", "scene: no_such_scene"))
+    p = dry_run(bad, tmp_path / "r")
+    assert p.returncode != 0 and "sweeps.regime_map.scene" in p.stdout + p.stderr
     bad.write_text(SMALL.read_text().replace("scene: bifurcation", "scene: no_such_scene"))
     p = dry_run(bad, tmp_path / "r")
-    assert p.returncode != 0 and "sweeps.bifurcation.scene" in p.stdout + p.stderr
+    assert p.returncode != 0 and "continuation.scene" in p.stdout + p.stderr
     bad.write_text(SMALL.read_text().replace("shards: 3", "shards: -1"))
     p = dry_run(bad, tmp_path / "r")
     assert p.returncode != 0 and "shards" in p.stdout + p.stderr

@@ -303,6 +303,7 @@ def scaling(
     effects = {
         "axial only": dict(torsion=False),
         "+ torsion": dict(torsion=True, r_phi=0.01),
+        "+ torsion + restitution noise": dict(torsion=True, r_phi=0.01, e_sigma=1e-9),
         "+ torsion + trajectory (dt = 0.01)": dict(torsion=True, r_phi=0.01, traj_dt=0.01),
     }
     for label, kw in effects.items():

@@ -8,18 +8,20 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from cases import CASES  # noqa: E402
+import yaml  # noqa: E402
+from cases import BASES, CASES  # noqa: E402
 
 from bouncedisk.runner import run_scene_arrays  # noqa: E402
-from bouncedisk.scene import load_scene  # noqa: E402
+from bouncedisk.scene import apply_overrides, scene_from_mapping  # noqa: E402
 
 OUT = Path("tests/data/reference")
 
 
 def arrays(name: str) -> dict[str, np.ndarray]:
     """Every output array of one reference case, by name."""
-    path, overrides = CASES[name]
-    res = run_scene_arrays(load_scene(path, overrides))
+    base, overrides = CASES[name]
+    raw = apply_overrides(yaml.safe_load(BASES[base]), overrides)
+    res = run_scene_arrays(scene_from_mapping(raw, f"<reference {name}>"))
     out = {f"ev_{k}": v for k, v in res.events.items()}
     out["traj"] = res.traj
     out["strobe"] = res.strobe
