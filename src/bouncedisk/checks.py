@@ -18,48 +18,24 @@ from . import observables as ob
 from .datasets import open_checked, open_simulation
 from .engine import EngineConfig, InitialState, simulate_arrays
 from .runner import run_scene_arrays
-from .scene import scene_from_mapping
 
-SCENES = {
-    "poincare_e03": {
-        "name": "poincare_e03",
-        "parameters": {"e": 0.3, "omega_s": 1.5},
-        "effects": ["impacts", "contact"],
-        "stop": {"impacts": 20000},
-    },
-    "poincare_e06": {
-        "name": "poincare_e06",
-        "parameters": {"e": 0.6, "omega_s": 1.5},
-        "effects": ["impacts", "contact"],
-        "stop": {"impacts": 20000},
-    },
-    "fig5": {
-        "name": "fig5",
-        "parameters": {"e": 0.6, "omega_s": 1.5, "r_phi": 0.01, "psi": 0.0},
-        "effects": ["impacts", "contact", "torsion"],
-        "stop": {"impacts": 300},
-        "outputs": {"events": True, "trajectory": {"dt": 0.05}},
-    },
-}
+#: The pipeline's scene files: the checks read the same scenes the pipeline runs.
+SCENE_DIR = Path(__file__).resolve().parents[2] / "workflow" / "config" / "scenes"
 
 
-def _stats_scene(name: str, e: float, w: float, members: int, t_end: float) -> dict:
-    return {
-        "name": name,
-        "parameters": {"e": e, "omega_s": w, "r_phi": 0.01, "psi": 0.0, "e_sigma": 1e-9},
-        "effects": ["impacts", "contact", "torsion", "restitution_noise"],
-        "stop": {"time": t_end},
-        "ensemble": {"members": members, "seed": 1},
-        "stats": {"discard": 3000.0},
-    }
+def workflow_scene(name: str, scene_dir: Path | None = None):
+    """The workflow's scene ``name`` (``workflow/config/scenes/<name>.yaml``).
+
+    Raises
+    ------
+    InputError
+        When the scene file is missing (the package runs outside the project's checkout).
+    """
+    from .scene import load_scene
+
+    return load_scene((scene_dir or SCENE_DIR) / f"{name}.yaml")
 
 
-#: Ensemble statistics the checks read (the pipeline's workflow/config/scenes/<name>.yaml).
-STATS_SCENES = {
-    "stats_e03": _stats_scene("stats_e03", 0.3, 1.5, 8, 13000.0),
-    "stats_e06": _stats_scene("stats_e06", 0.6, 1.5, 32, 53000.0),
-    "stats_locked": _stats_scene("stats_locked", 0.5, 1.126, 8, 13000.0),
-}
 #: Members of the rotor-speed band of Fig. 5 when simulated here (the pipeline's ``bands``).
 BAND_MEMBERS = 16
 
@@ -99,9 +75,9 @@ class _Source:
                 traj = np.column_stack([ds["time"].values, ds["omega_rotor"].values])
             out = (ev, traj, str(path))
         else:
-            res = run_scene_arrays(scene_from_mapping(SCENES[name], f"<built-in scene {name}>"))
+            res = run_scene_arrays(workflow_scene(name))
             traj = res.traj[:, [0, 4]] if len(res.traj) else None
-            out = (res.events, traj, f"simulated ({name} scene)")
+            out = (res.events, traj, f"simulated (scene {name}.yaml)")
         self.cache[name] = out
         return out
 
@@ -117,8 +93,7 @@ class _Source:
         else:
             from .stats import run_stats
 
-            scene = scene_from_mapping(STATS_SCENES[name], f"<built-in scene {name}>")
-            out = (run_stats(scene, cores=2).summary(), f"ensemble ({name} scene)")
+            out = (run_stats(workflow_scene(name), cores=2).summary(), f"ensemble ({name}.yaml)")
         self.cache[key] = out
         return out
 
@@ -134,9 +109,8 @@ class _Source:
         else:
             from .bands import omega_band
 
-            scene = scene_from_mapping(SCENES[name], f"<built-in scene {name}>")
-            ds = omega_band(scene, BAND_MEMBERS, seed=1, cores=2)
-            where = f"ensemble band ({name} scene, {BAND_MEMBERS} members)"
+            ds = omega_band(workflow_scene(name), BAND_MEMBERS, seed=1, cores=2)
+            where = f"ensemble band ({name}.yaml, {BAND_MEMBERS} members)"
         out = (dict(ds.attrs), ds["trend_steady"].values, where)
         self.cache[key] = out
         return out
@@ -206,7 +180,8 @@ def _locked_check(src: _Source) -> CheckResult:
     )
 
 
-def _settles(e: float, gamma: float, n: int, phase: float, events: int) -> bool:
+def settles_on_period(e: float, gamma: float, n: int, phase: float, events: int) -> bool:
+    """Does a run started at ``phase`` with the period-n orbit's velocity ``T/2`` settle on it?"""
     w = math.sqrt(gamma)
     res = simulate_arrays(
         EngineConfig(e=e, omega_s=w, max_events=events),
@@ -223,31 +198,32 @@ def engine_existence_threshold(n: int, e: float, resolution: float = 2e-4) -> fl
     lo, hi = 0.9 * g_n, 1.1 * g_n
     while hi - lo > resolution:
         mid = 0.5 * (lo + hi)
-        if _settles(e, mid, n, math.acos(min(1.0, g_n / mid)) + 1e-3, 20_000):
+        if settles_on_period(e, mid, n, math.acos(min(1.0, g_n / mid)) + 1e-3, 20_000):
             hi = mid
         else:
             lo = mid
     return 0.5 * (lo + hi)
 
 
+def period_one_is_stable(e: float, gamma: float) -> bool:
+    """Does a run started 1e-4 off the period-1 fixed point stay on it (phases within 1e-7)?"""
+    w = math.sqrt(gamma)
+    phi, vp = ob.period_n_fixed_point(1, e, w)
+    phi += 1e-4
+    res = simulate_arrays(
+        EngineConfig(e=e, omega_s=w, max_events=60_000),
+        InitialState(t=phi / w, u=math.sin(phi), v=vp),
+    )
+    return float(np.ptp(res.events["phase"][-200:])) < 1e-7
+
+
 def engine_doubling_threshold(e: float, resolution: float = 5e-4) -> float:
     """Γ at which the engine's period-1 orbit loses stability (bisection on long runs)."""
     g_pd = ob.period_doubling_threshold(1, e)
-
-    def stable(gamma: float) -> bool:
-        w = math.sqrt(gamma)
-        phi, vp = ob.period_n_fixed_point(1, e, w)
-        phi += 1e-4
-        res = simulate_arrays(
-            EngineConfig(e=e, omega_s=w, max_events=60_000),
-            InitialState(t=phi / w, u=math.sin(phi), v=vp),
-        )
-        return float(np.ptp(res.events["phase"][-200:])) < 1e-7
-
     lo, hi = g_pd - 0.05, g_pd + 0.05
     while hi - lo > resolution:
         mid = 0.5 * (lo + hi)
-        if stable(mid):
+        if period_one_is_stable(e, mid):
             lo = mid
         else:
             hi = mid
