@@ -50,7 +50,10 @@ def test_simulation_writer_streams_chunks_losslessly(tmp_path_factory, sizes, se
     rng = np.random.default_rng(seed)
     chunks = []
     for n in sizes:
-        col = lambda: rng.normal(size=n) * 10 ** rng.uniform(-300, 300)  # noqa: E731
+
+        def col(n=n):
+            return rng.normal(size=n) * 10 ** rng.uniform(-300, 300)
+
         chunks.append(
             Chunk(
                 t=np.sort(rng.uniform(0, 1e6, n)),
