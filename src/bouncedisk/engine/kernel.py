@@ -47,8 +47,8 @@ ST_TIME = 2  # the requested end time was reached
 ST_REST = 3  # the rotor stays in contact for ever: no further impact can occur
 ST_NEED_CONTACT = 4  # the dynamics need the `contact` effect, which the scene left out
 ST_NUMERICAL = 5  # a root search failed or made no progress
-ST_NEED_TRAJ = 6  # trajectory buffer too small for the next segment (info[4] = rows needed)
-ST_NEED_STROBE = 7  # stroboscopic buffer too small (info[4] = rows needed)
+ST_NEED_TRAJ = 6  # trajectory buffer full inside a segment; rows written: info[5], info[6]
+ST_NEED_STROBE = 7  # stroboscopic buffer full inside a segment (as ST_NEED_TRAJ)
 # --- event kinds ------------------------------------------------------------------------------
 KIND_IMPACT, KIND_CHATTER = 0, 1
 # --- segment kinds for sampling ---------------------------------------------------------------
@@ -165,8 +165,13 @@ def _sample(
 ):
     """Write the trajectory and stroboscopic samples falling in a segment.
 
-    Returns the new row counts, or ``(-1, -1)`` after setting ``info`` when a buffer is too small
-    (nothing is written then, so the caller can retry the same segment).
+    Returns the new row counts. When a buffer fills up inside the segment, the samples that fit
+    are written, the sample counters ``I_JTRAJ`` / ``I_KSTROBE`` record how far the segment got,
+    ``info`` gets the status ``ST_NEED_TRAJ`` (or ``ST_NEED_STROBE``), the rows still to write
+    (``info[4]``) and the row counts written in this call (``info[5]``, ``info[6]``), and
+    ``(-1, -1)`` is returned: the caller returns without advancing the state, the driver takes
+    the full buffers, and the next call resumes the same segment where the samples stopped. The
+    buffers are therefore bounded whatever one segment's length (a flight of 1e10 time units).
     """
     w = prm[P_W]
     r = prm[P_R]
@@ -187,10 +192,6 @@ def _sample(
             j1 = jmax + 1
         if j1 < j0:
             j1 = j0
-        if n_tr + (j1 - j0) > traj.shape[0]:
-            info[0] = ST_NEED_TRAJ
-            info[4] = j1 - j0
-            return -1, -1
     k0 = ist[I_KSTROBE]
     k1 = k0
     if flg[F_STROBE]:
@@ -201,10 +202,18 @@ def _sample(
             k1 -= 1
         if k1 < k0:
             k1 = k0
-        if n_sb + (k1 - k0) > strobe.shape[0]:
-            info[0] = ST_NEED_STROBE
-            info[4] = k1 - k0
-            return -1, -1
+    # rows that do not fit in this call are left for the next one (see the docstring)
+    full = 0
+    need = 0
+    if n_tr + (j1 - j0) > traj.shape[0]:
+        need = j1 - j0
+        j1 = j0 + (traj.shape[0] - n_tr)
+        full = ST_NEED_TRAJ
+    if n_sb + (k1 - k0) > strobe.shape[0]:
+        if full == 0:
+            need = k1 - k0
+            full = ST_NEED_STROBE
+        k1 = k0 + (strobe.shape[0] - n_sb)
     if flg[F_TRAJ]:
         dt = prm[P_DT]
         t0 = prm[P_T0]
@@ -230,6 +239,12 @@ def _sample(
             strobe[n_sb, 4] = om
             n_sb += 1
         ist[I_KSTROBE] = k1
+    if full != 0:
+        info[0] = full
+        info[4] = need
+        info[5] = n_tr
+        info[6] = n_sb
+        return -1, -1
     return n_tr, n_sb
 
 
