@@ -289,7 +289,7 @@ def run_scene(
                     "status": status,
                     "final_t": final["t"],
                     "final_omega": final["omega"],
-                    "final_in_contact": int(final["in_contact"]),
+                    "final_in_contact": int(bool(final["in_contact"]) or code == K.ST_REST),
                     "history": f"{attrs['created']}: {command or 'bouncedisk.runner.run_scene'}",
                 }
             )

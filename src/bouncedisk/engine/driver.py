@@ -251,7 +251,8 @@ def iterate(
             "u": float(st[K.S_U]),
             "v": float(st[K.S_V]),
             "omega": float(st[K.S_OM]),
-            "in_contact": float(ist[K.I_MODE] == K.MODE_CONTACT),
+            # the kernel marks a finished run MODE_DONE and keeps the mode it ended in
+            "in_contact": float(ist[K.I_LASTMODE] == K.MODE_CONTACT),
         }
         return status, final
 

@@ -16,6 +16,7 @@ import numpy as np
 from numba import njit
 
 from .laws import (
+    GRAZE_GAP,
     chatter_time,
     impact_law,
     separation_phase,
@@ -37,7 +38,8 @@ N_ST = 7
 I_N, I_MODE, I_SIG, I_GUARD, I_CHAT, I_NC, I_NEV, I_JTRAJ, I_KSTROBE, I_ZERO, I_STATUS, I_FREE = (
     range(12)
 )
-N_IST = 12
+I_LASTMODE = 12  # the mode (flight or contact) the run ended in
+N_IST = 13
 # --- modes ------------------------------------------------------------------------------------
 MODE_FLIGHT, MODE_CONTACT, MODE_DONE = 0, 1, 2
 # --- statuses ---------------------------------------------------------------------------------
@@ -54,8 +56,7 @@ KIND_IMPACT, KIND_CHATTER = 0, 1
 # --- segment kinds for sampling ---------------------------------------------------------------
 SEG_FLIGHT, SEG_CONTACT, SEG_SLIP, SEG_STICK = 0, 1, 2, 3
 
-# separations whose whole flight stays below this gap are grazing: the rotor stays in contact
-GRAZE_GAP = 64.0 * 2.220446049250313e-16
+# GRAZE_GAP (laws): separations whose whole flight stays below it are grazing (stay in contact)
 EV_COLS = 6  # t, phase, v_rel, omega_after, u, omega_before
 TRAJ_COLS = 5  # t, u, v, u_stator, omega
 STROBE_COLS = 5  # period, t, u, v, omega
@@ -258,6 +259,8 @@ def _report(info, n_ev, n_tr, n_sb):
 
 @njit(cache=True)
 def _finish(ist, info, status, n_ev, n_tr, n_sb):
+    if ist[I_MODE] != MODE_DONE:
+        ist[I_LASTMODE] = ist[I_MODE]
     ist[I_MODE] = MODE_DONE
     ist[I_STATUS] = status
     info[0] = status
