@@ -128,10 +128,12 @@ def run_sweep(
     total = int(np.prod(shape))
     start = time.perf_counter()
     n_events = 0
+    events_per_point = np.zeros(shape, dtype=np.int64)
     for count, idx in enumerate(np.ndindex(*shape)):
         point = {names[d]: float(values[d][i]) for d, i in enumerate(idx)}
         obs = point_observables(with_params(scene, **point), tail)
         n_events += int(obs["n_events"])
+        events_per_point[idx] = int(obs["n_events"])
         phase[idx] = obs["phase"]
         v_rel[idx] = obs["v_rel"]
         for k in scalar_names:
@@ -194,6 +196,12 @@ def run_sweep(
                 scalars["mean_slip_speed"],
                 {"long_name": "mean rotor speed in stator units, r_phi * omega", "units": "1"},
             ),
+            # per point, so that any join of shards (open_mfdataset too) sums to the sweep's total
+            "n_events": (
+                dims,
+                events_per_point,
+                {"long_name": "events (impacts and chattering tails) simulated", "units": "1"},
+            ),
         },
         coords=coords,
     )
@@ -209,7 +217,9 @@ def run_sweep(
             "shard": shard,
             "n_shards": n_shards,
             "tail": tail,
-            "n_impacts": n_events,
+            # a shard's count is named as such: open_mfdataset keeps the first file's attributes,
+            # and a joined sweep's total is n_events.sum() (or n_impacts of combine_shards)
+            "shard_n_impacts": n_events,
             "status": "completed",
             "run_id": new_run_id(f"{scene.name}-sweep{shard}", scene.sha256),
             "wall_time_s": round(time.perf_counter() - start, 6),
@@ -222,11 +232,14 @@ def combine_shards(shards: Sequence[xr.Dataset]) -> xr.Dataset:
     """Join sweep shards along their swept dimensions."""
     ds = xr.combine_by_coords(list(shards), combine_attrs="drop_conflicts")
     ds.attrs.pop("shard", None)
+    ds.attrs.pop("shard_n_impacts", None)
     first = shards[0].attrs
     ds.attrs["run_id"] = new_run_id(
         f"{first.get('scene_name', 'sweep')}-sweep", str(first.get("scene_sha256", "0" * 8))
     )
     ds.attrs["shard_run_ids"] = ",".join(str(s.attrs.get("run_id")) for s in shards)
     ds.attrs["wall_time_s"] = float(sum(float(s.attrs.get("wall_time_s", 0.0)) for s in shards))
-    ds.attrs["n_impacts"] = int(sum(int(s.attrs.get("n_impacts", 0)) for s in shards))
+    ds.attrs["n_impacts"] = int(
+        sum(int(s.attrs.get("shard_n_impacts", s.attrs.get("n_impacts", 0))) for s in shards)
+    )
     return ds
