@@ -17,6 +17,7 @@ import numpy as np
 from . import observables as ob
 from .datasets import open_checked, open_simulation
 from .engine import EngineConfig, InitialState, simulate_arrays
+from .errors import InputError
 from .runner import run_scene_arrays
 
 #: The pipeline's scene files: the checks read the same scenes the pipeline runs.
@@ -38,6 +39,44 @@ def workflow_scene(name: str, scene_dir: Path | None = None):
 
 #: Members of the rotor-speed band of Fig. 5 when simulated here (the pipeline's ``bands``).
 BAND_MEMBERS = 16
+#: The built results the checks read (relative to the results folder).
+RESULT_FILES = (
+    "simulations/fig5.nc",
+    "bands/fig5.nc",
+    "stats/stats_e03.nc",
+    "stats/stats_e06.nc",
+    "stats/stats_locked.nc",
+)
+
+
+def check_results_folder(path: str | Path) -> Path:
+    """The results folder for ``check --results``, refused unless it holds the built runs.
+
+    A CI that mistypes the folder must fail, not check freshly simulated runs instead.
+
+    Raises
+    ------
+    InputError
+        The folder is missing, is a file, or lacks one of ``simulations/<name>.nc`` the checks
+        read (named in the message).
+    """
+    p = Path(path)
+    if str(path).strip() == "":
+        raise InputError("<arguments>", "--results", "is empty; give the pipeline's results folder")
+    if not p.exists():
+        raise InputError(str(path), "--results", "folder not found (build it with snakemake)")
+    if not p.is_dir():
+        raise InputError(str(path), "--results", "is a file, not the pipeline's results folder")
+    missing = [f for f in RESULT_FILES if not (p / f).is_file()]
+    if missing:
+        raise InputError(
+            str(path),
+            "--results",
+            "holds no built results for "
+            + ", ".join(missing)
+            + " (build them with snakemake, or drop --results to simulate)",
+        )
+    return p
 
 
 @dataclass(frozen=True)
@@ -62,7 +101,9 @@ class _Source:
         if name in self.cache:
             return self.cache[name]
         path = self.results / "simulations" / f"{name}.nc" if self.results else None
-        if path is not None and path.exists():
+        if path is not None:
+            if not path.is_file():
+                raise InputError(str(path), "", "missing: the results folder lacks this run")
             ds = open_simulation(path)
             ev = {
                 "t": ds["t_impact"].values,
