@@ -155,7 +155,7 @@ def _pack(cfg: EngineConfig) -> tuple[np.ndarray, np.ndarray]:
     prm[K.P_TOL] = cfg.tol
     j = cfg.inertia_ratio
     prm[K.P_INERTIA] = 1.0 if math.isinf(j) else j / (1.0 + j)
-    prm[K.P_RHO] = cfg.mu_ratio
+    prm[K.P_MU_RATIO] = cfg.mu_ratio
     prm[K.P_TEND] = cfg.t_end
     prm[K.P_DT] = cfg.traj_dt
     prm[K.P_T0] = cfg.traj_t0
@@ -188,9 +188,9 @@ def initial_state(cfg: EngineConfig, init: InitialState) -> tuple[np.ndarray, np
     if th0 >= K.TWO_PI:
         th0 -= K.TWO_PI
         n0 += 1
-    ist[K.I_N] = n0
-    st[K.S_TH] = th0
-    st[K.S_OM] = init.omega
+    ist[K.I_PERIOD] = n0
+    st[K.S_PHASE] = th0
+    st[K.S_OMEGA] = init.omega
     us, vs = math.sin(th0), w * math.cos(th0)
     load = 1.0 - w * w * us
     in_contact = init.u is None or (init.u <= us and init.v == vs)
@@ -204,11 +204,11 @@ def initial_state(cfg: EngineConfig, init: InitialState) -> tuple[np.ndarray, np
         v = vs if init.v is None else init.v
         st[K.S_U] = u
         st[K.S_V] = v
-        st[K.S_TA] = 0.0
-        st[K.S_GA] = u - us
+        st[K.S_ANCHOR_TAU] = 0.0
+        st[K.S_ANCHOR_GAP] = u - us
     if cfg.traj_dt > 0.0:
-        ist[K.I_JTRAJ] = max(0, math.ceil((init.t - cfg.traj_t0) / cfg.traj_dt - 1e-9))
-    ist[K.I_KSTROBE] = n0 if th0 == 0.0 else n0 + 1
+        ist[K.I_NEXT_SAMPLE] = max(0, math.ceil((init.t - cfg.traj_t0) / cfg.traj_dt - 1e-9))
+    ist[K.I_NEXT_STROBE] = n0 if th0 == 0.0 else n0 + 1
     return st, ist
 
 
@@ -244,7 +244,7 @@ def iterate(
         if status in (K.ST_NEED_TRAJ, K.ST_NEED_STROBE):
             # the buffers are full: stream them out; the next call resumes the same segment
             n_tr, n_sb = int(info[5]), int(info[6])
-        t_now = (ist[K.I_N] * K.TWO_PI + st[K.S_TH]) / w
+        t_now = (ist[K.I_PERIOD] * K.TWO_PI + st[K.S_PHASE]) / w
         if n_ev or n_tr or n_sb:
             yield Chunk(
                 t=ev[:n_ev, 0].copy(),
@@ -256,23 +256,24 @@ def iterate(
                 kind=evk[:n_ev].copy(),
                 traj=traj[:n_tr].copy(),
                 strobe=strobe[:n_sb].copy(),
-                n_events_total=int(ist[K.I_NEV]),
+                n_events_total=int(ist[K.I_EVENTS]),
                 t_now=t_now,
             )
         if status in (K.ST_CHUNK, K.ST_NEED_TRAJ, K.ST_NEED_STROBE):
             continue
         if status in (K.ST_NEED_CONTACT, K.ST_NUMERICAL):
             raise EngineError(
-                f"{STATUS_TEXT[status]} (at t = {t_now:.9g}, after {ist[K.I_NEV]} events)", status
+                f"{STATUS_TEXT[status]} (at t = {t_now:.9g}, after {ist[K.I_EVENTS]} events)",
+                status,
             )
         final = {
             "t": t_now,
             "u": float(st[K.S_U]),
             "v": float(st[K.S_V]),
-            "omega": float(st[K.S_OM]),
+            "omega": float(st[K.S_OMEGA]),
             # the kernel marks a finished run MODE_DONE and keeps the mode it ended in
             "in_contact": float(ist[K.I_LASTMODE] == K.MODE_CONTACT),
-            "omega_integral": float(st[K.S_IOM]),
+            "omega_integral": float(st[K.S_OMEGA_INTEGRAL]),
         }
         return status, final
 

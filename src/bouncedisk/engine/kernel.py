@@ -29,7 +29,15 @@ from .noise import member_key, noisy_restitution
 from .roots import TWO_PI, first_root
 
 # --- parameter vector (float64) ---------------------------------------------------------------
-P_E, P_W, P_R, P_PSI, P_TOL, P_INERTIA, P_RHO, P_TEND, P_DT, P_T0, P_T1 = range(11)
+P_E = 0  # restitution e
+P_W = 1  # stator frequency w
+P_R = 2  # angular amplitude ratio R
+P_PSI = 3  # torsional phase psi
+P_TOL = 4  # root tolerance
+P_INERTIA = 5  # J_s/(J_s + J_r) of the stator_inertia effect (1: eq. 19)
+P_MU_RATIO = 6  # static/kinetic friction ratio of the kinetic_static effect
+P_TEND = 7  # end time
+P_DT, P_T0, P_T1 = 8, 9, 10  # trajectory grid: step, first and last sample time
 P_ESIG = 11  # restitution noise σ_e (effect `restitution_noise`)
 P_TSTAT = 12  # time from which ∫Ω dt is accumulated (ensemble statistics)
 N_PRM = 13
@@ -38,13 +46,27 @@ F_CONTACT, F_TORSION, F_CAP, F_TRAJ, F_STROBE, F_MAXEV, F_CLIPPED = range(7)
 F_NOISE, F_SEED, F_MEMBER, F_STATS = range(7, 11)  # restitution noise stream; accumulate ∫Ω dt
 N_FLG = 11
 # --- float state ------------------------------------------------------------------------------
-S_TH, S_U, S_V, S_OM, S_TA, S_GA, S_THC = range(7)
-S_IOM = 7  # ∫Ω dt since prm[P_TSTAT] (when flg[F_STATS])
+S_PHASE = 0  # stator phase θ in [0, 2π) (with I_PERIOD: t = (2π n + θ)/w)
+S_U, S_V = 1, 2  # rotor position and velocity at the flight's origin
+S_OMEGA = 3  # rotor angular velocity Ω
+S_ANCHOR_TAU = 4  # flight: time after the origin where the impact search starts
+S_ANCHOR_GAP = 5  # flight: the gap at that time
+S_CHATTER_PHASE = 6  # contact: stator phase of a chattering sequence's accumulation point
+S_OMEGA_INTEGRAL = 7  # ∫Ω dt since prm[P_TSTAT] (when flg[F_STATS])
 N_ST = 8
 # --- int state --------------------------------------------------------------------------------
-I_N, I_MODE, I_SIG, I_GUARD, I_CHAT, I_NC, I_NEV, I_JTRAJ, I_KSTROBE, I_ZERO, I_STATUS, I_FREE = (
-    range(12)
-)
+I_PERIOD = 0  # stator period count n
+I_MODE = 1  # MODE_FLIGHT, MODE_CONTACT or MODE_DONE
+I_SLIP_SIGN = 2  # contact: sgn(s), 0 while sticking
+I_SLIP_GUARD = 3  # contact: leaving s = 0, search the slip's zero only once it has grown
+I_CHATTERING = 4  # contact: a chattering sequence accumulates at I_CHATTER_PERIOD, S_CHATTER_PHASE
+I_CHATTER_PERIOD = 5
+I_EVENTS = 6  # events so far (impacts and chattering tails)
+I_NEXT_SAMPLE = 7  # index of the next trajectory sample
+I_NEXT_STROBE = 8  # period of the next stroboscopic sample
+I_ZERO_STEPS = 9  # consecutive contact segments of zero length (a stall guard)
+I_STATUS = 10  # status of a finished run
+I_UNLOADED = 11  # clipped model: riding the stator without load
 I_LASTMODE = 12  # the mode (flight or contact) the run ended in
 N_IST = 13
 # --- modes ------------------------------------------------------------------------------------
@@ -174,7 +196,7 @@ def _sample(
     """Write the trajectory and stroboscopic samples falling in a segment.
 
     Returns the new row counts. When a buffer fills up inside the segment, the samples that fit
-    are written, the sample counters ``I_JTRAJ`` / ``I_KSTROBE`` record how far the segment got,
+    are written, the sample counters ``I_NEXT_SAMPLE`` / ``I_NEXT_STROBE`` record how far the segment got,
     ``info`` gets the status ``ST_NEED_TRAJ`` (or ``ST_NEED_STROBE``), the rows still to write
     (``info[4]``) and the row counts written in this call (``info[5]``, ``info[6]``), and
     ``(-1, -1)`` is returned: the caller returns without advancing the state, the driver takes
@@ -186,7 +208,7 @@ def _sample(
     psi = prm[P_PSI]
     t_a = (n_a * TWO_PI + th_a) / w
     t_b = t_a + length
-    j0 = ist[I_JTRAJ]
+    j0 = ist[I_NEXT_SAMPLE]
     j1 = j0
     if flg[F_TRAJ]:
         dt = prm[P_DT]
@@ -200,7 +222,7 @@ def _sample(
             j1 = jmax + 1
         if j1 < j0:
             j1 = j0
-    k0 = ist[I_KSTROBE]
+    k0 = ist[I_NEXT_STROBE]
     k1 = k0
     if flg[F_STROBE]:
         # period k starts at phase 0: tau_k = (2π(k − n_a) − θ_a)/w
@@ -235,7 +257,7 @@ def _sample(
             traj[n_tr, 3] = sin(th_a + w * tau)
             traj[n_tr, 4] = om
             n_tr += 1
-        ist[I_JTRAJ] = j1
+        ist[I_NEXT_SAMPLE] = j1
     if flg[F_STROBE]:
         for k in range(k0, k1):
             tau = ((k - n_a) * TWO_PI - th_a) / w
@@ -246,7 +268,7 @@ def _sample(
             strobe[n_sb, 3] = v
             strobe[n_sb, 4] = om
             n_sb += 1
-        ist[I_KSTROBE] = k1
+        ist[I_NEXT_STROBE] = k1
     if full != 0:
         info[0] = full
         info[4] = need
@@ -268,7 +290,7 @@ def _omega_integral(kind, om0, sig, w, r, psi, th0, tau):
 
 @njit(cache=True)
 def _accumulate_omega(st, prm, kind, n_a, th_a, length, om0, sig):
-    """Add ``∫Ω dt`` over the part of a segment after ``prm[P_TSTAT]`` to ``st[S_IOM]``."""
+    """Add ``∫Ω dt`` over the part of a segment after ``prm[P_TSTAT]`` to ``st[S_OMEGA_INTEGRAL]``."""
     w = prm[P_W]
     tau0 = prm[P_TSTAT] - (n_a * TWO_PI + th_a) / w
     if tau0 >= length:
@@ -278,7 +300,7 @@ def _accumulate_omega(st, prm, kind, n_a, th_a, length, om0, sig):
     total = _omega_integral(kind, om0, sig, w, r, psi, th_a, length)
     if tau0 > 0.0:
         total -= _omega_integral(kind, om0, sig, w, r, psi, th_a, tau0)
-    st[S_IOM] += total
+    st[S_OMEGA_INTEGRAL] += total
 
 
 @njit(cache=True, inline="always")
@@ -322,7 +344,7 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
     psi = prm[P_PSI]
     tol = prm[P_TOL]
     inertia = prm[P_INERTIA]
-    rho = prm[P_RHO]
+    rho = prm[P_MU_RATIO]
     t_end = prm[P_TEND]
     contact = flg[F_CONTACT] != 0
     torsion = flg[F_TORSION] != 0
@@ -355,21 +377,23 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
         _finish(ist, info, ist[I_STATUS], n_ev, n_tr, n_sb)
         return
     while True:
-        if ist[I_NEV] >= max_ev:
+        if ist[I_EVENTS] >= max_ev:
             _finish(ist, info, ST_EVENTS, n_ev, n_tr, n_sb)
             return
         if n_ev >= ev.shape[0]:
             info[0] = ST_CHUNK
             _report(info, n_ev, n_tr, n_sb)
             return
-        n = ist[I_N]
-        th = st[S_TH]
+        n = ist[I_PERIOD]
+        th = st[S_PHASE]
         t_now = (n * TWO_PI + th) / w
         if ist[I_MODE] == MODE_FLIGHT:
             u0 = st[S_U]
             v0 = st[S_V]
-            om = st[S_OM]
-            tau, dk, ph, v_minus = flight_next_impact(u0, v0, th, st[S_TA], st[S_GA], w, xtol)
+            om = st[S_OMEGA]
+            tau, dk, ph, v_minus = flight_next_impact(
+                u0, v0, th, st[S_ANCHOR_TAU], st[S_ANCHOR_GAP], w, xtol
+            )
             if tau < 0.0:
                 _finish(ist, info, ST_NUMERICAL, n_ev, n_tr, n_sb)
                 return
@@ -406,10 +430,10 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
             if ends:
                 st[S_U] = u0 + v0 * length - 0.5 * length * length
                 st[S_V] = v0 - length
-                ist[I_N], st[S_TH] = _advance(n, th, w * length)
+                ist[I_PERIOD], st[S_PHASE] = _advance(n, th, w * length)
                 _finish(ist, info, ST_TIME, n_ev, n_tr, n_sb)
                 return
-            e_k = noisy_restitution(e, e_sigma, noise_key, ist[I_NEV]) if noise else e
+            e_k = noisy_restitution(e, e_sigma, noise_key, ist[I_EVENTS]) if noise else e
             v_rel, v_plus, om_plus = impact_law(
                 e_k, w, r, psi, ph, v_minus, om, torsion, cap, inertia
             )
@@ -421,10 +445,10 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
             ev[n_ev, 5] = om
             evk[n_ev] = KIND_IMPACT
             n_ev += 1
-            ist[I_NEV] += 1
-            ist[I_N] = n_hit
-            st[S_TH] = ph
-            st[S_OM] = om_plus
+            ist[I_EVENTS] += 1
+            ist[I_PERIOD] = n_hit
+            st[S_PHASE] = ph
+            st[S_OMEGA] = om_plus
             n_load = 1.0 - w * w * sin(ph)
             w_rel = e_k * v_rel
             go_contact = False
@@ -441,28 +465,28 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
                     _finish(ist, info, ST_NEED_CONTACT, n_ev, n_tr, n_sb)
                     return
                 ist[I_MODE] = MODE_CONTACT
-                ist[I_GUARD] = 0
-                ist[I_ZERO] = 0
+                ist[I_SLIP_GUARD] = 0
+                ist[I_ZERO_STEPS] = 0
                 if t_acc > 0.0:
-                    ist[I_CHAT] = 1
-                    ist[I_NC], st[S_THC] = _advance(n_hit, ph, w * t_acc)
+                    ist[I_CHATTERING] = 1
+                    ist[I_CHATTER_PERIOD], st[S_CHATTER_PHASE] = _advance(n_hit, ph, w * t_acc)
                 else:
-                    ist[I_CHAT] = 0
-                ist[I_SIG] = 0
+                    ist[I_CHATTERING] = 0
+                ist[I_SLIP_SIGN] = 0
                 if torsion:
                     _enter_contact_torsion(st, ist, r, w, psi, rho, ph)
             else:
                 ist[I_MODE] = MODE_FLIGHT
                 st[S_U] = sin(ph)
                 st[S_V] = v_plus
-                st[S_TA] = 0.0
-                st[S_GA] = 0.0
+                st[S_ANCHOR_TAU] = 0.0
+                st[S_ANCHOR_GAP] = 0.0
             continue
 
         # ---------------------------------------------------------------- contact
-        om = st[S_OM]
-        sig = ist[I_SIG]
-        if ist[I_FREE]:
+        om = st[S_OMEGA]
+        sig = ist[I_SLIP_SIGN]
+        if ist[I_UNLOADED]:
             # clipped spring-contact model: N is clipped to 0 while 1 + a_s < 0; no torque, the
             # rotor keeps its angular velocity and rides the stator to the window's end
             th_back = pi - th_sep
@@ -497,14 +521,14 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
             if stats:
                 _accumulate_omega(st, prm, SEG_CONTACT, n, th, seg, om, 0.0)
             if seg < d / w:
-                ist[I_N], st[S_TH] = _advance(n, th, w * seg)
-                st[S_U] = sin(st[S_TH])
-                st[S_V] = w * cos(st[S_TH])
+                ist[I_PERIOD], st[S_PHASE] = _advance(n, th, w * seg)
+                st[S_U] = sin(st[S_PHASE])
+                st[S_V] = w * cos(st[S_PHASE])
                 _finish(ist, info, ST_TIME, n_ev, n_tr, n_sb)
                 return
-            ist[I_N] = n + (1 if th > th_back else 0)
-            st[S_TH] = th_back
-            ist[I_FREE] = 0
+            ist[I_PERIOD] = n + (1 if th > th_back else 0)
+            st[S_PHASE] = th_back
+            ist[I_UNLOADED] = 0
             if torsion:
                 _enter_contact_torsion(st, ist, r, w, psi, rho, th_back)
             continue
@@ -520,8 +544,8 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
             tau_sep = d / w
         tau_t = t_end - t_now
         tau_c = inf
-        if ist[I_CHAT]:
-            tau_c = ((ist[I_NC] - n) * TWO_PI + (st[S_THC] - th)) / w
+        if ist[I_CHATTERING]:
+            tau_c = ((ist[I_CHATTER_PERIOD] - n) * TWO_PI + (st[S_CHATTER_PHASE] - th)) / w
             if tau_c < 0.0:
                 tau_c = 0.0
         tau_end = min(tau_sep, tau_t, tau_c)
@@ -536,7 +560,7 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
         if torsion:
             if sig != 0:
                 kind = SEG_SLIP
-                if ist[I_GUARD]:
+                if ist[I_SLIP_GUARD]:
                     # leaving s = 0: the slip grows until RN + σα_s returns to >= 0
                     s0 = sin(th + psi)
                     q0 = -r * (1.0 - w * w * sin(th)) + sig * w * w * s0
@@ -605,12 +629,12 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
                 else:
                     new_sig = 0
         if seg <= 0.0:
-            ist[I_ZERO] += 1
-            if ist[I_ZERO] > 32:
+            ist[I_ZERO_STEPS] += 1
+            if ist[I_ZERO_STEPS] > 32:
                 _finish(ist, info, ST_NUMERICAL, n_ev, n_tr, n_sb)
                 return
         else:
-            ist[I_ZERO] = 0
+            ist[I_ZERO_STEPS] = 0
         at_end = (not hit_event) and seg == tau_end
         inclusive = at_end and tau_end == tau_t
         a, b = _sample(
@@ -644,8 +668,8 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
             n1 = n + (1 if th > th_sep else 0)
             th1 = th_sep
         elif at_end and tau_end == tau_c and tau_c < tau_t:
-            n1 = ist[I_NC]
-            th1 = st[S_THC]
+            n1 = ist[I_CHATTER_PERIOD]
+            th1 = st[S_CHATTER_PHASE]
         else:
             n1, th1 = _advance(n, th, w * seg)
         if kind == SEG_SLIP:
@@ -654,20 +678,20 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
             om1 = w * cos(th1 + psi) / r
         else:
             om1 = om
-        ist[I_N] = n1
-        st[S_TH] = th1
-        st[S_OM] = om1
+        ist[I_PERIOD] = n1
+        st[S_PHASE] = th1
+        st[S_OMEGA] = om1
         if torsion:
             if kind == SEG_SLIP:
-                if ist[I_GUARD]:
-                    ist[I_GUARD] = 0
+                if ist[I_SLIP_GUARD]:
+                    ist[I_SLIP_GUARD] = 0
                 elif hit_event:
                     # the slip reached zero: stick, or slip on in the stator's direction (§2.5)
-                    st[S_OM] = w * cos(th1 + psi) / r
+                    st[S_OMEGA] = w * cos(th1 + psi) / r
                     _enter_contact_torsion(st, ist, r, w, psi, rho, th1)
             elif hit_event:
-                ist[I_SIG] = new_sig
-                ist[I_GUARD] = new_guard
+                ist[I_SLIP_SIGN] = new_sig
+                ist[I_SLIP_GUARD] = new_guard
         if at_end:
             if tau_end == tau_t:
                 if kind == SEG_CONTACT or kind == SEG_SLIP or kind == SEG_STICK:
@@ -675,30 +699,30 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
                     st[S_V] = w * cos(th1)
                 _finish(ist, info, ST_TIME, n_ev, n_tr, n_sb)
                 return
-            if tau_end == tau_c and ist[I_CHAT]:
-                ist[I_CHAT] = 0
+            if tau_end == tau_c and ist[I_CHATTERING]:
+                ist[I_CHATTERING] = 0
                 ev[n_ev, 0] = (n1 * TWO_PI + th1) / w
                 ev[n_ev, 1] = th1
                 ev[n_ev, 2] = 0.0
-                ev[n_ev, 3] = st[S_OM]
+                ev[n_ev, 3] = st[S_OMEGA]
                 ev[n_ev, 4] = sin(th1)
-                ev[n_ev, 5] = st[S_OM]
+                ev[n_ev, 5] = st[S_OMEGA]
                 evk[n_ev] = KIND_CHATTER
                 n_ev += 1
-                ist[I_NEV] += 1
+                ist[I_EVENTS] += 1
                 if tau_c < tau_sep:
                     continue
             if tau_end == tau_sep and clipped:
-                ist[I_FREE] = 1
+                ist[I_UNLOADED] = 1
                 continue
             if tau_end == tau_sep:
                 # separation: fly through the window where N < 0, then search from its end
                 ist[I_MODE] = MODE_FLIGHT
                 st[S_U] = 1.0 / (w * w)
                 st[S_V] = w * cos(th_sep)
-                st[S_TA] = t_win
-                st[S_GA] = g_win
-                ist[I_CHAT] = 0
+                st[S_ANCHOR_TAU] = t_win
+                st[S_ANCHOR_GAP] = g_win
+                ist[I_CHATTERING] = 0
 
 
 @njit(cache=True, inline="always")
@@ -728,9 +752,9 @@ def _enter_contact_torsion(st, ist, r, w, psi, rho, phase):
     so the slip search starts once the slip has grown (module ``run_chunk``); when it sticks,
     ``RΩ = Ω_s`` exactly.
     """
-    om = st[S_OM]
+    om = st[S_OMEGA]
     sig = _contact_sigma(r, w, psi, rho, om, phase)
-    ist[I_SIG] = sig
-    ist[I_GUARD] = 1 if sig != 0 and _slip_is_zero(r, w, psi, om, phase) else 0
+    ist[I_SLIP_SIGN] = sig
+    ist[I_SLIP_GUARD] = 1 if sig != 0 and _slip_is_zero(r, w, psi, om, phase) else 0
     if sig == 0:
-        st[S_OM] = w * cos(phase + psi) / r
+        st[S_OMEGA] = w * cos(phase + psi) / r
