@@ -15,6 +15,7 @@ import xarray as xr
 from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.patches import Ellipse, FancyArrowPatch, Rectangle
+from matplotlib.ticker import NullFormatter
 
 from .atomic import atomic_path
 
@@ -400,7 +401,7 @@ def fig_clipped_vs_bouncing(ds: xr.Dataset) -> Figure:
             )
         ax.set_ylabel(r"$\Omega$")
         ax.set_title(f"ψ = {p:.3g}", fontsize=10)
-        ax.legend(fontsize=8, loc="upper left")
+        ax.legend(fontsize=7, loc="lower right", ncol=2)
     axes[-1].set_xlabel("time $t/t_c$")
     fig.suptitle(
         "bouncing disk vs clipped spring contact (refs. [2, 3] of the paper): "
@@ -471,6 +472,8 @@ def fig_stats_cost(table: pd.DataFrame, singles: pd.DataFrame) -> Figure:
     sd = float(singles["mean_omega"].std(ddof=1))
     ax.axhspan(sd * 0.98, sd * 1.02, color="0.5", alpha=0.5,
                label=f"scatter of single runs (sd {sd:.2f})")  # fmt: skip
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.yaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("CPU time of the ensemble [s] (one core)")
     ax.set_ylabel(r"95% half-width of the mean rotor speed $\bar\Omega$")
     ax.legend(fontsize=7)

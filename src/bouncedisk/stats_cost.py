@@ -35,6 +35,7 @@ def half_width_table(
 
     Each ensemble runs on one core; ``cpu_s`` is its process CPU time.
     """
+    run_stats(_window(scene, float(min(durations)), 2), cores=1)  # warm-up: numba cache
     rows = []
     for d in durations:
         for k in members:
