@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from bouncedisk.cli import main
 from bouncedisk.curves import read_curve
 from bouncedisk.errors import InputError
-from bouncedisk.scene import scene_from_mapping
+from bouncedisk.scene import EFFECTS, scene_from_mapping
 
 LONG = """
 name: long
@@ -123,17 +123,7 @@ scene_maps = st.fixed_dictionaries(
     optional={
         "name": st.text(max_size=10) | values,
         "effects": st.lists(
-            st.sampled_from(
-                [
-                    "impacts",
-                    "contact",
-                    "torsion",
-                    "impulse_cap",
-                    "stator_inertia",
-                    "kinetic_static",
-                    "warp",
-                ]
-            ),
+            st.sampled_from([*EFFECTS, "warp"]),
             max_size=4,
         )
         | values,

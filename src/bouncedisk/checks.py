@@ -233,17 +233,25 @@ def settles_on_period(e: float, gamma: float, n: int, phase: float, events: int)
     return per is not None and per.p == 1 and per.q == n
 
 
-def engine_existence_threshold(n: int, e: float, resolution: float = 2e-4) -> float:
-    """Γ above which a run started at the period-n orbit's phase settles on it (bisection)."""
-    g_n = ob.period_n_threshold(n, e)
-    lo, hi = 0.9 * g_n, 1.1 * g_n
+def _bisect(holds, lo: float, hi: float, resolution: float, holds_above: bool) -> float:
+    """Midpoint of the bracket where ``holds(Γ)`` switches, narrowed to ``resolution``."""
     while hi - lo > resolution:
         mid = 0.5 * (lo + hi)
-        if settles_on_period(e, mid, n, math.acos(min(1.0, g_n / mid)) + 1e-3, 20_000):
+        if holds(mid) == holds_above:
             hi = mid
         else:
             lo = mid
     return 0.5 * (lo + hi)
+
+
+def engine_existence_threshold(n: int, e: float, resolution: float = 2e-4) -> float:
+    """Γ above which a run started at the period-n orbit's phase settles on it (bisection)."""
+    g_n = ob.period_n_threshold(n, e)
+
+    def settles(gamma: float) -> bool:
+        return settles_on_period(e, gamma, n, math.acos(min(1.0, g_n / gamma)) + 1e-3, 20_000)
+
+    return _bisect(settles, 0.9 * g_n, 1.1 * g_n, resolution, holds_above=True)
 
 
 def period_one_is_stable(e: float, gamma: float) -> bool:
@@ -261,14 +269,11 @@ def period_one_is_stable(e: float, gamma: float) -> bool:
 def engine_doubling_threshold(e: float, resolution: float = 5e-4) -> float:
     """Γ at which the engine's period-1 orbit loses stability (bisection on long runs)."""
     g_pd = ob.period_doubling_threshold(1, e)
-    lo, hi = g_pd - 0.05, g_pd + 0.05
-    while hi - lo > resolution:
-        mid = 0.5 * (lo + hi)
-        if period_one_is_stable(e, mid):
-            lo = mid
-        else:
-            hi = mid
-    return 0.5 * (lo + hi)
+
+    def stable(gamma: float) -> bool:
+        return period_one_is_stable(e, gamma)
+
+    return _bisect(stable, g_pd - 0.05, g_pd + 0.05, resolution, holds_above=False)
 
 
 def _threshold_checks(_src: _Source) -> list[CheckResult]:

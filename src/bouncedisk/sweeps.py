@@ -164,7 +164,10 @@ def regime_attrs() -> dict:
     }
 
 
-def _sweep_attrs(scene: Scene, names: Sequence[str], title: str) -> dict:
+def _sweep_attrs(
+    scene: Scene, names: Sequence[str], title: str, grid: _Grid, start: float, run: str
+) -> dict:
+    """Global attributes of a sweep or continuation: provenance, ensemble, counts, timing."""
     attrs = base_attrs(title)
     sa = scene_attrs(scene)
     for n in list(names) + ["gamma"]:
@@ -176,6 +179,10 @@ def _sweep_attrs(scene: Scene, names: Sequence[str], title: str) -> dict:
             "ensemble_seed": scene.ensemble.seed,
             "stats_discard": scene.stats.discard,
             "confidence_level": 0.95,
+            "n_impacts": int(grid.n_events.sum()),
+            "status": "completed",
+            "run_id": new_run_id(f"{scene.name}-{run}", scene.sha256),
+            "wall_time_s": round(time.perf_counter() - start, 6),
         }
     )
     return attrs
@@ -216,25 +223,12 @@ def run_sweep(
         for n, v in zip(names, values, strict=True)
     }
     ds = grid.dataset(tuple(names), coords)
-    ds.attrs.update(
-        _sweep_attrs(
-            scene, names, f"bouncedisk sweep of scene '{scene.name}' over {', '.join(names)}"
-        )
-    )
-    ds.attrs.update(
-        {
-            "swept": ",".join(names),
-            "shard": shard,
-            "n_shards": n_shards,
-            "tail": tail,
-            # a shard's count is named as such: open_mfdataset keeps the first file's attributes,
-            # and a joined sweep's total is n_events.sum() (or n_impacts of combine_shards)
-            "shard_n_impacts": int(grid.n_events.sum()),
-            "status": "completed",
-            "run_id": new_run_id(f"{scene.name}-sweep{shard}", scene.sha256),
-            "wall_time_s": round(time.perf_counter() - start, 6),
-        }
-    )
+    title = f"bouncedisk sweep of scene '{scene.name}' over {', '.join(names)}"
+    ds.attrs.update(_sweep_attrs(scene, names, title, grid, start, f"sweep{shard}"))
+    # a shard's count is named as such: open_mfdataset keeps the first file's attributes, and
+    # a joined sweep's total is n_events.sum() (or n_impacts of combine_shards)
+    ds.attrs["shard_n_impacts"] = ds.attrs.pop("n_impacts")
+    ds.attrs.update({"swept": ",".join(names), "shard": shard, "n_shards": n_shards, "tail": tail})
     return ds
 
 
@@ -289,20 +283,9 @@ def run_continuation(
             progress(i + 1, len(order))
     ds = grid.dataset((name,), {name: (name, order, {"units": "1", "long_name": name})})
     ds = ds.sortby(name)
-    ds.attrs.update(
-        _sweep_attrs(scene, [name], f"bouncedisk continuation of '{scene.name}' in {name}")
-    )
-    ds.attrs.update(
-        {
-            "swept": name,
-            "direction": direction,
-            "tail": tail,
-            "n_impacts": int(grid.n_events.sum()),
-            "status": "completed",
-            "run_id": new_run_id(f"{scene.name}-{direction}", scene.sha256),
-            "wall_time_s": round(time.perf_counter() - start, 6),
-        }
-    )
+    title = f"bouncedisk continuation of '{scene.name}' in {name}"
+    ds.attrs.update(_sweep_attrs(scene, [name], title, grid, start, direction))
+    ds.attrs.update({"swept": name, "direction": direction, "tail": tail})
     return ds
 
 
