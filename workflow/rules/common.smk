@@ -76,7 +76,6 @@ def sweep_shards(wildcards):
 def all_targets():
     figs = expand(f"{RES}/figures/{{fig}}.{{ext}}", fig=FIGURES, ext=["pdf", "png"])
     return figs + [
-        f"{RES}/runs.csv",
         f"{RES}/reproduction.md",
         f"{RES}/fit/prototype.nc",
         f"{RES}/prototype/synthetic_motor.csv",
@@ -96,10 +95,3 @@ def fig_out(name, caption, category):
                       category=category),
     }
 
-
-def registry_inputs(wildcards):
-    files = expand(f"{RES}/simulations/{{s}}.nc", s=config["simulations"])
-    files += expand(f"{RES}/sweeps/{{s}}.nc", s=list(config["sweeps"]))
-    files += expand(f"{RES}/poincare/{{s}}.nc", s=list(config["poincare"]))
-    files += [f"{RES}/studies/clipped_vs_bouncing.nc", f"{RES}/fit/prototype.nc"]
-    return files
