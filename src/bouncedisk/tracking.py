@@ -834,13 +834,25 @@ class PipelineSettings:
 
     @classmethod
     def from_config(cls, config: Mapping) -> PipelineSettings:
-        t = dict(config.get("tracking") or {})
+        """From ``config["tracking"]``: a mapping, or a bare ``false``/``true``."""
+        t = config.get("tracking", {})
+        if not isinstance(t, Mapping):
+            return cls(enabled=_switch(t, True))
         return cls(
-            enabled=bool(t.get("enabled", True)),
+            enabled=_switch(t.get("enabled"), True),
             uri=t.get("uri") or None,
             experiment=t.get("experiment") or EXPERIMENT,
-            copy_netcdf=bool(t.get("copy_netcdf", False)),
+            copy_netcdf=_switch(t.get("copy_netcdf"), False),
         )
+
+
+def _switch(v: Any, default: bool) -> bool:
+    """A config switch: a bool, or its text as ``--config`` passes nested values."""
+    if v is None:
+        return default
+    if isinstance(v, str):
+        return v.strip().lower() in ("true", "yes", "on", "1")
+    return bool(v)
 
 
 class PipelineTracker:
