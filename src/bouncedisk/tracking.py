@@ -889,14 +889,18 @@ class PipelineTracker:
         self._thread: threading.Thread | None = None
         self._error: BaseException | None = None
         self.interrupted = False
+        # seconds spent on tracking in the main process (the open overlaps the jobs)
+        self.timings: dict[str, float] = {}
 
     # -- start -----------------------------------------------------------------------------
 
     def start(self, jobs: list[JobRecord], background: bool = True) -> None:
         """Check the store (raises :class:`TrackingError`) and open the parent run."""
+        t = time.perf_counter()
         preflight(self.store, create=True)
         self.jobs = jobs
         self.t0 = time.time()
+        self.timings["tracking.start_s"] = time.perf_counter() - t
         if background:
             self._thread = threading.Thread(target=self._open_guarded, daemon=True)
             self._thread.start()
@@ -910,6 +914,7 @@ class PipelineTracker:
             self._error = ex
 
     def _open(self) -> None:
+        t, cpu = time.perf_counter(), time.thread_time()
         tags = provenance_tags(PIPELINE)
         tags.update(
             {
@@ -939,6 +944,10 @@ class PipelineTracker:
             self.run_id = run.info.run_id
             _log_batch(client, self.run_id, _keys(params), {})
         self._client, self._exp = client, exp
+        import xarray  # noqa: F401 - warm the import that finish() needs, while the jobs run
+
+        self.timings["tracking.open_s"] = time.perf_counter() - t
+        self.timings["tracking.open_cpu_s"] = time.thread_time() - cpu
 
     def _wait(self) -> None:
         if self._thread is not None:
@@ -966,6 +975,7 @@ class PipelineTracker:
     def finish(self) -> str:
         """Log every job that ran as a nested run, a snapshot of all outputs on the parent run,
         and end it FINISHED. Returns the parent run id."""
+        t = time.perf_counter()
         self._wait()
         assert self.run_id is not None and self._client is not None
         client, rid = self._client, self.run_id
@@ -1002,8 +1012,11 @@ class PipelineTracker:
                 for o in map(Path, job.outputs):
                     if o.suffix == ".md" and o.is_file():
                         client.log_artifact(rid, str(o))
+            self.timings["tracking.finish_s"] = time.perf_counter() - t
+            _log_batch(client, rid, {}, self.timings)
             client.set_terminated(rid, "FINISHED")
         cache.save()
+        self.timings["tracking.finish_s"] = time.perf_counter() - t
         return rid
 
     def _describe_job(self, job: JobRecord, cache: _HashCache, manifest: dict):

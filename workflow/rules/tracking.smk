@@ -52,7 +52,7 @@ def _note_interrupt(signum):
 
 
 def tracking_start():
-    if not TRACKING.enabled:
+    if not TRACKING.enabled or workflow.touch:  # --touch computes nothing worth a record
         return
     try:
         cores = workflow.cores
@@ -83,7 +83,13 @@ def tracking_finish():
         except _tracking.TrackingError as ex:
             _tracking.print_error(ex)
             raise SystemExit(1)
-        print(f"bouncedisk: recorded run {run_id} in {tracker.store.uri}", file=sys.stderr)
+        t = tracker.timings
+        spent = t.get("tracking.start_s", 0) + t.get("tracking.finish_s", 0)
+        print(
+            f"bouncedisk: recorded run {run_id} in {tracker.store.uri} "
+            f"({spent:.1f} s, and {t.get('tracking.open_s', 0):.1f} s alongside the jobs)",
+            file=sys.stderr,
+        )
 
 
 def tracking_fail():
