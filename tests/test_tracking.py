@@ -482,6 +482,10 @@ def test_concurrent_tracked_commands_lose_no_record_and_diff_by_their_run_ids(tm
         )
     outs = [p.communicate(timeout=300) for p in procs]
     assert all(p.returncode == 0 for p in procs), outs
+    for _, err in outs:  # one line of its own on stderr, no MLflow chatter
+        assert [ln for ln in err.splitlines() if "bouncedisk" in ln or "INFO" in ln] == [
+            ln for ln in err.splitlines() if ln.startswith("bouncedisk: recorded run ")
+        ], err
     printed = [o.split("(run ")[1].split(")")[0] for o, _ in outs]  # bouncedisk run ids
     p = subprocess.run(
         ["bouncedisk", "runs", "--json", "--tracking-uri", store],

@@ -271,20 +271,16 @@ def _one_line(ex: object) -> str:
 # ------------------------------------------------------------------------------------------
 
 
-def _quiet_mlflow() -> None:
-    """No telemetry, no INFO chatter from MLflow and its database migrations."""
+def _client(store: Store):
+    """An MlflowClient on ``store``: no telemetry, no INFO chatter from MLflow's migrations."""
     os.environ.setdefault("MLFLOW_DISABLE_TELEMETRY", "true")
     os.environ.setdefault("DO_NOT_TRACK", "true")
     import logging
 
-    for name in ("mlflow", "alembic", "alembic.runtime.migration"):
+    from mlflow.tracking import MlflowClient  # configures its loggers: quiet them after
+
+    for name in ("mlflow", "alembic"):
         logging.getLogger(name).setLevel(logging.WARNING)
-
-
-def _client(store: Store):
-    _quiet_mlflow()
-    from mlflow.tracking import MlflowClient
-
     return MlflowClient(tracking_uri=store.uri)
 
 
@@ -607,7 +603,9 @@ def _git(*args: str, cwd: Path | None = None) -> str | None:
 
 
 def git_state(cwd: Path | None = None) -> dict[str, str]:
-    """Commit of the working tree and whether tracked files differ from it."""
+    """Commit of the working tree at ``cwd`` (default: the package's source tree) and whether
+    tracked files differ from it."""
+    cwd = cwd or Path(__file__).resolve().parent
     commit = _git("rev-parse", "HEAD", cwd=cwd)
     if commit is None:
         return {"git_commit": "unknown", "git_dirty": "unknown"}
@@ -635,9 +633,9 @@ def process_alive(pid: int, start: str = "") -> bool:
     return not start or not _process_start(pid) or _process_start(pid) == start
 
 
-def provenance_tags(kind: str) -> dict[str, str]:
+def provenance_tags(kind: str, cwd: Path | None = None) -> dict[str, str]:
     """Tags every tracked run carries: kind, code and tool versions, host and process."""
-    g = git_state()
+    g = git_state(cwd)
     tags = {
         TAG_KIND: kind,
         "bouncedisk.version": __version__,
@@ -915,7 +913,7 @@ class PipelineTracker:
 
     def _open(self) -> None:
         t, cpu = time.perf_counter(), time.thread_time()
-        tags = provenance_tags(PIPELINE)
+        tags = provenance_tags(PIPELINE, Path.cwd())  # the workflow's tree: scenes, config
         tags.update(
             {
                 "mlflow.source.name": "snakemake",
