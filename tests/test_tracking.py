@@ -346,7 +346,12 @@ def test_mlflow_server_on_the_store_answers_with_the_pipeline_runs(two_runs):
     base, _, _ = two_runs
     rows = runs_json(base)
     port = free_port()
-    env = dict(os.environ, MLFLOW_DISABLE_TELEMETRY="true", DO_NOT_TRACK="true")
+    env = dict(
+        os.environ,
+        MLFLOW_DISABLE_TELEMETRY="true",
+        DO_NOT_TRACK="true",
+        MLFLOW_SERVER_ENABLE_JOB_EXECUTION="false",  # no background job workers: a plain server
+    )
     res = base / "results"
     server = subprocess.Popen(
         [
