@@ -110,9 +110,15 @@ def _track(args, store, kind: str, outputs=(), params=None, metrics=None) -> Non
     from . import tracking
 
     command = "bouncedisk " + " ".join(shlex.quote(a) for a in sys.argv[1:])
-    run_id = tracking.log_command_run(
-        kind, store, outputs, params=params, metrics=metrics, command=command
-    )
+    try:
+        run_id = tracking.log_command_run(
+            kind, store, outputs, params=params, metrics=metrics, command=command
+        )
+    except Exception as ex:  # noqa: BLE001 - drivers and REST raise their own types
+        reason = (str(ex).strip().splitlines() or [type(ex).__name__])[0][:200]
+        raise tracking.TrackingError(
+            store.uri, f"recording failed (the outputs were written): {reason}"
+        ) from None
     if not getattr(args, "quiet", False):
         print(f"bouncedisk: recorded run {run_id} in {store.uri}", file=sys.stderr)
 
