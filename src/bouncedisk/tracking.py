@@ -102,7 +102,8 @@ PARAM_ATTRS = {
     "max_events",
 }
 PARAM_PREFIXES = ("initial_", "physical_", "ensemble_", "stop_")
-# what a nested run's kind is, from its rule's name (first match); others are "job"
+# what a nested run's kind is, from its rule's name (figures first, then the first prefix that
+# matches); others are "job"
 KINDS = (
     ("simulate", "simulation"),
     ("sweep", "sweep"),
@@ -111,9 +112,12 @@ KINDS = (
     ("fit", "fit"),
     ("check", "check"),
     ("reproduction", "check"),
-    ("fig", "figure"),
-    ("figure", "figure"),
     ("compile", "build"),
+    ("poincare", "study"),
+    ("clipped", "study"),
+    ("work_precision", "study"),
+    ("scaling", "study"),
+    ("synthetic", "data"),
 )
 COPIED = {".png", ".pdf", ".svg", ".md", ".csv", ".json", ".txt", ".html", ".yaml", ".tsv"}
 MAX_PARAM = 500  # characters of a param value kept (MLflow allows 6000)
@@ -826,6 +830,9 @@ class JobRecord:
 
     @property
     def kind(self) -> str:
+        figure = any(o.endswith((".png", ".pdf", ".svg")) for o in self.outputs)
+        if figure or "figure" in self.rule or re.match(r"fig\d", self.rule):
+            return "figure"
         for prefix, kind in KINDS:
             if self.rule.startswith(prefix):
                 return kind
