@@ -28,6 +28,9 @@ COMPARED_TAGS = (
     "cores",
 )
 
+# metrics of the invocation itself (wall time, jobs run, tracking cost), not of its outputs
+INVOCATION_METRICS = ("pipeline.", "tracking.")
+
 
 class Runs:
     """The top-level runs of one store's experiment, oldest first."""
@@ -246,12 +249,13 @@ def _pairs(a: dict, b: dict, same=lambda x, y: x == y) -> dict[str, list]:
 
 
 def diff(runs: Runs, ra, rb) -> dict[str, Any]:
-    """What differs between two runs: params, metrics (``pipeline.*`` apart), output hashes,
-    and code/tool tags."""
-    ma = {k: v for k, v in ra.data.metrics.items() if not k.startswith("pipeline.")}
-    mb = {k: v for k, v in rb.data.metrics.items() if not k.startswith("pipeline.")}
-    pa = {k: v for k, v in ra.data.metrics.items() if k.startswith("pipeline.")}
-    pb = {k: v for k, v in rb.data.metrics.items() if k.startswith("pipeline.")}
+    """What differs between two runs: params, metrics (the invocation's own ``pipeline.*`` and
+    ``tracking.*`` apart, under "pipeline"), output hashes, and code/tool tags."""
+    own = INVOCATION_METRICS
+    ma = {k: v for k, v in ra.data.metrics.items() if not k.startswith(own)}
+    mb = {k: v for k, v in rb.data.metrics.items() if not k.startswith(own)}
+    pa = {k: v for k, v in ra.data.metrics.items() if k.startswith(own)}
+    pb = {k: v for k, v in rb.data.metrics.items() if k.startswith(own)}
     fa = {k: v.get("sha256") for k, v in runs.manifest(ra).items()}
     fb = {k: v.get("sha256") for k, v in runs.manifest(rb).items()}
     ta = {k: ra.data.tags.get(k) for k in COMPARED_TAGS if k in ra.data.tags}
