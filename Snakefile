@@ -22,9 +22,22 @@ include: "workflow/rules/fit.smk"
 include: "workflow/rules/accuracy.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/check.smk"
+include: "workflow/rules/tracking.smk"
 
 
 rule all:
     input:
         all_targets(),
     default_target: True
+
+
+onstart:
+    tracking_start()
+
+
+onsuccess:
+    tracking_finish()
+
+
+onerror:
+    tracking_fail()

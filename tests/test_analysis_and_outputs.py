@@ -1,4 +1,4 @@
-"""Sweeps and shards, the clipped model, Poincaré datasets, registry, checks and figures."""
+"""Sweeps and shards, the clipped model, Poincaré datasets, checks and figures."""
 
 import math
 
@@ -131,25 +131,6 @@ def test_poincare_dataset(sim_file):
     assert ds.sizes["impact"] == 2000
     assert np.ptp(np.sort(ds["phase"].values[-2:])) > 0.5  # the two phases of the period-2 orbit
     assert ds.attrs["source_run_id"] != ds.attrs["run_id"]
-
-
-def test_registry_build_list_and_diff(sim_file, tmp_path, capsys):
-    other = tmp_path / "other.nc"
-    f = tmp_path / "o.yaml"
-    f.write_text("name: other\nparameters: {e: 0.6, omega_s: 1.5}\nstop: {impacts: 100}\n")
-    assert main(["simulate", str(f), "-o", str(other), "-q"]) == 0
-    reg = tmp_path / "runs.csv"
-    assert main(["runs", "build", str(sim_file), str(other), "-o", str(reg)]) == 0
-    table = pd.read_csv(reg)
-    assert list(table["scene_name"]) == ["pe", "other"] and table["sha256"].str.len().eq(64).all()
-    capsys.readouterr()
-    assert main(["runs", "--registry", str(reg)]) == 0
-    assert "other" in capsys.readouterr().out
-    assert main(["runs", "diff", "pe", "other", "--registry", str(reg)]) == 0
-    out = capsys.readouterr().out
-    assert "e " in out and "0.3" in out and "0.6" in out
-    assert main(["runs", "diff", "nope", "other", "--registry", str(reg)]) == 2
-    assert main(["runs", "--registry", str(tmp_path / "missing.csv")]) == 2
 
 
 def test_check_command_passes_and_writes_markdown(tmp_path, capsys):

@@ -27,6 +27,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     out = check_output_path(args.output, "-o", inputs=[args.scene])
     limit = parse_size(args.max_output) if args.max_output else default_max_output()
     scene = load_scene(args.scene, args.set or [])
+    store = _tracking_store(args)
     command = "bouncedisk " + " ".join(shlex.quote(a) for a in sys.argv[1:])
     summary = run_scene(
         scene, out, progress=not args.quiet, command=command, max_output_bytes=limit
@@ -36,13 +37,20 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             f"{out}: {summary.n_impacts} impacts, {summary.n_chatter} chattering tails, "
             f"status {summary.status!r}, {summary.wall_time_s:.3f} s (run {summary.run_id})"
         )
+    _track(args, store, "simulate", [out], params={"scene_file": args.scene, "set": args.set or []})
     return 0
 
 
 def _cmd_stats(args: argparse.Namespace) -> int:
     from .statscli import stats_command
+    from .tracking import numeric_leaves
 
-    return stats_command(args)
+    store = _tracking_store(args)
+    summary = stats_command(args)
+    params = {"scene_file": args.scene, "set": args.set or [], "regime": summary["regime"]}
+    outputs = [args.output] if args.output else []
+    _track(args, store, "stats", outputs, params=params, metrics=numeric_leaves(summary))
+    return 0
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
@@ -73,26 +81,105 @@ def _cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
+# --- experiment tracking (bouncedisk.tracking; `runs` reads it back through bouncedisk.registry)
+
+RUNS_ACTIONS = {"list": (0, 0), "show": (1, 1), "diff": (0, 2)}  # action: (min, max) run ids
+
+
+def _add_track_options(p: argparse.ArgumentParser) -> None:
+    """``--track`` / ``--tracking-uri`` for a command whose work can be recorded."""
+    p.add_argument(
+        "--track",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="record this run in the MLflow tracking store (default: on if BOUNCEDISK_TRACK=1)",
+    )
+    p.add_argument(
+        "--tracking-uri",
+        metavar="URI",
+        help="tracking store (default: $MLFLOW_TRACKING_URI, else sqlite:///results/mlflow.db)",
+    )
+
+
+def _tracking_store(args: argparse.Namespace):
+    """Before the work: the store to record into when tracking is wanted, else None.
+
+    Raises InputError (exit 2, one line naming the URI) when the store cannot be used, so that
+    nothing is computed for a record that cannot be written.
+    """
+    from . import tracking
+
+    if not tracking.tracking_wanted(getattr(args, "track", None)):
+        return None
+    store = tracking.resolve_store(getattr(args, "tracking_uri", None))
+    tracking.preflight(store)
+    return store
+
+
+def _track(args, store, kind: str, outputs=(), params=None, metrics=None) -> None:
+    """After the work: record it as one run (no-op when ``store`` is None)."""
+    if store is None:
+        return
+    from . import tracking
+
+    command = "bouncedisk " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    try:
+        run_id = tracking.log_command_run(
+            kind, store, outputs, params=params, metrics=metrics, command=command
+        )
+    except Exception as ex:  # noqa: BLE001 - drivers and REST raise their own types
+        reason = (str(ex).strip().splitlines() or [type(ex).__name__])[0][:200]
+        raise tracking.TrackingError(
+            store.uri, f"recording failed (the outputs were written): {reason}"
+        ) from None
+    if not getattr(args, "quiet", False):
+        print(f"bouncedisk: recorded run {run_id} in {store.uri}", file=sys.stderr)
+
+
 def _cmd_runs(args: argparse.Namespace) -> int:
+    import json
+
     from . import registry
 
-    if args.action == "build":
-        if not args.files:
-            raise InputError("<arguments>", "FILES", "give the netCDF files to gather")
-        if not args.output:
-            raise InputError("<arguments>", "-o", "give the registry CSV to write")
-        table = registry.build(args.files, benchmarks_dir=args.benchmarks)
-        registry.write(table, args.output)
-        print(f"{args.output}: {len(table)} runs")
+    words = list(args.words)
+    action = words.pop(0) if words and words[0] in RUNS_ACTIONS else "list"
+    lo, hi = RUNS_ACTIONS[action]
+    if not lo <= len(words) <= hi:
+        need = {"list": "no run id", "show": "one run id", "diff": "at most two run ids"}[action]
+        extra = " ".join(words[hi:]) or "(none)"
+        raise InputError("runs", action, f"takes {need}; got {extra!r}")
+    runs = registry.Runs(args.tracking_uri, args.results)
+    if action == "list":
+        rows = [registry.row(runs, r) for r in runs.runs]
+        print(json.dumps(rows, indent=1) if args.json else registry.format_list(rows))
         return 0
-    table = registry.read(args.registry)
-    if args.action == "diff":
-        if len(args.files) != 2:
-            raise InputError("<arguments>", "runs diff", "give two run ids (or unique prefixes)")
-        print(registry.diff(table, args.files[0], args.files[1]))
+    if action == "show":
+        rec = registry.show(runs, runs.find(words[0]))
+        print(json.dumps(rec, indent=1, default=str) if args.json else registry.format_show(rec))
         return 0
-    print(registry.format_table(table))
+    if len(words) == 2:
+        ra, rb = runs.find(words[0]), runs.find(words[1])
+    else:
+        pipelines = [r for r in runs.runs if r.data.tags.get("bouncedisk.kind") == "pipeline"]
+        rb = runs.find(words[0]) if words else (pipelines or runs.runs or [None])[-1]
+        ra = runs.previous(rb) if rb is not None else None
+        if ra is None:
+            raise InputError(
+                f"tracking store {runs.store.uri}", "runs diff", "no earlier run to compare with"
+            )
+    d = registry.diff(runs, ra, rb)
+    print(json.dumps(d, indent=1, default=str) if args.json else registry.format_diff(d))
     return 0
+
+
+def _one_line_error(prefix: str):
+    """An argparse ``error`` that prints one line and exits 2 (no usage block)."""
+
+    def error(message: str):
+        print(f"bouncedisk: error: {prefix}: {message}", file=sys.stderr)
+        sys.exit(EXIT_USER)
+
+    return error
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
@@ -116,7 +203,9 @@ def _cmd_check(args: argparse.Namespace) -> int:
 def _cmd_fit(args: argparse.Namespace) -> int:
     from . import fitting
 
+    store = _tracking_store(args)
     fitting.fit_command(args)
+    _track(args, store, "fit", [args.output], params={"curve": args.curve, "seed": args.seed})
     return 0
 
 
@@ -160,6 +249,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="refuse a run whose file would exceed SIZE (e.g. 500M, 4G; default: "
         "$BOUNCEDISK_MAX_OUTPUT or 4G)",
     )
+    _add_track_options(p)
     p.set_defaults(func=_cmd_simulate)
 
     p = sub.add_parser(
@@ -178,20 +268,27 @@ def build_parser() -> argparse.ArgumentParser:
         "--cores", type=int, default=None, help="members run on this many cores (default: all)"
     )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress")
+    _add_track_options(p)
     p.set_defaults(func=_cmd_stats)
 
     p = sub.add_parser("info", help="summarise a simulation netCDF file")
     p.add_argument("file")
     p.set_defaults(func=_cmd_info)
 
-    p = sub.add_parser("runs", help="list the run registry, diff two runs, or build it")
-    p.add_argument("action", nargs="?", choices=("list", "diff", "build"), default="list")
-    p.add_argument("files", nargs="*", help="diff: two run ids; build: netCDF files")
-    p.add_argument(
-        "--registry", default="results/runs.csv", help="registry CSV (default: %(default)s)"
+    p = sub.add_parser(
+        "runs",
+        help="the tracked runs: list, show RUN, diff A B",
+        usage="bouncedisk runs [list | show RUN | diff [A [B]]] [--json] [--tracking-uri URI]",
     )
-    p.add_argument("-o", "--output", help="build: registry CSV to write")
-    p.add_argument("--benchmarks", help="build: folder of Snakemake benchmark files")
+    p.add_argument("words", nargs="*", metavar="ACTION RUN", help="list | show RUN | diff A B")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.add_argument(
+        "--tracking-uri",
+        metavar="URI",
+        help="tracking store (default: $MLFLOW_TRACKING_URI, else sqlite:///RESULTS/mlflow.db)",
+    )
+    p.add_argument("--results", default="results", help="results folder (default: %(default)s)")
+    p.error = _one_line_error("runs")
     p.set_defaults(func=_cmd_runs)
 
     p = sub.add_parser("check", help="verify the paper's claims (exit 0 only if all pass)")
@@ -208,6 +305,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--bootstrap", type=int, default=40, help="bootstrap resamples (default: %(default)s)"
     )
     p.add_argument("-q", "--quiet", action="store_true")
+    _add_track_options(p)
     p.set_defaults(func=_cmd_fit)
     return parser
 
@@ -233,7 +331,15 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the console script."""
     _install_signal_handlers()
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra and args.command == "runs":  # run ids after options: `runs diff A --json B`
+        bad = [x for x in extra if x.startswith("-")]
+        if bad:
+            print(f"bouncedisk: error: runs: unknown option {bad[0]}", file=sys.stderr)
+            return EXIT_USER
+        args.words += extra
+    elif extra:
+        parser.error(f"unrecognized arguments: {' '.join(extra)}")
     try:
         return args.func(args)
     except InputError as ex:

@@ -64,8 +64,8 @@ def _row(name: str, value, ci) -> str:
     return f"{name:>18}: {value:.6g}  95% CI [{ci[0]:.6g}, {ci[1]:.6g}]"
 
 
-def stats_command(args: argparse.Namespace) -> int:
-    """Run ``bouncedisk stats``; see :mod:`bouncedisk.stats`."""
+def stats_command(args: argparse.Namespace) -> dict:
+    """Run ``bouncedisk stats`` (see :mod:`bouncedisk.stats`); returns the printed summary."""
     from .datasets import write_dataset
     from .runner import deferred_interrupts
     from .scene import load_scene
@@ -100,4 +100,4 @@ def stats_command(args: argparse.Namespace) -> int:
         print(format_summary(summary))
         if args.output:
             print(f"{args.output}: per-member values ({wall:.2f} s on {cores} cores)")
-    return 0
+    return summary

@@ -1,4 +1,4 @@
-# Stage 6: reproduction checks and the run registry.
+# Stage 6: reproduction checks (the runs themselves are recorded by workflow/rules/tracking.smk).
 
 
 rule reproduction_checks:
@@ -22,21 +22,3 @@ rule reproduction_checks:
     script:
         "../scripts/reproduction_checks.py"
 
-
-rule run_registry:
-    """Gather every output's provenance into results/runs.csv (`bouncedisk runs` lists it)."""
-    input:
-        code=CODE,
-        files=registry_inputs,
-    output:
-        f"{RES}/runs.csv",
-    conda:
-        "../envs/bouncedisk.yaml"
-    log:
-        f"{RES}/logs/run_registry.log",
-    benchmark:
-        f"{RES}/benchmarks/run_registry.tsv"
-    params:
-        benchmarks=f"{RES}/benchmarks",
-    script:
-        "../scripts/run_registry.py"

@@ -95,7 +95,6 @@ def sweep_shards(wildcards):
 def all_targets():
     figs = expand(f"{RES}/figures/{{fig}}.{{ext}}", fig=FIGURES, ext=["pdf", "png"])
     return figs + [
-        f"{RES}/runs.csv",
         f"{RES}/reproduction.md",
         f"{RES}/fit/prototype.nc",
         f"{RES}/prototype/synthetic_motor.csv",
@@ -117,14 +116,3 @@ def fig_out(name, caption, category):
         "png": report(f"{RES}/figures/{name}.png", caption=f"../report/{caption}.rst",
                       category=category),
     }
-
-
-def registry_inputs(wildcards):
-    files = expand(f"{RES}/simulations/{{s}}.nc", s=config["simulations"])
-    files += expand(f"{RES}/sweeps/{{s}}.nc", s=list(config["sweeps"]))
-    files += expand(f"{RES}/poincare/{{s}}.nc", s=list(config["poincare"]))
-    files += [f"{RES}/studies/clipped_vs_bouncing.nc", f"{RES}/fit/prototype.nc"]
-    files += expand(f"{RES}/stats/{{s}}.nc", s=config["statistics"])
-    files += expand(f"{RES}/bands/{{s}}.nc", s=config["bands"]["scenes"])
-    files += expand(f"{RES}/continuation/{{d}}.nc", d=["up", "down"])
-    return files

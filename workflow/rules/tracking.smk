@@ -1,0 +1,100 @@
+# Experiment tracking (MLflow, INTERFACES.md "Experiment tracking"): one parent run per invocation
+# that does work, a nested run per job that ran, all logged from the main Snakemake process by the
+# Snakefile's onstart/onsuccess/onerror handlers (the jobs never import mlflow). A no-op run
+# reaches no handler and logs nothing. `--config tracking='{enabled: false}'` runs untracked.
+import signal
+import sys
+
+import snakemake as _snakemake
+
+from bouncedisk import tracking as _tracking
+
+TRACKING = _tracking.PipelineSettings.from_config(config)
+_TRACKER = []  # the invocation's PipelineTracker, once onstart made it
+
+
+def _tracking_jobs():
+    """The DAG's jobs as plain records (src/ never imports snakemake)."""
+    records = []
+    for job in workflow.dag.jobs:
+        if not job.output:
+            continue
+        records.append(
+            _tracking.JobRecord(
+                job.rule.name,
+                [str(o) for o in job.output],
+                wildcards={k: str(v) for k, v in job.wildcards.items()},
+                params={k: v for k, v in job.params.items() if not callable(v)},
+                benchmark=str(job.benchmark) if job.benchmark else None,
+                logs=[str(x) for x in job.log],
+                ran=workflow.dag.needrun(job),
+            )
+        )
+    return records
+
+
+def _note_interrupt(signum):
+    """Chain a signal handler that remembers the interrupt (KILLED rather than FAILED)."""
+    previous = signal.getsignal(signum)
+
+    def handler(sig, frame):
+        for t in _TRACKER:
+            t.interrupted = True
+        if callable(previous):
+            return previous(sig, frame)
+        if sig == signal.SIGINT:
+            raise KeyboardInterrupt
+
+    try:
+        signal.signal(signum, handler)
+    except ValueError:  # not the main thread
+        pass
+
+
+def tracking_start():
+    if not TRACKING.enabled or workflow.touch:  # --touch computes nothing worth a record
+        return
+    try:
+        cores = workflow.cores
+    except Exception:
+        cores = None
+    tracker = _tracking.PipelineTracker(
+        TRACKING,
+        RES,
+        config,
+        cores=cores,
+        snakemake_version=_snakemake.__version__,
+        command=" ".join(sys.argv),
+    )
+    try:
+        tracker.start(_tracking_jobs())
+    except _tracking.TrackingError as ex:
+        _tracking.print_error(ex)
+        raise SystemExit(1)
+    _TRACKER.append(tracker)
+    _note_interrupt(signal.SIGINT)
+    _note_interrupt(signal.SIGTERM)
+
+
+def tracking_finish():
+    for tracker in _TRACKER:
+        try:
+            run_id = tracker.finish()
+        except _tracking.TrackingError as ex:
+            _tracking.print_error(ex)
+            raise SystemExit(1)
+        t = tracker.timings
+        spent = t.get("tracking.start_s", 0) + t.get("tracking.finish_s", 0)
+        print(
+            f"bouncedisk: recorded run {run_id} in {tracker.store.uri} "
+            f"({spent:.1f} s, and {t.get('tracking.open_s', 0):.1f} s alongside the jobs)",
+            file=sys.stderr,
+        )
+
+
+def tracking_fail():
+    for tracker in _TRACKER:
+        try:
+            tracker.fail()
+        except _tracking.TrackingError as ex:
+            _tracking.print_error(ex)
