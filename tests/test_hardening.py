@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from bouncedisk.cli import main
@@ -91,9 +91,9 @@ def test_item1_output_over_the_disk_limit_is_refused_before_running(tmp_path, ca
     argv = ["simulate", FIG3, "-o", str(out), "-q"]
     for s in sets:
         argv += ["--set", s]
-    start = time.monotonic()
+    start = time.process_time()
     assert main(argv) == 2
-    assert time.monotonic() - start < 120.0  # a hang guard, not a timing
+    assert time.process_time() - start < 10.0  # CPU seconds, not wall-clock
     line = _one_line(capsys)
     assert "over the limit" in line and "--max-output" in line
     _no_files(tmp_path)
@@ -390,6 +390,58 @@ def _vm_hwm_mb() -> float:
     return 0.0  # pragma: no cover
 
 
+def _reset_hwm() -> None:
+    """Reset this process's peak RSS, so that VmHWM measures the next case only (Linux)."""
+    try:
+        with open("/proc/self/clear_refs", "w") as fh:
+            fh.write("5")
+    except OSError:  # pragma: no cover
+        pass
+
+
+NUMBERS = st.one_of(
+    st.sampled_from([0, 1, -1, 0.3, 1.5, 1e-6, 1e300, 1.0000001, 1e20, 5e3]),
+    st.floats(-10, 10),
+    st.sampled_from(["1e-6", "nan", "inf", "x", "", "1_000"]),
+    st.none(),
+    st.booleans(),
+)
+FUZZ_SCENES = st.fixed_dictionaries(
+    {},
+    optional={
+        "name": st.sampled_from(["a", "bad name", "1e3", 7]),
+        "parameters": st.fixed_dictionaries(
+            {}, optional={"e": NUMBERS, "omega_s": NUMBERS, "r_phi": NUMBERS, "psi": NUMBERS}
+        )
+        | NUMBERS,
+        "effects": st.lists(st.sampled_from(["impacts", "contact", "torsion", "warp"]), max_size=3),
+        "stop": st.fixed_dictionaries(
+            {},
+            optional={
+                "impacts": st.sampled_from([1, 300, 20_000, 10**9, 10**20, -3, "5e3"]),
+                "time": st.sampled_from([0.5, 100.0, 1e3, -1.0, "2e2"]),
+                "max_events": st.sampled_from([10, 1000, 0]),
+            },
+        ),
+        "initial": st.fixed_dictionaries(
+            {}, optional={"t": NUMBERS, "u": NUMBERS, "v": NUMBERS, "omega": NUMBERS}
+        ),
+        "outputs": st.fixed_dictionaries(
+            {},
+            optional={
+                "events": st.booleans(),
+                "trajectory": st.fixed_dictionaries(
+                    {"dt": st.sampled_from([1e-9, 1e-6, 1e-3, 0.05, "1e-2", -1.0])}
+                )
+                | st.booleans(),
+                "stroboscopic": st.booleans(),
+            },
+        ),
+        "bogus": NUMBERS,
+    },
+)
+
+
 SET_KEYS = [
     "parameters.e",
     "parameters.omega_s",
@@ -442,31 +494,54 @@ OPTIONS = st.lists(
             ["--max-output", "-1"],
             ["--bogus"],
             ["-o"],
+            [],
+            [],
         ]
     ),
     max_size=2,
 )
 
 
+VALID_SETS = {
+    "parameters.e": ["0.3", "6e-1", "1e-6", "0", "1"],
+    "parameters.omega_s": ["1.5", "1.0000001", "3e0", "0.8", "1e3", "1"],
+    "parameters.r_phi": ["1e-6", "0.01", "1e2"],
+    "parameters.psi": ["0", "1.5", "-3e0"],
+    "stop": ["{time: 1e2}", "{impacts: 1e3}", "{periods: 50}", "{impacts: 20000}"],
+    "outputs.trajectory.dt": ["1e-9", "1e-3", "0.01", "2.5e-2"],
+    "outputs.stroboscopic": ["true", "false"],
+    "initial": ["{t: 0.0, u: 2.0, v: 1.0e+10}", "{t: 0.0, u: 2.0, v: 300.0}", "{t: 1e8}"],
+    "effects": ["[impacts, contact, torsion]", "[impacts, contact]", "[impacts]"],
+}
+SETS = st.one_of(
+    st.sampled_from([(k, v) for k, vs in VALID_SETS.items() for v in vs]),
+    st.sampled_from([(k, v) for k, vs in VALID_SETS.items() for v in vs]),
+    st.tuples(st.sampled_from(SET_KEYS), st.sampled_from(SET_VALUES)),
+)
+
+
 @settings(
-    max_examples=int(os.environ.get("BOUNCEDISK_FUZZ_EXAMPLES", "40")),
+    max_examples=int(os.environ.get("BOUNCEDISK_FUZZ_EXAMPLES", "60")),
     deadline=None,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
 )
 @given(
-    sets=st.lists(
-        st.tuples(st.sampled_from(SET_KEYS), st.sampled_from(SET_VALUES)), min_size=1, max_size=4
-    ),
+    sets=st.lists(SETS, max_size=4),
     options=OPTIONS,
-    target=st.sampled_from(["file", "folder", "scene", "nested", "read-only"]),
-    command=st.sampled_from(["simulate", "check"]),
+    target=st.sampled_from(["file", "file", "file", "folder", "scene", "nested", "read-only"]),
+    command=st.sampled_from(["simulate", "simulate", "simulate", "check"]),
+    mapping=st.none() | st.none() | FUZZ_SCENES,
 )
-def test_fuzz_command_line(tmp_path_factory, sets, options, target, command):
-    """Exit 0 or 2, one line on error and never a traceback, no output file on error, peak
-    memory under 1 GB and under 10 s per case."""
+def test_fuzz_command_line(tmp_path_factory, sets, options, target, command, mapping):
+    """Exit 0 or 2, never a traceback, no output file on error, peak memory under 1 GB and under
+    10 s of CPU per case (``BOUNCEDISK_FUZZ_EXAMPLES`` cases, 60 by default)."""
+    import yaml
+
     d = tmp_path_factory.mktemp("fuzz")
     scene = d / "s.yaml"
-    scene.write_text(SMALL)
+    text = SMALL if mapping is None else yaml.safe_dump(mapping)
+    scene.write_text(text)
+    _reset_hwm()
     out = {
         "file": d / "out.nc",
         "folder": d,
@@ -484,17 +559,19 @@ def test_fuzz_command_line(tmp_path_factory, sets, options, target, command):
         argv += opt
     if "-q" not in argv:
         argv.append("-q") if command == "simulate" else None
-    start = time.monotonic()
+    # CPU time, not wall time: the bound is about the work a request causes, and wall time on a
+    # shared CI machine measures the neighbours
+    start = time.process_time()
     try:
         code = main(argv)
     except SystemExit as ex:  # argparse: one line, exit 2
         code = ex.code
-    elapsed = time.monotonic() - start
+    elapsed = time.process_time() - start
+    event(f"{command} exit {code}")
     assert code in (0, 2), (argv, code)
-    # a hang guard, not a timing: the issue's 10 s per case is measured in the closing note
-    assert elapsed < 120.0, (argv, elapsed)
+    assert elapsed < 10.0, (argv, elapsed)  # CPU seconds per case, not wall-clock
     assert _vm_hwm_mb() < 1024.0, argv
-    assert scene.read_text() == SMALL
+    assert scene.read_text() == text
     if code == 2 and target in ("file", "nested"):
         assert not out.exists(), argv
     leftovers = [p for p in d.rglob(".*") if ".tmp" in p.name or ".probe" in p.name]

@@ -55,7 +55,7 @@ def test_killed_run_leaves_previous_complete_file_or_none(tmp_path, sig):
     out = tmp_path / "out.nc"
     # a previous complete result sits at the output path
     short = tmp_path / "short.yaml"
-    short.write_text(LONG.replace("200000000", "1000"))
+    short.write_text(LONG.replace("100000000", "1000"))
     assert main(["simulate", str(short), "-o", str(out), "-q"]) == 0
     before = out.read_bytes()
     proc = _start(scene, out)
@@ -87,7 +87,7 @@ def test_killed_first_run_leaves_no_output(tmp_path):
 def test_truncated_netcdf_is_reported(tmp_path, capsys):
     out = tmp_path / "good.nc"
     short = tmp_path / "s.yaml"
-    short.write_text(LONG.replace("200000000", "5000"))
+    short.write_text(LONG.replace("100000000", "5000"))
     assert main(["simulate", str(short), "-o", str(out), "-q"]) == 0
     data = out.read_bytes()
     bad = tmp_path / "cut.nc"

@@ -56,7 +56,7 @@ def _cmd_stats(args: argparse.Namespace) -> int:
 def _cmd_info(args: argparse.Namespace) -> int:
     from .datasets import open_simulation
 
-    ds = open_simulation(args.file)
+    ds = open_simulation(args.file, lazy=True)  # the header only: memory stays flat
     keys = (
         "scene_name",
         "run_id",
@@ -78,6 +78,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
         if k in ds.attrs:
             print(f"{k:>14}: {ds.attrs[k]}")
     print(f"{'variables':>14}: {', '.join(sorted(ds.data_vars))}")
+    ds.close()
     return 0
 
 

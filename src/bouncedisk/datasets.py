@@ -160,11 +160,14 @@ class SimulationWriter:
                 nc["time_s"].standard_name = "time"
                 nc["time_s"].axis = "T"
                 nc["time_s"].units = "s"
-                nc["time"].coordinates = "time_s"
             for name in ("u_rotor", "v_rotor", "u_stator"):
                 self._var(name, "f8", "time")
             if self.torsion:
                 self._var("omega_rotor", "f8", "time")
+            if self.t_c is not None:  # CF: time_s is an auxiliary coordinate of the samples
+                for name in ("u_rotor", "v_rotor", "u_stator", "omega_rotor"):
+                    if name in nc.variables:
+                        nc[name].coordinates = "time_s"
         if self.strobe:
             nc.createDimension("period", None)
             self._var("period", "i8", "period")
@@ -259,8 +262,12 @@ def open_checked(
     required: tuple[str, ...] = (),
     required_attrs: tuple[str, ...] = (),
     what: str = "netCDF",
+    lazy: bool = False,
 ) -> xr.Dataset:
     """Open a netCDF file fully into memory, validating that it is readable and complete.
+
+    With ``lazy`` the data stay on disk (memory stays flat whatever the file's size: a summary
+    of a 4 GB file reads its header only); the caller closes the Dataset.
 
     Raises
     ------
@@ -274,8 +281,11 @@ def open_checked(
     if p.is_dir():
         raise InputError(str(path), "", f"is a directory, not a {what} file")
     try:
-        with xr.open_dataset(p, engine="netcdf4") as ds:
-            ds = ds.load()
+        if lazy:
+            ds = xr.open_dataset(p, engine="netcdf4")
+        else:
+            with xr.open_dataset(p, engine="netcdf4") as ds:
+                ds = ds.load()
     except Exception as ex:  # netCDF4/HDF5 raise a zoo of types for damaged files
         reason = str(ex).splitlines()[0][:120] if str(ex) else type(ex).__name__
         raise InputError(
@@ -283,20 +293,30 @@ def open_checked(
         ) from None
     for name in required:
         if name not in ds.variables:
+            ds.close()
             raise InputError(str(path), name, f"missing required variable (not a {what} file?)")
     for name in required_attrs:
         if name not in ds.attrs:
+            ds.close()
             raise InputError(str(path), name, f"missing required attribute (not a {what} file?)")
     return ds
 
 
-def open_simulation(path: str | Path) -> xr.Dataset:
-    """Open and validate a simulation file (INTERFACES.md variables and attributes)."""
-    ds = open_checked(path, REQUIRED_SIMULATION, REQUIRED_ATTRS, what="bouncedisk simulation")
+def open_simulation(path: str | Path, lazy: bool = False) -> xr.Dataset:
+    """Open and validate a simulation file (INTERFACES.md variables and attributes).
+
+    ``lazy`` (:func:`open_checked`) leaves the data on disk and skips the check of their values.
+    """
+    ds = open_checked(
+        path, REQUIRED_SIMULATION, REQUIRED_ATTRS, what="bouncedisk simulation", lazy=lazy
+    )
     n = ds.sizes.get("impact", 0)
     for name in REQUIRED_SIMULATION:
         if ds[name].dims != ("impact",):
+            ds.close()
             raise InputError(str(path), name, "must have the single dimension 'impact'")
+    if lazy:
+        return ds
     if n and not np.all(np.isfinite(ds["t_impact"].values)):
         raise InputError(str(path), "t_impact", "contains non-finite values")
     return ds
