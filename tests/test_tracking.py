@@ -270,8 +270,10 @@ def test_two_invocations_two_parent_runs_and_the_diff_names_the_change(two_runs)
     assert [r["status"] for r in rows] == ["FINISHED", "FINISHED"]
     a, b = rows[0]["run_id"], rows[1]["run_id"]
     assert rows[1]["previous"] == a
-    assert rows[1]["changed"] == ["simulations/fig4/r_phi", "simulations/fig4/scene_sha256"]
-    assert rows[0]["checks_total"] == 6 and rows[0]["checks_passed"] == 6
+    # fig4's simulation and its ensemble band (figure 4 draws it) depend on the scene
+    changed = [f"{o}/fig4/{k}" for o in ("bands", "simulations") for k in ("r_phi", "scene_sha256")]
+    assert rows[1]["changed"] == changed
+    assert rows[0]["checks_total"] == 7 and rows[0]["checks_passed"] == 7
     # the files can be gone: the store keeps what the diff needs
     shutil.rmtree(base / "results" / "simulations")
     # options in any position, run id prefixes
@@ -283,14 +285,15 @@ def test_two_invocations_two_parent_runs_and_the_diff_names_the_change(two_runs)
     )
     assert p.returncode == 0, p.stderr
     d = json.loads(p.stdout)
-    assert set(d["params"]) == {"simulations/fig4/r_phi", "simulations/fig4/scene_sha256"}
+    assert set(d["params"]) == set(changed)
     assert d["params"]["simulations/fig4/r_phi"] == ["0.01", "0.02"]
-    depends = ("simulations/fig4/", "figures/fig4_trajectory_e06/")
+    depends = ("simulations/fig4/", "bands/fig4/", "figures/fig4_trajectory_e06/")
     assert d["metrics"] and all(k.startswith(depends) for k in d["metrics"]), d["metrics"]
     assert "simulations/fig4/final_omega" in d["metrics"]
     assert "simulations/fig4.nc" in d["outputs"]
     assert set(d["outputs"]) <= {
         "simulations/fig4.nc",
+        "bands/fig4.nc",
         "figures/fig4_trajectory_e06.png",
         "figures/fig4_trajectory_e06.pdf",
     }
@@ -313,7 +316,7 @@ def test_first_run_keeps_its_metrics_artifacts_and_every_job_record(two_runs):
     a = client.get_run(rows[0]["run_id"])
     assert a.data.metrics["simulations/fig4/n_impacts"] == 300
     assert a.data.params["simulations/fig4/r_phi"] == "0.01"
-    assert a.data.metrics["checks.passed"] == a.data.metrics["checks.total"] == 6
+    assert a.data.metrics["checks.passed"] == a.data.metrics["checks.total"] == 7
     assert sum(k.startswith("reproduction/check.") for k in a.data.metrics) >= 12
     # --cores 2: every job that ran has its nested run, with its benchmark numbers
     for run, log in ((a, first), (client.get_run(rows[1]["run_id"]), second)):
