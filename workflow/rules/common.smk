@@ -83,6 +83,7 @@ FIGURES = [
     "work_precision",
     "scaling",
     "stats_cost",
+    "fit_profiles",
 ]
 
 
