@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
+from bouncedisk import checks
 from bouncedisk import observables as ob
 from bouncedisk.engine import KIND_CHATTER, EngineConfig, InitialState, simulate_arrays
 
@@ -87,62 +88,25 @@ def test_impact_map_jacobian_at_period_1_fixed_point():
     assert np.trace(jac[-1]) == pytest.approx(expected, abs=1e-9)
 
 
-def _settles_on_period(e, gamma, n, start_phase, events=4000):
-    """Does a run started near the period-n orbit's phase settle on it (n impacts-per-period)?"""
-    w = math.sqrt(gamma)
-    T = 2 * math.pi * n / w
-    res = simulate_arrays(
-        EngineConfig(e=e, omega_s=w, max_events=events),
-        InitialState(t=start_phase / w, u=math.sin(start_phase), v=T / 2),
-    )
-    ev = res.events
-    per = ob.find_period(ev["t"], ev["phase"], ev["v_rel"], ev["kind"], w, max_period=4, tol=1e-6)
-    return per is not None and per.p == 1 and per.q == n
-
-
 @pytest.mark.parametrize("n", [1, 2])
 def test_period_n_existence_threshold_within_1e_3(n):
-    """Bisect Γ on 'a run started at the orbit's phase settles on it' (MODEL.md Γ_n)."""
+    """Bisect Γ on 'a run started at the orbit's phase settles on it' (MODEL.md Γ_n), with the
+    reproduction check's own bisection (bouncedisk.checks)."""
     e = 0.3
     g_n = ob.period_n_threshold(n, e)
-    lo, hi = g_n * 0.9, g_n * 1.1  # below: no orbit; above: stable orbit
-    assert not _settles_on_period(e, lo, n, 0.0)
-    assert _settles_on_period(e, hi, n, math.acos(g_n / hi))
-    while hi - lo > 2e-4:
-        mid = 0.5 * (lo + hi)
-        phase = math.acos(min(1.0, g_n / mid)) + 1e-3
-        if _settles_on_period(e, mid, n, phase, events=20_000):
-            hi = mid
-        else:
-            lo = mid
-    assert abs(0.5 * (lo + hi) - g_n) < 1e-3
+    # the bracket the bisection starts from is a real bracket: below, no orbit; above, stable
+    assert not checks.settles_on_period(e, 0.9 * g_n, n, 0.0, 4000)
+    assert checks.settles_on_period(e, 1.1 * g_n, n, math.acos(1 / 1.1), 4000)
+    assert abs(checks.engine_existence_threshold(n, e) - g_n) < 1e-3
 
 
 def test_period_doubling_threshold_within_1e_3():
     """Bisect Γ on 'the period-1 orbit is stable' using the engine's long-run behaviour."""
     e = 0.3
     g_pd = ob.period_doubling_threshold(1, e)
-
-    def period_one(gamma):
-        w = math.sqrt(gamma)
-        phi, vp = ob.period_n_fixed_point(1, e, w)
-        phi += 1e-4  # a small perturbation off the fixed point
-        res = simulate_arrays(
-            EngineConfig(e=e, omega_s=w, max_events=60_000),
-            InitialState(t=phi / w, u=math.sin(phi), v=vp),
-        )
-        ph = res.events["phase"][-200:]
-        return np.ptp(ph) < 1e-7
-
-    lo, hi = g_pd - 0.05, g_pd + 0.05
-    assert period_one(lo) and not period_one(hi)
-    while hi - lo > 5e-4:
-        mid = 0.5 * (lo + hi)
-        if period_one(mid):
-            lo = mid
-        else:
-            hi = mid
-    assert abs(0.5 * (lo + hi) - g_pd) < 1e-3
+    assert checks.period_one_is_stable(e, g_pd - 0.05)
+    assert not checks.period_one_is_stable(e, g_pd + 0.05)
+    assert abs(checks.engine_doubling_threshold(e) - g_pd) < 1e-3
 
 
 def test_seed_claim_e03_is_period_2():

@@ -22,7 +22,7 @@ LONG = """
 name: long
 parameters: {e: 0.6, omega_s: 1.5}
 effects: [impacts, contact]
-stop: {impacts: 200000000}
+stop: {impacts: 100000000}
 outputs: {events: true}
 """
 

@@ -17,51 +17,66 @@ import numpy as np
 from . import observables as ob
 from .datasets import open_checked, open_simulation
 from .engine import EngineConfig, InitialState, simulate_arrays
+from .errors import InputError
 from .runner import run_scene_arrays
-from .scene import scene_from_mapping
 
-SCENES = {
-    "poincare_e03": {
-        "name": "poincare_e03",
-        "parameters": {"e": 0.3, "omega_s": 1.5},
-        "effects": ["impacts", "contact"],
-        "stop": {"impacts": 20000},
-    },
-    "poincare_e06": {
-        "name": "poincare_e06",
-        "parameters": {"e": 0.6, "omega_s": 1.5},
-        "effects": ["impacts", "contact"],
-        "stop": {"impacts": 20000},
-    },
-    "fig5": {
-        "name": "fig5",
-        "parameters": {"e": 0.6, "omega_s": 1.5, "r_phi": 0.01, "psi": 0.0},
-        "effects": ["impacts", "contact", "torsion"],
-        "stop": {"impacts": 300},
-        "outputs": {"events": True, "trajectory": {"dt": 0.05}},
-    },
-}
+#: The pipeline's scene files: the checks read the same scenes the pipeline runs.
+SCENE_DIR = Path(__file__).resolve().parents[2] / "workflow" / "config" / "scenes"
 
 
-def _stats_scene(name: str, e: float, w: float, members: int, t_end: float) -> dict:
-    return {
-        "name": name,
-        "parameters": {"e": e, "omega_s": w, "r_phi": 0.01, "psi": 0.0, "e_sigma": 1e-9},
-        "effects": ["impacts", "contact", "torsion", "restitution_noise"],
-        "stop": {"time": t_end},
-        "ensemble": {"members": members, "seed": 1},
-        "stats": {"discard": 3000.0},
-    }
+def workflow_scene(name: str, scene_dir: Path | None = None):
+    """The workflow's scene ``name`` (``workflow/config/scenes/<name>.yaml``).
+
+    Raises
+    ------
+    InputError
+        When the scene file is missing (the package runs outside the project's checkout).
+    """
+    from .scene import load_scene
+
+    return load_scene((scene_dir or SCENE_DIR) / f"{name}.yaml")
 
 
-#: Ensemble statistics the checks read (the pipeline's workflow/config/scenes/<name>.yaml).
-STATS_SCENES = {
-    "stats_e03": _stats_scene("stats_e03", 0.3, 1.5, 8, 13000.0),
-    "stats_e06": _stats_scene("stats_e06", 0.6, 1.5, 32, 53000.0),
-    "stats_locked": _stats_scene("stats_locked", 0.5, 1.126, 8, 13000.0),
-}
 #: Members of the rotor-speed band of Fig. 5 when simulated here (the pipeline's ``bands``).
 BAND_MEMBERS = 16
+#: The built results the checks read (relative to the results folder).
+RESULT_FILES = (
+    "simulations/fig5.nc",
+    "bands/fig5.nc",
+    "stats/stats_e03.nc",
+    "stats/stats_e06.nc",
+    "stats/stats_locked.nc",
+)
+
+
+def check_results_folder(path: str | Path) -> Path:
+    """The results folder for ``check --results``, refused unless it holds the built runs.
+
+    A CI that mistypes the folder must fail, not check freshly simulated runs instead.
+
+    Raises
+    ------
+    InputError
+        The folder is missing, is a file, or lacks one of ``simulations/<name>.nc`` the checks
+        read (named in the message).
+    """
+    p = Path(path)
+    if str(path).strip() == "":
+        raise InputError("<arguments>", "--results", "is empty; give the pipeline's results folder")
+    if not p.exists():
+        raise InputError(str(path), "--results", "folder not found (build it with snakemake)")
+    if not p.is_dir():
+        raise InputError(str(path), "--results", "is a file, not the pipeline's results folder")
+    missing = [f for f in RESULT_FILES if not (p / f).is_file()]
+    if missing:
+        raise InputError(
+            str(path),
+            "--results",
+            "holds no built results for "
+            + ", ".join(missing)
+            + " (build them with snakemake, or drop --results to simulate)",
+        )
+    return p
 
 
 @dataclass(frozen=True)
@@ -86,7 +101,9 @@ class _Source:
         if name in self.cache:
             return self.cache[name]
         path = self.results / "simulations" / f"{name}.nc" if self.results else None
-        if path is not None and path.exists():
+        if path is not None:
+            if not path.is_file():
+                raise InputError(str(path), "", "missing: the results folder lacks this run")
             ds = open_simulation(path)
             ev = {
                 "t": ds["t_impact"].values,
@@ -99,9 +116,9 @@ class _Source:
                 traj = np.column_stack([ds["time"].values, ds["omega_rotor"].values])
             out = (ev, traj, str(path))
         else:
-            res = run_scene_arrays(scene_from_mapping(SCENES[name], f"<built-in scene {name}>"))
+            res = run_scene_arrays(workflow_scene(name))
             traj = res.traj[:, [0, 4]] if len(res.traj) else None
-            out = (res.events, traj, f"simulated ({name} scene)")
+            out = (res.events, traj, f"simulated (scene {name}.yaml)")
         self.cache[name] = out
         return out
 
@@ -117,8 +134,7 @@ class _Source:
         else:
             from .stats import run_stats
 
-            scene = scene_from_mapping(STATS_SCENES[name], f"<built-in scene {name}>")
-            out = (run_stats(scene, cores=2).summary(), f"ensemble ({name} scene)")
+            out = (run_stats(workflow_scene(name), cores=2).summary(), f"ensemble ({name}.yaml)")
         self.cache[key] = out
         return out
 
@@ -134,9 +150,8 @@ class _Source:
         else:
             from .bands import omega_band
 
-            scene = scene_from_mapping(SCENES[name], f"<built-in scene {name}>")
-            ds = omega_band(scene, BAND_MEMBERS, seed=1, cores=2)
-            where = f"ensemble band ({name} scene, {BAND_MEMBERS} members)"
+            ds = omega_band(workflow_scene(name), BAND_MEMBERS, seed=1, cores=2)
+            where = f"ensemble band ({name}.yaml, {BAND_MEMBERS} members)"
         out = (dict(ds.attrs), ds["trend_steady"].values, where)
         self.cache[key] = out
         return out
@@ -206,7 +221,8 @@ def _locked_check(src: _Source) -> CheckResult:
     )
 
 
-def _settles(e: float, gamma: float, n: int, phase: float, events: int) -> bool:
+def settles_on_period(e: float, gamma: float, n: int, phase: float, events: int) -> bool:
+    """Does a run started at ``phase`` with the period-n orbit's velocity ``T/2`` settle on it?"""
     w = math.sqrt(gamma)
     res = simulate_arrays(
         EngineConfig(e=e, omega_s=w, max_events=events),
@@ -223,31 +239,32 @@ def engine_existence_threshold(n: int, e: float, resolution: float = 2e-4) -> fl
     lo, hi = 0.9 * g_n, 1.1 * g_n
     while hi - lo > resolution:
         mid = 0.5 * (lo + hi)
-        if _settles(e, mid, n, math.acos(min(1.0, g_n / mid)) + 1e-3, 20_000):
+        if settles_on_period(e, mid, n, math.acos(min(1.0, g_n / mid)) + 1e-3, 20_000):
             hi = mid
         else:
             lo = mid
     return 0.5 * (lo + hi)
 
 
+def period_one_is_stable(e: float, gamma: float) -> bool:
+    """Does a run started 1e-4 off the period-1 fixed point stay on it (phases within 1e-7)?"""
+    w = math.sqrt(gamma)
+    phi, vp = ob.period_n_fixed_point(1, e, w)
+    phi += 1e-4
+    res = simulate_arrays(
+        EngineConfig(e=e, omega_s=w, max_events=60_000),
+        InitialState(t=phi / w, u=math.sin(phi), v=vp),
+    )
+    return float(np.ptp(res.events["phase"][-200:])) < 1e-7
+
+
 def engine_doubling_threshold(e: float, resolution: float = 5e-4) -> float:
     """Γ at which the engine's period-1 orbit loses stability (bisection on long runs)."""
     g_pd = ob.period_doubling_threshold(1, e)
-
-    def stable(gamma: float) -> bool:
-        w = math.sqrt(gamma)
-        phi, vp = ob.period_n_fixed_point(1, e, w)
-        phi += 1e-4
-        res = simulate_arrays(
-            EngineConfig(e=e, omega_s=w, max_events=60_000),
-            InitialState(t=phi / w, u=math.sin(phi), v=vp),
-        )
-        return float(np.ptp(res.events["phase"][-200:])) < 1e-7
-
     lo, hi = g_pd - 0.05, g_pd + 0.05
     while hi - lo > resolution:
         mid = 0.5 * (lo + hi)
-        if stable(mid):
+        if period_one_is_stable(e, mid):
             lo = mid
         else:
             hi = mid

@@ -10,7 +10,6 @@ import argparse
 import shlex
 import signal
 import sys
-from pathlib import Path
 
 from . import __version__
 from .errors import InputError
@@ -21,15 +20,17 @@ EXIT_INTERRUPT = 130
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
+    from .outputs import check_output_path, default_max_output, parse_size
     from .runner import run_scene
     from .scene import load_scene
 
+    out = check_output_path(args.output, "-o", inputs=[args.scene])
+    limit = parse_size(args.max_output) if args.max_output else default_max_output()
     scene = load_scene(args.scene, args.set or [])
-    out = Path(args.output)
-    if out.exists() and out.is_dir():
-        raise InputError(str(out), "-o", "is a directory; give a file name such as out.nc")
     command = "bouncedisk " + " ".join(shlex.quote(a) for a in sys.argv[1:])
-    summary = run_scene(scene, out, progress=not args.quiet, command=command)
+    summary = run_scene(
+        scene, out, progress=not args.quiet, command=command, max_output_bytes=limit
+    )
     if not args.quiet:
         print(
             f"{out}: {summary.n_impacts} impacts, {summary.n_chatter} chattering tails, "
@@ -97,7 +98,12 @@ def _cmd_runs(args: argparse.Namespace) -> int:
 def _cmd_check(args: argparse.Namespace) -> int:
     from . import checks
 
-    results = checks.run_checks(Path(args.results) if args.results else None)
+    if args.output:
+        from .outputs import check_output_path
+
+        check_output_path(args.output, "-o")
+    results_dir = checks.check_results_folder(args.results) if args.results is not None else None
+    results = checks.run_checks(results_dir)
     text = checks.to_markdown(results)
     if args.output:
         from .atomic import write_text_atomic
@@ -114,9 +120,23 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     return 0
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """Argument errors as one line ``bouncedisk: error: ...`` and exit status 2 (no usage block).
+
+    Subparsers inherit the class (``add_subparsers`` uses the parent's type).
+    """
+
+    def error(self, message: str):
+        """Print one line naming the command and the problem, then exit 2."""
+        message = " ".join(message.split())
+        self.exit(
+            EXIT_USER, f"bouncedisk: error: {self.prog}: {message} (see {self.prog} --help)\n"
+        )
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``bouncedisk`` command and its subcommands."""
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="bouncedisk",
         description="Exact event-driven simulation of a rotor bouncing on a vibrating, "
         "twisting stator.",
@@ -134,6 +154,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="override a scene field, e.g. --set parameters.e=0.6 (repeatable)",
     )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress or summary")
+    p.add_argument(
+        "--max-output",
+        metavar="SIZE",
+        help="refuse a run whose file would exceed SIZE (e.g. 500M, 4G; default: "
+        "$BOUNCEDISK_MAX_OUTPUT or 4G)",
+    )
     p.set_defaults(func=_cmd_simulate)
 
     p = sub.add_parser(
@@ -224,6 +250,18 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_INTERRUPT
     except BrokenPipeError:
         return 0
+    except MemoryError:
+        print(
+            "bouncedisk: error: out of memory: the request needs more memory than this machine "
+            "has; ask for less (fewer impacts, a larger outputs.trajectory.dt)",
+            file=sys.stderr,
+        )
+        return EXIT_USER
+    except OSError as ex:  # a file the user named cannot be read or written
+        where = f"{ex.filename}: " if ex.filename else ""
+        reason = ex.strerror or " ".join(str(ex).split()) or type(ex).__name__
+        print(f"bouncedisk: error: {where}{reason}", file=sys.stderr)
+        return EXIT_USER
     except Exception as ex:  # engine failures: one line, no traceback
         from .engine import EngineError
 

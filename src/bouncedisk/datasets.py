@@ -25,14 +25,21 @@ KIND_MEANINGS = "impact chatter"
 
 #: (long_name, units) of every variable a simulation file may hold.
 VARIABLES: dict[str, tuple[str, str]] = {
-    "t_impact": ("time of the event (impact, or accumulation point of a chattering tail)", "1"),
+    "t_impact": (
+        "nondimensional time t/t_c of the event (impact, or accumulation point of a chattering "
+        "tail)",
+        "1",
+    ),
+    "period_index": ("whole stator periods elapsed before the event (t = 0 starts period 0)", "1"),
+    "t_impact_s": ("time of the event since t = 0", "s"),
     "phase": ("stator phase at the event, omega_s * t mod 2 pi", "rad"),
     "v_rel": ("relative normal velocity just before impact, v_s - v_rotor", "1"),
     "u_impact": ("axial position of the contact point at the event", "1"),
     "kind": ("kind of event", "1"),
     "omega_before": ("rotor angular velocity just before the event", "1"),
     "omega_after": ("rotor angular velocity just after the event", "1"),
-    "time": ("time", "1"),
+    "time": ("nondimensional time t/t_c of the sample", "1"),
+    "time_s": ("time of the sample since t = 0", "s"),
     "u_rotor": ("rotor axial position", "1"),
     "v_rotor": ("rotor axial velocity", "1"),
     "u_stator": ("stator axial position", "1"),
@@ -61,6 +68,16 @@ def _attr_value(v: Any) -> Any:
     return str(v)
 
 
+def period_index(t: np.ndarray, phase: np.ndarray, omega_s: float) -> np.ndarray:
+    """Whole stator periods before each event, recovered exactly from ``t`` and ``phase``.
+
+    The engine carries time as ``(n, θ)`` with ``t = (2πn + θ)/ω_s`` (kernel docstring); the
+    rounding of ``t`` is far below half a period while ``ω_s t < 1e15``, so ``n`` is exact.
+    """
+    x = (np.asarray(t, dtype=float) * omega_s - np.asarray(phase, dtype=float)) / (2.0 * math.pi)
+    return np.rint(x).astype(np.int64)
+
+
 class SimulationWriter:
     """Stream a run into a netCDF file, atomically.
 
@@ -76,8 +93,14 @@ class SimulationWriter:
         trajectory: bool,
         strobe: bool,
         chunk: int = 1 << 16,
+        omega_s: float = 1.0,
+        t_c: float | None = None,
+        max_bytes: float = math.inf,
     ):
         self.path = Path(path)
+        self.omega_s = omega_s
+        self.t_c = t_c
+        self.max_bytes = max_bytes
         self.torsion = torsion
         self.events = events
         self.trajectory = trajectory
@@ -111,6 +134,15 @@ class SimulationWriter:
         nc.createDimension("impact", None)
         for name in ("t_impact", "phase", "v_rel", "u_impact"):
             self._var(name, "f8", "impact")
+        # the exact time of an event is (period_index, phase): t_impact is derived from them and
+        # loses resolution on long runs (t ~ 5e8 at omega_s = 1000 ties neighbouring impacts)
+        self._var("period_index", "i8", "impact")
+        nc["t_impact"].comment = (
+            "derived: t_impact = (2 pi period_index + phase) / omega_s; the pair (period_index, "
+            "phase) is exact, t_impact is rounded to double precision"
+        )
+        if self.t_c is not None:
+            self._var("t_impact_s", "f8", "impact")
         self._var("kind", "i1", "impact")
         nc["kind"].flag_values = np.array([0, 1], dtype="i1")
         nc["kind"].flag_meanings = KIND_MEANINGS
@@ -121,8 +153,14 @@ class SimulationWriter:
         if self.trajectory:
             nc.createDimension("time", None)
             self._var("time", "f8", "time")
-            nc["time"].standard_name = "time"
-            nc["time"].axis = "T"
+            # nondimensional: no CF standard_name/axis "T", which need units of time
+            nc["time"].comment = "nondimensional time t/t_c (t_c = sqrt(U0/g_eff), MODEL.md)"
+            if self.t_c is not None:
+                self._var("time_s", "f8", "time")
+                nc["time_s"].standard_name = "time"
+                nc["time_s"].axis = "T"
+                nc["time_s"].units = "s"
+                nc["time"].coordinates = "time_s"
             for name in ("u_rotor", "v_rotor", "u_stator"):
                 self._var(name, "f8", "time")
             if self.torsion:
@@ -136,11 +174,34 @@ class SimulationWriter:
                 self._var("strobe_omega", "f8", "period")
         return self
 
+    def _bytes(self, n_events: int, n_traj: int, n_strobe: int) -> float:
+        ev = 41 + (16 if self.torsion else 0) + (8 if self.t_c is not None else 0)
+        tr = 32 + (8 if self.torsion else 0) + (8 if self.t_c is not None else 0)
+        sb = 32 + (8 if self.torsion else 0)
+        return (
+            (n_events * ev if self.events else 0)
+            + (n_traj * tr if self.trajectory else 0)
+            + (n_strobe * sb if self.strobe else 0)
+        )
+
     def append(self, c: Chunk) -> None:
-        """Append one engine chunk."""
+        """Append one engine chunk.
+
+        Raises
+        ------
+        InputError
+            When the file would grow past ``max_bytes`` (the temporary file is then removed).
+        """
         nc = self._nc
         assert nc is not None
         n = len(c.t)
+        size = self._bytes(
+            self.n_events + n, self.n_traj + len(c.traj), self.n_strobe + len(c.strobe)
+        )
+        if size > self.max_bytes:
+            from .outputs import too_large
+
+            raise too_large(self.path, size, int(self.max_bytes), "this run")
         self.n_impacts += int(np.count_nonzero(c.kind == 0))
         self.n_chatter += int(np.count_nonzero(c.kind == 1))
         if n and self.events:
@@ -150,6 +211,9 @@ class SimulationWriter:
             nc["v_rel"][a:b] = c.v_rel
             nc["u_impact"][a:b] = c.u
             nc["kind"][a:b] = c.kind
+            nc["period_index"][a:b] = period_index(c.t, c.phase, self.omega_s)
+            if self.t_c is not None:
+                nc["t_impact_s"][a:b] = c.t * self.t_c
             if self.torsion:
                 nc["omega_before"][a:b] = c.omega_before
                 nc["omega_after"][a:b] = c.omega_after
@@ -158,6 +222,8 @@ class SimulationWriter:
         if m and self.trajectory:
             a, b = self.n_traj, self.n_traj + m
             nc["time"][a:b] = c.traj[:, 0]
+            if self.t_c is not None:
+                nc["time_s"][a:b] = c.traj[:, 0] * self.t_c
             nc["u_rotor"][a:b] = c.traj[:, 1]
             nc["v_rotor"][a:b] = c.traj[:, 2]
             nc["u_stator"][a:b] = c.traj[:, 3]

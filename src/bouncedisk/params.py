@@ -15,13 +15,30 @@ from dataclasses import asdict, dataclass
 from .errors import InputError
 
 
-def _finite(source: str, name: str, value: object) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
+def number(source: str, name: str, value: object) -> float:
+    """The one number validator: a finite float from a YAML number or any text ``float()`` reads.
+
+    Accepts ``1e-6``, ``1E300``, ``-2.5e+3`` and ``1_000.5`` whether YAML gave a number or a
+    string; refuses booleans, other text, NaN and infinities.
+    """
+    if isinstance(value, str):
+        try:
+            x = float(value.strip())
+        except ValueError:
+            raise InputError(source, name, f"must be a number, got {value!r}") from None
+    elif isinstance(value, bool) or not isinstance(value, int | float):
         raise InputError(source, name, f"must be a number, got {value!r}")
-    x = float(value)
+    else:
+        try:
+            x = float(value)
+        except OverflowError:
+            raise InputError(source, name, f"must be finite, got {value!r}") from None
     if not math.isfinite(x):
         raise InputError(source, name, f"must be finite, got {value!r}")
     return x
+
+
+_finite = number
 
 
 @dataclass(frozen=True)

@@ -61,11 +61,25 @@ def sha256_file(path: str | Path, block: int = 1 << 20) -> str:
     return h.hexdigest()
 
 
-def base_attrs(title: str) -> dict[str, str]:
+KEYWORDS = (
+    "bouncing disk, ultrasonic motor, piezoelectric motor, impact oscillator, bouncing ball, "
+    "restitution, friction, stick-slip, chattering, Zeno, nonsmooth dynamics, event-driven "
+    "simulation"
+)
+
+
+def base_attrs(title: str, summary: str | None = None) -> dict[str, str]:
     """CF/ACDD global attributes shared by every file the package writes."""
     return {
         "Conventions": "CF-1.10, ACDD-1.3",
         "title": title,
+        "summary": summary
+        or (
+            f"{title}: output of bouncedisk, an exact event-driven simulator of a rotor bouncing "
+            "on an ultrasonically vibrating, twisting stator (the bouncing-disk model of a "
+            "piezoelectric ultrasonic motor)."
+        ),
+        "keywords": KEYWORDS,
         "source": f"bouncedisk {__version__} (python {platform.python_version()})",
         "references": REFERENCES,
         "bouncedisk_version": __version__,

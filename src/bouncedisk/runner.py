@@ -237,17 +237,27 @@ def run_scene(
     progress: bool = True,
     on_chunk: Callable[[Chunk], None] | None = None,
     command: str = "",
+    max_output_bytes: float | None = None,
 ) -> RunSummary:
     """Run ``scene`` and write its netCDF file to ``out`` (atomically).
+
+    ``max_output_bytes`` (default: :func:`bouncedisk.outputs.default_max_output`) bounds the
+    file: a scene whose output would exceed it is refused before it runs, and a run that
+    crosses it anyway (a time stop with more impacts than expected) stops with no output.
 
     Raises
     ------
     InputError
-        When the scene leaves out an effect its dynamics need (names ``effects``).
+        When the scene leaves out an effect its dynamics need (names ``effects``), or its output
+        would exceed ``max_output_bytes``.
     EngineError
         On a numerical failure of the engine.
     """
+    from .outputs import check_output_size, default_max_output
+
     out = Path(out)
+    limit = default_max_output() if max_output_bytes is None else max_output_bytes
+    check_output_size(scene, out, limit)
     torsion = scene.has("torsion")
     run_id = new_run_id(scene.name, scene.sha256)
     prog = (
@@ -266,6 +276,9 @@ def run_scene(
                 events=scene.outputs.events,
                 trajectory=scene.outputs.trajectory is not None,
                 strobe=scene.outputs.stroboscopic,
+                omega_s=scene.params.omega_s,
+                t_c=scene.scales.t_c if scene.scales else None,
+                max_bytes=limit,
             ) as writer,
         ):
             while True:
@@ -283,7 +296,18 @@ def run_scene(
                     prog.update(c.n_events_total, c.t_now)
             wall = time.perf_counter() - start
             status = _status_text(scene, code)
-            attrs = base_attrs(f"bouncedisk simulation of scene '{scene.name}'")
+            attrs = base_attrs(
+                f"bouncedisk simulation of scene '{scene.name}'",
+                summary=(
+                    "Event-driven simulation of a rotor bouncing on a vibrating, twisting stator "
+                    f"(scene '{scene.name}': e = {scene.params.e:g}, omega_s = "
+                    f"{scene.params.omega_s:g}): one row per impact or chattering tail"
+                    + (", a dense trajectory" if scene.outputs.trajectory else "")
+                    + (", a stroboscopic section" if scene.outputs.stroboscopic else "")
+                    + ". Nondimensional units (lengths by U0, time by t_c) unless a variable "
+                    "says otherwise."
+                ),
+            )
             attrs.update(scene_attrs(scene))
             attrs.update(
                 {
@@ -295,7 +319,7 @@ def run_scene(
                     "status": status,
                     "final_t": final["t"],
                     "final_omega": final["omega"],
-                    "final_in_contact": int(final["in_contact"]),
+                    "final_in_contact": int(bool(final["in_contact"]) or code == K.ST_REST),
                     "history": f"{attrs['created']}: {command or 'bouncedisk.runner.run_scene'}",
                 }
             )

@@ -17,8 +17,9 @@ from typing import Any
 
 import yaml
 
+from . import yamlio
 from .errors import InputError
-from .params import Parameters, PhysicalParameters, Scales
+from .params import Parameters, PhysicalParameters, Scales, number
 
 #: Effects a scene may name (MODEL.md "Optional effects").
 EFFECTS = (
@@ -160,11 +161,7 @@ class Scene:
 
 # ------------------------------------------------------------------------------------ helpers
 def _num(src: str, name: str, v: Any, *, positive: bool = False, nonneg: bool = False) -> float:
-    if isinstance(v, bool) or not isinstance(v, int | float):
-        raise InputError(src, name, f"must be a number, got {v!r}")
-    x = float(v)
-    if not math.isfinite(x):
-        raise InputError(src, name, f"must be finite, got {v!r}")
+    x = number(src, name, v)
     if positive and not x > 0:
         raise InputError(src, name, f"must be > 0, got {v!r}")
     if nonneg and x < 0:
@@ -173,6 +170,8 @@ def _num(src: str, name: str, v: Any, *, positive: bool = False, nonneg: bool = 
 
 
 def _int(src: str, name: str, v: Any, *, minimum: int = 1) -> int:
+    if isinstance(v, str):
+        v = number(src, name, v)
     if isinstance(v, float) and v.is_integer():
         v = int(v)
     if isinstance(v, bool) or not isinstance(v, int):
@@ -210,7 +209,7 @@ def apply_overrides(raw: dict, overrides: list[str], source: str = "--set") -> d
         if not key or any(not part for part in key.split(".")):
             raise InputError(source, item, "expected KEY=VALUE with a dotted key")
         try:
-            value = yaml.safe_load(text) if text.strip() else None
+            value = yamlio.load(text, source, key) if text.strip() else None
         except yaml.YAMLError:
             raise InputError(source, key, f"cannot parse value {text!r}") from None
         node = out
@@ -241,7 +240,7 @@ def read_yaml(path: str | Path) -> dict:
     except OSError as ex:
         raise InputError(src, "", f"cannot read: {ex.strerror}") from None
     try:
-        data = yaml.safe_load(text)
+        data = yamlio.load(text, src)
     except yaml.YAMLError as ex:
         mark = getattr(ex, "problem_mark", None)
         where = f"line {mark.line + 1}, column {mark.column + 1}" if mark else "YAML"
@@ -361,7 +360,14 @@ def scene_from_mapping(raw: dict, source: str = "<scene>") -> Scene:
     max_ev = _int(src, "stop.max_events", sm.get("max_events", DEFAULT_MAX_EVENTS))
     if given[0] == "impacts":
         n = _int(src, "stop.impacts", sm["impacts"])
-        stop = Stop(impacts=min(n, max_ev), max_events=max_ev)
+        if n > max_ev:
+            raise InputError(
+                src,
+                "stop.impacts",
+                f"{n} is above the safety cap stop.max_events = {max_ev}; "
+                "ask for fewer impacts or raise stop.max_events",
+            )
+        stop = Stop(impacts=n, max_events=max_ev)
     elif given[0] == "time":
         t_stop = _num(src, "stop.time", sm["time"], positive=True)
         stop = Stop(time=t0 + t_stop, max_events=max_ev)

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from .engine import EngineConfig, InitialState, simulate_arrays
+from .engine import EngineConfig, InitialState, iterate, simulate_arrays
 from .engine.kernel import KIND_CHATTER, KIND_IMPACT
 from .observables import circular_distance
 from .solvers import ivp_events, moreau_events
@@ -216,14 +216,28 @@ def work_precision_summary(table: pd.DataFrame, target: float = 1e-8) -> dict[st
 
 
 # ------------------------------------------------------------------------------------ scaling
-def _rate(cfg: EngineConfig, repeat: int = 2) -> float:
-    simulate_arrays(EngineConfig(**{**cfg.__dict__, "max_events": 10, "t_end": math.inf}))
+def _stream(cfg: EngineConfig) -> int:
+    """Run ``cfg`` chunk by chunk, dropping the output; returns the number of events.
+
+    Memory stays at one chunk whatever the run's size: the "+ trajectory" case (200,000 impacts
+    at ``dt = 0.01``, about 84 million samples) held 3.4 GB of samples, and 9.7 GB at the peak
+    while they were joined, when the run was collected in memory.
+    """
+    n = 0
+    for chunk in iterate(cfg):
+        n += len(chunk.t)
+    return n
+
+
+def _rate(cfg: EngineConfig, repeat: int = 2) -> tuple[float, int]:
+    """Best wall time of ``repeat`` streamed runs of ``cfg`` (after a warm-up), and its events."""
+    _stream(EngineConfig(**{**cfg.__dict__, "max_events": 10, "t_end": math.inf}))
     best = math.inf
     for _ in range(repeat):
         t0 = time.perf_counter()
-        res = simulate_arrays(cfg)
+        n = _stream(cfg)
         best = min(best, time.perf_counter() - t0)
-    return best, len(res.events["t"])
+    return best, n
 
 
 def _vm_hwm_mb() -> str:

@@ -92,7 +92,7 @@ class _Grid:
         self.phase = np.full(shape + (tail,), np.nan)
         self.v_rel = np.full(shape + (tail,), np.nan)
         self.chatter = np.zeros(shape + (tail,), np.int8)
-        self.n_impacts = 0
+        self.n_events = np.zeros(shape, np.int64)
 
     @staticmethod
     def names() -> list[str]:
@@ -118,7 +118,7 @@ class _Grid:
             self.phase[idx][:k] = point.tail["phase"][-k:]
             self.v_rel[idx][:k] = point.tail["v_rel"][-k:]
             self.chatter[idx][:k] = point.tail["kind"][-k:] == ob.KIND_CHATTER
-        self.n_impacts += int(sum(m.n_impacts for m in st.members))
+        self.n_events[idx] = int(sum(m.n_impacts + m.n_chatter for m in st.members))
 
     def dataset(self, dims: tuple[str, ...], coords: dict) -> xr.Dataset:
         data = {}
@@ -148,6 +148,8 @@ class _Grid:
         data["phase"] = (ev_dims, self.phase, {"long_name": "stator phase at the event, member 0 tail", "units": "rad"})  # fmt: skip
         data["v_rel"] = (ev_dims, self.v_rel, {"long_name": "relative impact velocity, member 0 tail", "units": "1"})  # fmt: skip
         data["is_chatter"] = (ev_dims, self.chatter, {"long_name": "the event is a complete chatter (a reset)", "units": "1"})  # fmt: skip
+        # per point, so that any join of shards (open_mfdataset too) sums to the sweep's total
+        data["n_events"] = (dims, self.n_events, {"long_name": "events after the transient, all members", "units": "1"})  # fmt: skip
         return xr.Dataset(data, coords=coords)
 
 
@@ -225,7 +227,9 @@ def run_sweep(
             "shard": shard,
             "n_shards": n_shards,
             "tail": tail,
-            "n_impacts": grid.n_impacts,
+            # a shard's count is named as such: open_mfdataset keeps the first file's attributes,
+            # and a joined sweep's total is n_events.sum() (or n_impacts of combine_shards)
+            "shard_n_impacts": int(grid.n_events.sum()),
             "status": "completed",
             "run_id": new_run_id(f"{scene.name}-sweep{shard}", scene.sha256),
             "wall_time_s": round(time.perf_counter() - start, 6),
@@ -293,7 +297,7 @@ def run_continuation(
             "swept": name,
             "direction": direction,
             "tail": tail,
-            "n_impacts": grid.n_impacts,
+            "n_impacts": int(grid.n_events.sum()),
             "status": "completed",
             "run_id": new_run_id(f"{scene.name}-{direction}", scene.sha256),
             "wall_time_s": round(time.perf_counter() - start, 6),
@@ -306,11 +310,14 @@ def combine_shards(shards: Sequence[xr.Dataset]) -> xr.Dataset:
     """Join sweep shards along their swept dimensions; ``n_impacts`` sums the shards'."""
     ds = xr.combine_by_coords(list(shards), combine_attrs="drop_conflicts")
     ds.attrs.pop("shard", None)
+    ds.attrs.pop("shard_n_impacts", None)
     first = shards[0].attrs
     ds.attrs["run_id"] = new_run_id(
         f"{first.get('scene_name', 'sweep')}-sweep", str(first.get("scene_sha256", "0" * 8))
     )
     ds.attrs["shard_run_ids"] = ",".join(str(s.attrs.get("run_id")) for s in shards)
     ds.attrs["wall_time_s"] = float(sum(float(s.attrs.get("wall_time_s", 0.0)) for s in shards))
-    ds.attrs["n_impacts"] = int(sum(int(s.attrs.get("n_impacts", 0)) for s in shards))
+    ds.attrs["n_impacts"] = int(
+        sum(int(s.attrs.get("shard_n_impacts", s.attrs.get("n_impacts", 0))) for s in shards)
+    )
     return ds

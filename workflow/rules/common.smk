@@ -2,7 +2,8 @@
 import math
 
 RES = config["results"]
-SCENES = "workflow/config/scenes"
+# the scene files (config `scenes`, default workflow/config/scenes): one per study
+SCENES = config.get("scenes", "workflow/config/scenes")
 # every result depends on the code that made it: editing the package reruns what it affects
 CODE = sorted(str(p) for p in Path("src/bouncedisk").rglob("*.py"))
 

@@ -234,11 +234,16 @@ def iterate(
     evk = np.empty(chunk_events, dtype=np.int8)
     traj = np.empty((chunk_samples if cfg.traj_dt > 0 else 0, K.TRAJ_COLS))
     strobe = np.empty((chunk_samples if cfg.stroboscopic else 0, K.STROBE_COLS))
-    info = np.zeros(5, dtype=np.int64)
+    # status, events, trajectory rows, stroboscopic rows, rows still needed, and the row counts
+    # of a call that stopped inside a segment because a sample buffer was full
+    info = np.zeros(7, dtype=np.int64)
     w = cfg.omega_s
     while True:
         K.run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info)
-        status, n_ev, n_tr, n_sb, need = (int(x) for x in info)
+        status, n_ev, n_tr, n_sb = (int(x) for x in info[:4])
+        if status in (K.ST_NEED_TRAJ, K.ST_NEED_STROBE):
+            # the buffers are full: stream them out; the next call resumes the same segment
+            n_tr, n_sb = int(info[5]), int(info[6])
         t_now = (ist[K.I_N] * K.TWO_PI + st[K.S_TH]) / w
         if n_ev or n_tr or n_sb:
             yield Chunk(
@@ -254,13 +259,7 @@ def iterate(
                 n_events_total=int(ist[K.I_NEV]),
                 t_now=t_now,
             )
-        if status == K.ST_NEED_TRAJ:
-            traj = np.empty((max(need, chunk_samples), K.TRAJ_COLS))
-            continue
-        if status == K.ST_NEED_STROBE:
-            strobe = np.empty((max(need, chunk_samples), K.STROBE_COLS))
-            continue
-        if status == K.ST_CHUNK:
+        if status in (K.ST_CHUNK, K.ST_NEED_TRAJ, K.ST_NEED_STROBE):
             continue
         if status in (K.ST_NEED_CONTACT, K.ST_NUMERICAL):
             raise EngineError(
@@ -271,7 +270,8 @@ def iterate(
             "u": float(st[K.S_U]),
             "v": float(st[K.S_V]),
             "omega": float(st[K.S_OM]),
-            "in_contact": float(ist[K.I_MODE] == K.MODE_CONTACT),
+            # the kernel marks a finished run MODE_DONE and keeps the mode it ended in
+            "in_contact": float(ist[K.I_LASTMODE] == K.MODE_CONTACT),
             "omega_integral": float(st[K.S_IOM]),
         }
         return status, final

@@ -16,6 +16,7 @@ import numpy as np
 from numba import njit
 
 from .laws import (
+    GRAZE_GAP,
     chatter_time,
     impact_law,
     separation_phase,
@@ -44,7 +45,8 @@ N_ST = 8
 I_N, I_MODE, I_SIG, I_GUARD, I_CHAT, I_NC, I_NEV, I_JTRAJ, I_KSTROBE, I_ZERO, I_STATUS, I_FREE = (
     range(12)
 )
-N_IST = 12
+I_LASTMODE = 12  # the mode (flight or contact) the run ended in
+N_IST = 13
 # --- modes ------------------------------------------------------------------------------------
 MODE_FLIGHT, MODE_CONTACT, MODE_DONE = 0, 1, 2
 # --- statuses ---------------------------------------------------------------------------------
@@ -54,15 +56,14 @@ ST_TIME = 2  # the requested end time was reached
 ST_REST = 3  # the rotor stays in contact for ever: no further impact can occur
 ST_NEED_CONTACT = 4  # the dynamics need the `contact` effect, which the scene left out
 ST_NUMERICAL = 5  # a root search failed or made no progress
-ST_NEED_TRAJ = 6  # trajectory buffer too small for the next segment (info[4] = rows needed)
-ST_NEED_STROBE = 7  # stroboscopic buffer too small (info[4] = rows needed)
+ST_NEED_TRAJ = 6  # trajectory buffer full inside a segment; rows written: info[5], info[6]
+ST_NEED_STROBE = 7  # stroboscopic buffer full inside a segment (as ST_NEED_TRAJ)
 # --- event kinds ------------------------------------------------------------------------------
 KIND_IMPACT, KIND_CHATTER = 0, 1
 # --- segment kinds for sampling ---------------------------------------------------------------
 SEG_FLIGHT, SEG_CONTACT, SEG_SLIP, SEG_STICK = 0, 1, 2, 3
 
-# separations whose whole flight stays below this gap are grazing: the rotor stays in contact
-GRAZE_GAP = 64.0 * 2.220446049250313e-16
+# GRAZE_GAP (laws): separations whose whole flight stays below it are grazing (stay in contact)
 EV_COLS = 6  # t, phase, v_rel, omega_after, u, omega_before
 TRAJ_COLS = 5  # t, u, v, u_stator, omega
 STROBE_COLS = 5  # period, t, u, v, omega
@@ -172,8 +173,13 @@ def _sample(
 ):
     """Write the trajectory and stroboscopic samples falling in a segment.
 
-    Returns the new row counts, or ``(-1, -1)`` after setting ``info`` when a buffer is too small
-    (nothing is written then, so the caller can retry the same segment).
+    Returns the new row counts. When a buffer fills up inside the segment, the samples that fit
+    are written, the sample counters ``I_JTRAJ`` / ``I_KSTROBE`` record how far the segment got,
+    ``info`` gets the status ``ST_NEED_TRAJ`` (or ``ST_NEED_STROBE``), the rows still to write
+    (``info[4]``) and the row counts written in this call (``info[5]``, ``info[6]``), and
+    ``(-1, -1)`` is returned: the caller returns without advancing the state, the driver takes
+    the full buffers, and the next call resumes the same segment where the samples stopped. The
+    buffers are therefore bounded whatever one segment's length (a flight of 1e10 time units).
     """
     w = prm[P_W]
     r = prm[P_R]
@@ -194,10 +200,6 @@ def _sample(
             j1 = jmax + 1
         if j1 < j0:
             j1 = j0
-        if n_tr + (j1 - j0) > traj.shape[0]:
-            info[0] = ST_NEED_TRAJ
-            info[4] = j1 - j0
-            return -1, -1
     k0 = ist[I_KSTROBE]
     k1 = k0
     if flg[F_STROBE]:
@@ -208,10 +210,18 @@ def _sample(
             k1 -= 1
         if k1 < k0:
             k1 = k0
-        if n_sb + (k1 - k0) > strobe.shape[0]:
-            info[0] = ST_NEED_STROBE
-            info[4] = k1 - k0
-            return -1, -1
+    # rows that do not fit in this call are left for the next one (see the docstring)
+    full = 0
+    need = 0
+    if n_tr + (j1 - j0) > traj.shape[0]:
+        need = j1 - j0
+        j1 = j0 + (traj.shape[0] - n_tr)
+        full = ST_NEED_TRAJ
+    if n_sb + (k1 - k0) > strobe.shape[0]:
+        if full == 0:
+            need = k1 - k0
+            full = ST_NEED_STROBE
+        k1 = k0 + (strobe.shape[0] - n_sb)
     if flg[F_TRAJ]:
         dt = prm[P_DT]
         t0 = prm[P_T0]
@@ -237,6 +247,12 @@ def _sample(
             strobe[n_sb, 4] = om
             n_sb += 1
         ist[I_KSTROBE] = k1
+    if full != 0:
+        info[0] = full
+        info[4] = need
+        info[5] = n_tr
+        info[6] = n_sb
+        return -1, -1
     return n_tr, n_sb
 
 
@@ -275,6 +291,8 @@ def _report(info, n_ev, n_tr, n_sb):
 
 @njit(cache=True)
 def _finish(ist, info, status, n_ev, n_tr, n_sb):
+    if ist[I_MODE] != MODE_DONE:
+        ist[I_LASTMODE] = ist[I_MODE]
     ist[I_MODE] = MODE_DONE
     ist[I_STATUS] = status
     info[0] = status
