@@ -22,7 +22,7 @@ from .model import EnsembleSpec, member_records, param_names, physical, uniform_
 from .objective import Objective
 from .search import SearchSettings, search
 from .statistics import Layout, record_stats, stat_floor
-from .uncertainty import Profile, all_profiles, combinations
+from .uncertainty import THRESHOLD, Profile, all_profiles, birge, combinations
 
 #: At most this many samples are fitted (every k-th sample is kept beyond it).
 MAX_SAMPLES = 12_000
@@ -39,10 +39,10 @@ class FitSettings:
     members: int = 12  # members per evaluation in the local search and the profiles
     pilot_members: int = 32  # members measuring the model's covariance; also the band
     global_members: int = 1
-    scan: int = 256
+    scan: int = 96
     popsize: int = 10
     maxiter: int = 12
-    local_nfev: int = 40
+    local_nfev: int = 12
     e_sigma: float = 1e-9  # restitution noise of the members (MODEL.md)
     cores: int = 1
     profile: tuple[str, ...] | None = None  # coordinates to profile (None: all)
@@ -174,8 +174,12 @@ def fit_curve(
     obj = Objective(fitted, param_names(fitted), layout, target, spec, s.members,
                     cov=provisional_cov(target, boot))  # fmt: skip
     best = search(obj, s.search_settings(), progress)
+    thr = birge(best.chi2, len(target), len(obj.names))
+    if progress is not None and thr > THRESHOLD:
+        progress(f"chi2 {best.chi2:.4g} on {len(target)} statistics: intervals widened "
+                 f"(delta chi2 {thr:.4g} instead of {THRESHOLD:.3f})")  # fmt: skip
     profiles, jac, corr, sd = all_profiles(obj, best.x, s.members, s.profile and list(s.profile),
-                                           progress)  # fmt: skip
+                                           progress, thr)  # fmt: skip
     final = obj.best(s.members)  # a profile may have found a better point
     comb_sd, comb_vec = combinations(jac, obj.span)
     ens = obj.ensemble(final.x, s.pilot_members)

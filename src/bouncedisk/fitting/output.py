@@ -80,7 +80,12 @@ def _parameters(fit: FitResult) -> tuple[dict, list[str]]:
                          interval="not profiled: the search range")  # fmt: skip
         else:
             attrs.update(ci_low=fn(p.ci_low), ci_high=fn(p.ci_high), identified=int(p.identified),
-                         interval=f"profile likelihood, delta chi2 <= {THRESHOLD:.3f}",
+                         interval=f"profile likelihood, delta chi2 <= {p.threshold:.4g}"
+                         + (f" (scaled from {THRESHOLD:.3f} by chi2/dof)" if p.threshold > THRESHOLD
+                            else "")
+                         + ("; widened to every acceptable point found (several basins)"
+                            if p.multimodal else ""),
+                         multimodal=int(p.multimodal), delta_chi2=p.threshold,
                          open_low=int(p.open_low), open_high=int(p.open_high))  # fmt: skip
             if not p.identified:
                 not_identified.append(pub)
@@ -170,8 +175,9 @@ def _global_attrs(fit: FitResult, path: str, not_identified: list[str]) -> dict:
         "drive_frequency_hz": fit.curve.drive_frequency_hz,
         "Phi0_rad": fit.curve.phi0_rad if fit.curve.phi0_rad is not None else "unknown",
         "noise_sigma_rad_s": fit.curve.sigma, "wall_time_s": round(fit.wall_time_s, 3),
-        "method": "synthetic likelihood of ensemble statistics; trend-matched Sobol scan + "
-        "differential evolution, then least squares; profile likelihoods",
+        "method": "synthetic likelihood of ensemble statistics; Sobol scan of (e, omega_s) with "
+        "psi from a grid and r_phi matched to the trend, then multi-start least squares; profile "
+        "likelihoods widened to every acceptable point found",
     }  # fmt: skip
 
 
@@ -183,7 +189,7 @@ def summary_text(ds: xr.Dataset) -> str:
     for name in PUBLIC:
         if name in ds and "ci_low" in ds[name].attrs:
             v = ds[name].attrs
-            flag = "" if v["identified"] else "   <- not identified (flat profile)"
+            flag = "" if v["identified"] else "   <- not identified (flat or several basins)"
             lines.append(f"  {name:>12} = {float(ds[name]):.5g}   95% [{v['ci_low']:.5g}, "
                          f"{v['ci_high']:.5g}] {v['units']}{flag}")  # fmt: skip
     s_ci, t_ci = a["steady_speed_ci_rad_s"], a["time_constant_ci_s"]

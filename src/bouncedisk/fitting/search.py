@@ -1,12 +1,13 @@
 """Global-then-local search of the synthetic likelihood (:mod:`.objective`).
 
-1. A Sobol scan of the whole search box and a seeded :func:`scipy.optimize.differential_evolution`
-   seeded with the scan's best points, on cheap ensembles (``global_members``) and the robust loss
+1. A Sobol scan of the ``(e, omega_s)`` plane (the axial motion depends on nothing else, and the
+   landscape is rugged there: periodic windows); at every scan point ``ψ`` is chosen from a grid
+   and ``R_φ`` matched to the trend, on cheap ensembles (``global_members``) and the robust loss
    ``Σ log(1 + r²)`` with provisional scales (a block bootstrap of the data).
 2. A pilot ensemble (``pilot_members``) at the best point measures the model's across-member
    covariance ``C``; the objective switches to it.
 3. :func:`scipy.optimize.least_squares` on the whitened residuals, in coordinates scaled to the
-   search box, from the best few global points re-evaluated with ``members``; then ``C`` is
+   search box, from each of the best few distinct global points (multi-start) re-evaluated with ``members``; then ``C`` is
    measured again at the new best point and the search polished.
 
 Every evaluation is logged, and the result is the best logged point at the final ensemble size
@@ -19,7 +20,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import differential_evolution, least_squares
+from scipy.optimize import least_squares
 from scipy.stats import qmc
 
 from .objective import Evaluation, Objective
@@ -38,7 +39,7 @@ class SearchSettings:
     members: int = 12
     pilot_members: int = 32
     local_nfev: int = 40
-    starts: int = 3
+    starts: int = 4
 
 
 def _say(progress: Callable[[str], None] | None, msg: str) -> None:
@@ -77,58 +78,61 @@ def matched_point(obj: Objective, x: np.ndarray, members: int, steps: int = 2) -
     return best
 
 
+#: ψ values tried at every (e, omega_s) point of the scan (the trend's smooth dependence).
+PSI_GRID = 8
+
+
+def _inner(obj: Objective, x: np.ndarray, members: int) -> np.ndarray:
+    """Best ``(ψ, R_φ)`` for fixed ``(e, omega_s)``: a ψ grid, each with a trend-matched ``R_φ``.
+
+    The axial motion depends only on ``(e, omega_s)`` (torsion never feeds back), so at a fixed
+    ``(e, omega_s)`` the statistics are smooth in ``ψ`` and scale simply with ``R_φ``
+    (MODEL.md); the rugged part of the problem is the 2-D ``(e, omega_s)`` plane only.
+    """
+    names = obj.names
+    best, best_loss = None, np.inf
+    if "psi" not in names:
+        return matched_point(obj, x, members, steps=1)
+    j = names.index("psi")
+    for psi in np.linspace(-np.pi, np.pi, PSI_GRID, endpoint=False):
+        y = x.copy()
+        y[j] = psi
+        y = matched_point(obj, y, members, steps=1)
+        loss = obj.robust(y, members)
+        if loss < best_loss:
+            best, best_loss = y, loss
+    return best
+
+
 def global_stage(
     obj: Objective, s: SearchSettings, progress: Callable[[str], None] | None = None
 ) -> list[Evaluation]:
-    """Scan with matched trends, then differential evolution, on cheap ensembles.
+    """Scan the rugged ``(e, omega_s)`` plane, with ``(ψ, R_φ)`` fitted at every point.
 
-    The scan is a Sobol sample of the whole box whose points are moved by
-    :func:`matched_point`; the best matched points seed the evolution's population.
-    Returns the logged cheap evaluations, best first (by ``χ²`` under the provisional metric).
+    A Sobol sample of ``s.scan`` points of ``(e, omega_s)``; at each, :func:`_inner` chooses
+    ``ψ`` from a grid and matches ``R_φ`` (and a free speed scale) to the trend. Cheap ensembles
+    (``global_members``) under the provisional metric. Returns the logged cheap evaluations, best
+    first (by ``χ²`` under the provisional metric).
     """
-    d = len(obj.names)
-    scan = qmc.scale(qmc.Sobol(d, seed=s.seed).random(s.scan), obj.lo, obj.hi)
-    matched = []
-    for i in range(0, len(scan), 64):
-        matched += obj.map(lambda x: matched_point(obj, x, s.global_members), scan[i : i + 64])
-        _say(progress, f"scan: {len(matched)}/{s.scan} points (trend-matched R_phi)")
-    losses = np.array([obj.robust(x, s.global_members) for x in matched])
-    _say(progress, f"scan: best robust loss {losses.min():.4g}")
-    # the evolution runs over the coordinates other than those matched to the trend
-    free = [j for j, n in enumerate(obj.names) if n not in MATCHED]
-    init = np.array(matched)[np.argsort(losses)[: max(5, s.popsize * len(free))]][:, free]
-    gen = [0]
-    anchor = np.array(matched)[int(np.argmin(losses))]
-
-    def full(z):
-        x = anchor.copy()
-        x[free] = z
-        return x
-
-    def loss(z):
-        xm = matched_point(obj, full(z), s.global_members, steps=1)
-        return obj.robust(xm, s.global_members)
-
-    def callback(xk, convergence=None):
-        gen[0] += 1
+    names = obj.names
+    axial = [names.index("e"), names.index("omega_s")]
+    sob = qmc.Sobol(2, seed=s.seed).random(s.scan)
+    base = 0.5 * (obj.lo + obj.hi)
+    if "log10_r_phi" in names:
+        base[names.index("log10_r_phi")] = -2.5
+    pts = []
+    for u in sob:
+        x = base.copy()
+        x[axial] = obj.lo[axial] + u * obj.span[axial]
+        pts.append(x)
+    done = []
+    chunk = 32
+    for i in range(0, len(pts), chunk):
+        done += obj.map(lambda x: _inner(obj, x, s.global_members), pts[i : i + chunk])
         best = min(ev.chi2 for ev in obj.log if ev.members == s.global_members)
-        _say(progress, f"global search: generation {gen[0]}/{s.maxiter}, best chi2 {best:.4g}")
-
-    differential_evolution(
-        loss,
-        [(obj.lo[j], obj.hi[j]) for j in free],
-        seed=s.seed,
-        maxiter=s.maxiter,
-        tol=0.0,
-        atol=0.0,
-        polish=False,
-        init=init,
-        updating="deferred",
-        workers=obj.map,
-        callback=callback,
-    )
-    pts = [ev for ev in obj.log if ev.members == s.global_members]
-    return sorted(pts, key=lambda ev: ev.chi2)
+        _say(progress, f"scan: {len(done)}/{s.scan} (e, omega_s) points, best chi2 {best:.4g}")
+    ranked = [ev for ev in obj.log if ev.members == s.global_members]
+    return sorted(ranked, key=lambda ev: ev.chi2)
 
 
 def measure_cov(obj: Objective, x: np.ndarray, members: int) -> np.ndarray:
@@ -144,22 +148,23 @@ def local_stage(
     nfev: int,
     progress: Callable[[str], None] | None = None,
 ) -> Evaluation:
-    """Least squares on the whitened residuals from the best of ``starts`` (box-scaled)."""
-    for x in starts:
-        obj.chi2(x, s.members)
-    x0 = obj.best(s.members).x
-    span = obj.span
+    """Least squares on the whitened residuals from every one of ``starts`` (box-scaled).
 
-    def fun(u):
-        return obj.residuals(obj.lo + u * span, s.members)
+    Multi-start: the landscape in ``(e, omega_s)`` is rugged (periodic windows), so each start is
+    refined on its own and the best logged point is kept.
+    """
+    span = obj.span
 
     def logged(u):
         x = obj.lo + u * span
         obj.chi2(x, s.members)
-        return fun(u)
+        return obj.residuals(x, s.members)
 
-    u0 = np.clip((x0 - obj.lo) / span, 0.0, 1.0)
-    least_squares(logged, u0, bounds=(0.0, 1.0), diff_step=2e-3, max_nfev=nfev, x_scale=1.0)
+    for k, x0 in enumerate(starts):
+        u0 = np.clip((x0 - obj.lo) / span, 0.0, 1.0)
+        least_squares(logged, u0, bounds=(0.0, 1.0), diff_step=2e-3, max_nfev=nfev, x_scale=1.0)
+        _say(progress, f"local search: start {k + 1}/{len(starts)}, best chi2 "
+                       f"{obj.best(s.members).chi2:.4g}")  # fmt: skip
     best = obj.best(s.members)
     _say(progress, f"local search: chi2 {best.chi2:.4g} ({len(obj.cache)} ensembles evaluated)")
     return best
@@ -174,6 +179,9 @@ def search(
     _say(progress, f"pilot: model covariance from {s.pilot_members} members")
     # the pilot ensemble's first `members` members are the local stage's ensemble too
     starts = [ev.x for ev in _distinct(ranked, obj.span, s.starts)]
+    for x in starts:
+        obj.chi2(x, s.members)
+    # the starts themselves, then each refined (never worse than the best start)
     best = local_stage(obj, starts, s, s.local_nfev, progress)
     obj.set_cov(measure_cov(obj, best.x, s.pilot_members))
     best = local_stage(obj, [best.x], s, max(8, s.local_nfev // 3), progress)

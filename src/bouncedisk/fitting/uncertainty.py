@@ -39,6 +39,8 @@ class Profile:
     open_low: bool
     open_high: bool
     identified: bool
+    threshold: float = THRESHOLD  # Δχ² used (scaled when the fit is poor, :func:`birge`)
+    multimodal: bool = False  # acceptable points outside the profile's interval widened it
 
 
 def jacobian(obj: Objective, x: np.ndarray, members: int, rel_step: float = 0.01) -> np.ndarray:
@@ -80,7 +82,7 @@ def combinations(jac: np.ndarray, span: np.ndarray) -> tuple[np.ndarray, np.ndar
     return sd, v[:, order].T
 
 
-def _side(obj, x0, j, sign, step, chi0, members, jac, max_steps):
+def _side(obj, x0, j, sign, step, chi0, members, jac, max_steps, thr=THRESHOLD):
     """Points of one side of the profile of coordinate ``j``: (values, χ², points)."""
     others = [k for k in range(len(x0)) if k != j]
     jo = jac[:, others]
@@ -107,38 +109,38 @@ def _side(obj, x0, j, sign, step, chi0, members, jac, max_steps):
                 best_x, best_c = y, c
         x = best_x
         out.append((v, best_c, x.copy()))
-        if best_c - chi0 > 2.0 * THRESHOLD:
+        if best_c - chi0 > 2.0 * thr:
             break
-        if best_c - chi0 < 0.25 * THRESHOLD:
+        if best_c - chi0 < 0.25 * thr:
             step *= 2.0
     return out
 
 
 def profile(
     obj: Objective, x0: np.ndarray, j: int, members: int, jac: np.ndarray, sd: float,
-    max_steps: int = 6,
+    max_steps: int = 6, thr: float = THRESHOLD,
 ) -> Profile:  # fmt: skip
     """Profile likelihood of coordinate ``j`` about the estimate ``x0`` (module docstring)."""
     chi0 = obj.chi2(x0, members)
     step = float(np.clip(sd if np.isfinite(sd) else np.inf, 0.01 * obj.span[j], 0.2 * obj.span[j]))
-    lo = _side(obj, x0, j, -1.0, step, chi0, members, jac, max_steps)
-    hi = _side(obj, x0, j, +1.0, step, chi0, members, jac, max_steps)
+    lo = _side(obj, x0, j, -1.0, step, chi0, members, jac, max_steps, thr)
+    hi = _side(obj, x0, j, +1.0, step, chi0, members, jac, max_steps, thr)
     pts = lo[::-1] + [(float(x0[j]), chi0, x0.copy())] + hi
     values = np.array([p[0] for p in pts])
     chis = np.array([p[1] for p in pts])
     points = np.array([p[2] for p in pts])
-    return Profile(obj.names[j], values, chis, points, *_interval(values, chis, obj, j))
+    return Profile(obj.names[j], values, chis, points, *_interval(values, chis, obj, j, thr), thr)
 
 
-def _interval(values, chis, obj, j):
+def _interval(values, chis, obj, j, thr=THRESHOLD):
     """95 % interval from a profile: crossings of the threshold, or the bounds if open."""
     base = chis.min()
     k0 = int(np.argmin(chis))
-    below = chis - base <= THRESHOLD
+    below = chis - base <= thr
 
     def crossing(k_in, k_out):
         a, b = chis[k_in] - base, chis[k_out] - base
-        f = (THRESHOLD - a) / (b - a) if b != a else 0.0
+        f = (thr - a) / (b - a) if b != a else 0.0
         return float(values[k_in] + f * (values[k_out] - values[k_in]))
 
     k = k0
@@ -162,10 +164,16 @@ def all_profiles(
     members: int,
     which: list[str] | None = None,
     progress: Callable[[str], None] | None = None,
+    thr: float = THRESHOLD,
 ) -> tuple[list[Profile], np.ndarray, np.ndarray, np.ndarray]:
     """Profiles of the coordinates ``which`` (default all), with the curvature at ``x0``.
 
-    Returns the profiles, the Jacobian, the correlation matrix and the local standard deviations.
+    Each interval is then widened to hold every point the search evaluated (with ``members``
+    members, under the current metric) whose ``χ²`` is within ``thr`` of the best: the
+    landscape in ``(e, omega_s)`` is rugged, a profile that walks from the estimate sees one
+    basin only, and an acceptable point in another basin means the interval is (at least) the
+    hull of both (:func:`widen`). Returns the profiles, the Jacobian, the correlation matrix and
+    the local standard deviations.
     """
     jac = jacobian(obj, x0, members)
     _cov, corr, sd = curvature(jac)
@@ -173,9 +181,56 @@ def all_profiles(
     for j, name in enumerate(obj.names):
         if which is not None and name not in which:
             continue
-        out.append(profile(obj, x0, j, members, jac, sd[j]))
+        out.append(profile(obj, x0, j, members, jac, sd[j], thr=thr))
         if progress is not None:
             p = out[-1]
-            progress(f"profile {name}: {len(p.values)} points, 95% [{p.ci_low:.4g}, "
-                     f"{p.ci_high:.4g}]{'' if p.identified else ' (not identified)'}")  # fmt: skip
+            progress(f"profile {name}: {len(p.values)} points")
+    # after every profile: a profile may have found a better point than the estimate
+    out = [widen(obj, p, members) for p in out]
+    if progress is not None:
+        for p in out:
+            progress(f"interval {p.name}: 95% [{p.ci_low:.4g}, {p.ci_high:.4g}]"
+                     f"{'' if p.identified else ' (not identified)'}"
+                     f"{' (several basins)' if p.multimodal else ''}")  # fmt: skip
     return out, jac, corr, sd
+
+
+#: A parameter whose acceptable points span at least this fraction of its range is not identified.
+SPREAD_NOT_IDENTIFIED = 0.5
+
+
+def acceptable_points(obj: Objective, members: int, thr: float) -> np.ndarray:
+    """Every evaluated point (``members`` members) within ``thr`` of the best ``χ²`` now."""
+    pts = {tuple(ev.x): ev.x for ev in obj.log if ev.members == members}
+    xs = np.array(list(pts.values()))
+    chis = np.array([float(np.sum(obj.residuals(x, members) ** 2)) for x in xs])
+    return xs[chis <= chis.min() + thr]
+
+
+def widen(obj: Objective, p: Profile, members: int) -> Profile:
+    """The interval of ``p`` widened to every acceptable evaluated point (union of basins).
+
+    A parameter is not identified when its profile is open on both sides or its acceptable
+    points span at least :data:`SPREAD_NOT_IDENTIFIED` of its search range.
+    """
+    j = obj.names.index(p.name)
+    xs = acceptable_points(obj, members, p.threshold)
+    v = xs[:, j]
+    lo, hi = min(p.ci_low, float(v.min())), max(p.ci_high, float(v.max()))
+    multimodal = lo < p.ci_low or hi > p.ci_high
+    wide = (hi - lo) >= SPREAD_NOT_IDENTIFIED * obj.span[j]
+    identified = p.identified and not wide
+    return Profile(p.name, p.values, p.chi2, p.points, lo, hi, p.open_low, p.open_high,
+                   identified, p.threshold, multimodal)  # fmt: skip
+
+
+def birge(chi2_min: float, n_stats: int, n_params: int) -> float:
+    """Δχ² threshold of a 95 % interval, scaled by ``χ²/dof`` when that exceeds 1.
+
+    A best ``χ²`` far above its degrees of freedom means the model's point does not reproduce
+    the data within the stated variances; the usual remedy (the Particle Data Group's scale
+    factor) is to scale the variances by ``χ²/dof``, i.e. the threshold by the same factor.
+    The fit file says so (``fit_adequate = 0``, ``interval_scale``).
+    """
+    dof = max(1, n_stats - n_params)
+    return THRESHOLD * max(1.0, chi2_min / dof)
