@@ -259,6 +259,14 @@ def test_recovery(tmp_path, case):
     fit = fit_curve(curve, FitSettings(seed=1, cores=2))
     ds = fit_dataset(fit)
     truth = model_trend(curve, true)
+    print(f"\nRECOVERY {case}: chi2 {ds.attrs['chi2']:.4g} adequate {ds.attrs['fit_adequate']} "
+          f"wall {ds.attrs['wall_time_s']:.1f} s; trend fitted {ds.attrs['model_steady_speed_rad_s']:.4g}"
+          f" rad/s {ds.attrs['model_time_constant_s']:.4g} s, generating {truth.steady:.4g} rad/s "
+          f"{truth.tau:.4g} s")  # fmt: skip
+    for name in ("e", "r_phi", "psi", "omega_s"):
+        a = ds[name].attrs
+        print(f"  {name}: true {true[name]:.4g} fitted {float(ds[name]):.4g} "
+              f"[{a['ci_low']:.4g}, {a['ci_high']:.4g}] identified {a['identified']}")  # fmt: skip
     assert ds.attrs["model_steady_speed_rad_s"] == pytest.approx(truth.steady, rel=0.03)
     assert ds.attrs["model_time_constant_s"] == pytest.approx(truth.tau, rel=0.10)
     for name in ("e", "r_phi", "psi", "omega_s"):
@@ -285,5 +293,10 @@ def test_coverage_of_r_phi(tmp_path):
         curve = read_curve(make_curve(tmp_path / f"c{seed}.csv", true, 100 + seed, member=seed))
         fit = fit_dataset(fit_curve(curve, FitSettings(seed=1, cores=2, profile=("log10_r_phi",))))
         a = fit["r_phi"].attrs
-        hits += a["ci_low"] <= true["r_phi"] <= a["ci_high"]
+        hit = a["ci_low"] <= true["r_phi"] <= a["ci_high"]
+        hits += hit
+        print(f"\nCOVERAGE seed {seed}: r_phi {float(fit['r_phi']):.4g} [{a['ci_low']:.4g}, "
+              f"{a['ci_high']:.4g}] covers {bool(hit)}; chi2 {fit.attrs['chi2']:.4g}, "
+              f"{fit.attrs['wall_time_s']:.1f} s")  # fmt: skip
+    print(f"COVERAGE: {hits}/10")
     assert hits >= 8

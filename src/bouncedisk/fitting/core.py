@@ -22,7 +22,16 @@ from .model import EnsembleSpec, member_records, param_names, physical, uniform_
 from .objective import Objective
 from .search import SearchSettings, search
 from .statistics import Layout, record_stats, stat_floor
-from .uncertainty import THRESHOLD, Profile, all_profiles, birge, combinations
+from .uncertainty import (
+    ADEQUATE_P,
+    THRESHOLD,
+    Profile,
+    adequate,
+    all_profiles,
+    birge,
+    combinations,
+    scan_acceptable,
+)
 
 #: At most this many samples are fitted (every k-th sample is kept beyond it).
 MAX_SAMPLES = 12_000
@@ -178,9 +187,19 @@ def fit_curve(
     if progress is not None and thr > THRESHOLD:
         progress(f"chi2 {best.chi2:.4g} on {len(target)} statistics: intervals widened "
                  f"(delta chi2 {thr:.4g} instead of {THRESHOLD:.3f})")  # fmt: skip
+    extra = scan_acceptable(obj, s.global_members)
+    if progress is not None:
+        progress(f"scan: {len(extra)} points reproduce the data's statistics within its "
+                 "bootstrap scales")  # fmt: skip
     profiles, jac, corr, sd = all_profiles(obj, best.x, s.members, s.profile and list(s.profile),
-                                           progress, thr)  # fmt: skip
+                                           progress, thr, extra)  # fmt: skip
     final = obj.best(s.members)  # a profile may have found a better point
+    if not adequate(final.chi2, len(target)):
+        # the best point found does not reproduce the data: nothing is identified by it
+        profiles = [dataclasses.replace(p, identified=False) for p in profiles]
+        if progress is not None:
+            progress(f"chi2 {final.chi2:.4g} on {len(target)} statistics (p < {ADEQUATE_P:g}): "
+                     "the fit does not reproduce the data; no parameter reported identified")  # fmt: skip
     comb_sd, comb_vec = combinations(jac, obj.span)
     ens = obj.ensemble(final.x, s.pilot_members)
     theta = obj.theta(final.x)

@@ -20,7 +20,7 @@ from ..provenance import base_attrs, new_run_id, sha256_file
 from .core import FitResult
 from .model import BOUNDS
 from .statistics import STAT_LONG_NAMES, STAT_UNITS, STATS
-from .uncertainty import THRESHOLD
+from .uncertainty import THRESHOLD, adequate
 
 #: Public name: (search coordinate, transform, units, long name).
 PUBLIC = {
@@ -166,7 +166,7 @@ def _global_attrs(fit: FitResult, path: str, not_identified: list[str]) -> dict:
         "not_identified": ",".join(not_identified) or "none",
         "chi2": fit.chi2, "n_statistics": len(STATS),
         "chi2_p_value": float(chi2_dist.sf(fit.chi2, len(STATS))),
-        "fit_adequate": int(chi2_dist.sf(fit.chi2, len(STATS)) > 1e-3), "evaluations": fit.evaluations,
+        "fit_adequate": int(adequate(fit.chi2, len(STATS))), "evaluations": fit.evaluations,
         "ensemble_members": fit.settings.members, "band_members": fit.settings.pilot_members,
         "e_sigma": fit.settings.e_sigma, "seed": fit.settings.seed,
         "n_bootstrap": fit.settings.bootstrap, "work_note": fit.note or "none",
@@ -189,7 +189,7 @@ def summary_text(ds: xr.Dataset) -> str:
     for name in PUBLIC:
         if name in ds and "ci_low" in ds[name].attrs:
             v = ds[name].attrs
-            flag = "" if v["identified"] else "   <- not identified (flat or several basins)"
+            flag = "" if v["identified"] else "   <- not identified"
             lines.append(f"  {name:>12} = {float(ds[name]):.5g}   95% [{v['ci_low']:.5g}, "
                          f"{v['ci_high']:.5g}] {v['units']}{flag}")  # fmt: skip
     s_ci, t_ci = a["steady_speed_ci_rad_s"], a["time_constant_ci_s"]

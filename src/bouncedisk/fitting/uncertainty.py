@@ -165,6 +165,7 @@ def all_profiles(
     which: list[str] | None = None,
     progress: Callable[[str], None] | None = None,
     thr: float = THRESHOLD,
+    extra: np.ndarray | None = None,
 ) -> tuple[list[Profile], np.ndarray, np.ndarray, np.ndarray]:
     """Profiles of the coordinates ``which`` (default all), with the curvature at ``x0``.
 
@@ -172,7 +173,8 @@ def all_profiles(
     members, under the current metric) whose ``χ²`` is within ``thr`` of the best: the
     landscape in ``(e, omega_s)`` is rugged, a profile that walks from the estimate sees one
     basin only, and an acceptable point in another basin means the interval is (at least) the
-    hull of both (:func:`widen`). Returns the profiles, the Jacobian, the correlation matrix and
+    hull of both (:func:`widen`); ``extra`` are further acceptable points (the scan's, judged
+    by the data's own resampling scales, :func:`scan_acceptable`). Returns the profiles, the Jacobian, the correlation matrix and
     the local standard deviations.
     """
     jac = jacobian(obj, x0, members)
@@ -186,7 +188,7 @@ def all_profiles(
             p = out[-1]
             progress(f"profile {name}: {len(p.values)} points")
     # after every profile: a profile may have found a better point than the estimate
-    out = [widen(obj, p, members) for p in out]
+    out = [widen(obj, p, members, extra) for p in out]
     if progress is not None:
         for p in out:
             progress(f"interval {p.name}: 95% [{p.ci_low:.4g}, {p.ci_high:.4g}]"
@@ -207,7 +209,7 @@ def acceptable_points(obj: Objective, members: int, thr: float) -> np.ndarray:
     return xs[chis <= chis.min() + thr]
 
 
-def widen(obj: Objective, p: Profile, members: int) -> Profile:
+def widen(obj: Objective, p: Profile, members: int, extra: np.ndarray | None = None) -> Profile:
     """The interval of ``p`` widened to every acceptable evaluated point (union of basins).
 
     A parameter is not identified when its profile is open on both sides or its acceptable
@@ -215,6 +217,8 @@ def widen(obj: Objective, p: Profile, members: int) -> Profile:
     """
     j = obj.names.index(p.name)
     xs = acceptable_points(obj, members, p.threshold)
+    if extra is not None and len(extra):
+        xs = np.vstack([xs, extra])
     v = xs[:, j]
     lo, hi = min(p.ci_low, float(v.min())), max(p.ci_high, float(v.max()))
     multimodal = lo < p.ci_low or hi > p.ci_high
@@ -234,3 +238,29 @@ def birge(chi2_min: float, n_stats: int, n_params: int) -> float:
     """
     dof = max(1, n_stats - n_params)
     return THRESHOLD * max(1.0, chi2_min / dof)
+
+
+def scan_acceptable(obj: Objective, members: int) -> np.ndarray:
+    """Scan points that reproduce the data's statistics within the data's own scales.
+
+    The scan's cheap evaluations (``members`` members, ``χ²`` under the provisional metric: the
+    data's block-bootstrap spread, at least a few % of each statistic) whose ``χ²`` is within the
+    (``χ²/dof``-scaled) 95 % threshold of the scan's best. Distinct basins in this set mean the
+    curve does not single out one of them.
+    """
+    evs = [ev for ev in obj.log if ev.members == members]
+    if not evs:
+        return np.empty((0, len(obj.names)))
+    chis = np.array([ev.chi2 for ev in evs])
+    thr = birge(float(chis.min()), len(obj.target), len(obj.names))
+    return np.array([ev.x for ev, c in zip(evs, chis, strict=True) if c <= chis.min() + thr])
+
+
+#: A fit whose best ``χ²`` has a p-value below this (``χ²`` with one degree per statistic) is
+#: inadequate: it does not reproduce the data, and no parameter is reported identified by it.
+ADEQUATE_P = 1e-3
+
+
+def adequate(chi2_min: float, n_stats: int) -> bool:
+    """Whether the best point reproduces the data's statistics (p-value above :data:`ADEQUATE_P`)."""
+    return bool(chi2_dist.sf(chi2_min, n_stats) > ADEQUATE_P)
