@@ -210,8 +210,15 @@ def _fig5_fitted(ax, axr, fitted: xr.Dataset) -> None:
         f"τ = {a.get('time_constant_s', float('nan')):.3g} s; fitted model: "
         f"S = {a.get('model_steady_speed_rad_s', float('nan')):.4g} rad/s, "
         f"τ = {a.get('model_time_constant_s', float('nan')):.3g} s; "
-        f"not identified: {a.get('not_identified', '?')}",
+        f"not identified: {a.get('not_identified', '?')}"
+        + (
+            f"\nFIT INADEQUATE: chi2 {a.get('chi2', float('nan')):.4g} on "
+            f"{a.get('n_statistics', '?')} statistics (p = {a.get('chi2_p_value', float('nan')):.2g})"
+            if not a.get("fit_adequate", 1)
+            else ""
+        ),
         fontsize=8,
+        color="black" if a.get("fit_adequate", 1) else "darkred",
     )
 
 

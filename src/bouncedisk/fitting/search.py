@@ -80,6 +80,10 @@ def matched_point(obj: Objective, x: np.ndarray, members: int, steps: int = 2) -
 
 #: ψ values tried at every (e, omega_s) point of the scan (the trend's smooth dependence).
 PSI_GRID = 8
+#: Least-squares evaluations refining (ψ, R_φ) at every scan point.
+INNER_NFEV = 6
+#: Grid points of ψ refined at every scan point.
+INNER_STARTS = 2
 
 
 def _inner(obj: Objective, x: np.ndarray, members: int) -> np.ndarray:
@@ -90,17 +94,35 @@ def _inner(obj: Objective, x: np.ndarray, members: int) -> np.ndarray:
     (MODEL.md); the rugged part of the problem is the 2-D ``(e, omega_s)`` plane only.
     """
     names = obj.names
-    best, best_loss = None, np.inf
     if "psi" not in names:
         return matched_point(obj, x, members, steps=1)
     j = names.index("psi")
+    grid = []
     for psi in np.linspace(-np.pi, np.pi, PSI_GRID, endpoint=False):
         y = x.copy()
         y[j] = psi
         y = matched_point(obj, y, members, steps=1)
-        loss = obj.robust(y, members)
-        if loss < best_loss:
-            best, best_loss = y, loss
+        grid.append((obj.robust(y, members), y))
+    grid.sort(key=lambda g: g[0])
+    # refine (ψ, R_φ [, speed scale]) by least squares from the best INNER_STARTS grid points:
+    # the grid step is far coarser than the steady speed's sensitivity to ψ
+    free = [k for k, n in enumerate(names) if n in ("psi", *MATCHED)]
+    span = obj.span[free]
+    best, best_chi2 = grid[0][1], obj.chi2(grid[0][1], members)
+    for _, start in grid[:INNER_STARTS]:
+
+        def fun(u, start=start):
+            y = start.copy()
+            y[free] = obj.lo[free] + u * span
+            return obj.residuals(y, members)
+
+        u0 = np.clip((start[free] - obj.lo[free]) / span, 0.0, 1.0)
+        res = least_squares(fun, u0, bounds=(0.0, 1.0), diff_step=1e-3, max_nfev=INNER_NFEV)
+        y = start.copy()
+        y[free] = obj.lo[free] + res.x * span
+        c = obj.chi2(y, members)
+        if c < best_chi2:
+            best, best_chi2 = y, c
     return best
 
 
