@@ -245,7 +245,8 @@ def scan_acceptable(obj: Objective, members: int) -> np.ndarray:
 
     The scan's cheap evaluations (``members`` members, ``χ²`` under the provisional metric: the
     data's block-bootstrap spread, at least a few % of each statistic) whose ``χ²`` is within the
-    (``χ²/dof``-scaled) 95 % threshold of the scan's best. Distinct basins in this set mean the
+    (``χ²/dof``-scaled) 95 % threshold of the scan's best, or below twice the 95 % point of
+    ``χ²(n_stats)`` (one model realization against the data's: twice the variance). Distinct basins in this set mean the
     curve does not single out one of them.
     """
     evs = [ev for ev in obj.log if ev.members == members]
@@ -253,7 +254,11 @@ def scan_acceptable(obj: Objective, members: int) -> np.ndarray:
         return np.empty((0, len(obj.names)))
     chis = np.array([ev.chi2 for ev in evs])
     thr = birge(float(chis.min()), len(obj.target), len(obj.names))
-    return np.array([ev.x for ev, c in zip(evs, chis, strict=True) if c <= chis.min() + thr])
+    # a cheap point is one realization compared with another: twice the variance, so it is
+    # consistent with the data when its chi2 is below twice the 95 % point of chi2(n_stats)
+    consistent = 2.0 * float(chi2_dist.ppf(0.95, len(obj.target)))
+    limit = max(chis.min() + thr, consistent)
+    return np.array([ev.x for ev, c in zip(evs, chis, strict=True) if c <= limit])
 
 
 #: A fit whose best ``χ²`` has a p-value below this (``χ²`` with one degree per statistic) is
