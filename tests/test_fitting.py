@@ -1,6 +1,8 @@
-"""Fitting the model to a velocity–time curve: recovery, determinism, bad input."""
+"""Fitting the model to a velocity–time curve: options, bounded work, the file, recovery."""
 
 import math
+import os
+import time
 
 import numpy as np
 import pytest
@@ -12,96 +14,177 @@ from bouncedisk.fitting import (
     FitSettings,
     fit_curve,
     fit_dataset,
+    prepare_curve,
     simulate_curve,
     synthesize_curve,
-    uniform_grid,
 )
+from bouncedisk.fitting.core import MAX_SAMPLES
+from bouncedisk.fitting.model import EnsembleSpec, member_records, uniform_grid
 from bouncedisk.observables import first_order_trend
 
+F_HZ, PHI0, SPAN, DT, SIGMA = 15000.0, 3.0e-4, 0.06, 2.5e-5, 0.05
 # generating parameters used nowhere else in the repository
-TRUE = {"e": 0.42, "r_phi": 0.0031, "psi": -0.55, "omega_s": 2.05}
-F_HZ, PHI0, SPAN, DT, SIGMA, SEED = 15000.0, 3.0e-4, 0.1, 2.5e-5, 0.05, 11
+CASES = {
+    "periodic": {"e": 0.32, "r_phi": 0.0041, "psi": 0.25, "omega_s": 1.52},
+    "chaotic_reinjection": {"e": 0.62, "r_phi": 0.0027, "psi": -0.35, "omega_s": 1.48},
+    "near_boundary": {"e": 0.28, "r_phi": 0.0052, "psi": 1.1, "omega_s": 1.51},
+}
+TINY = FitSettings(seed=5, scan=16, popsize=3, maxiter=1, members=4, pilot_members=8,
+                   local_nfev=4, bootstrap=4, cores=2)  # fmt: skip
 
 
 def sidecar(f=F_HZ, phi0=PHI0, **extra):
-    return {
-        "source": "test",
-        "synthetic": True,
-        "units": {"time": "s", "omega": "rad/s"},
-        "motor": {"drive_frequency_hz": f, "Phi0_rad": phi0},
-        **extra,
-    }
+    return {"source": "test", "synthetic": True, "units": {"time": "s", "omega": "rad/s"},
+            "motor": {"drive_frequency_hz": f, "Phi0_rad": phi0}, **extra}  # fmt: skip
 
 
-@pytest.fixture(scope="module")
-def synthetic(tmp_path_factory):
-    df = synthesize_curve(TRUE, F_HZ, PHI0, SPAN, DT, SIGMA, SEED)
-    path = tmp_path_factory.mktemp("curve") / "motor.csv"
+def make_curve(path, true, seed, member=None):
+    df = synthesize_curve(true, F_HZ, PHI0, SPAN, DT, SIGMA, seed, member=member)
     write_curve(df, path, sidecar())
     return path
 
 
-def true_trend(curve: MotorCurve):
-    """Trend of the noise-free generating model, averaged over four initial stator phases."""
-    theta = {
-        "e": TRUE["e"],
-        "log10_r_phi": math.log10(TRUE["r_phi"]),
-        "psi": TRUE["psi"],
-        "omega_s": TRUE["omega_s"],
-    }
-    grid = uniform_grid(curve)
-    mean = np.mean([simulate_curve(theta, curve, k, 4, noise=False) for k in range(4)], axis=0)
-    return first_order_trend(grid, mean)
+@pytest.fixture(scope="module")
+def periodic_csv(tmp_path_factory):
+    return make_curve(tmp_path_factory.mktemp("curve") / "motor.csv", CASES["periodic"], 11)
 
 
-def test_recovers_trend_and_covers_true_parameters(synthetic):
-    curve = read_curve(synthetic)
-    fit = fit_curve(curve, FitSettings(seed=3))
-    ds = fit_dataset(curve, fit)
-    truth = true_trend(curve)
-    assert ds.attrs["steady_speed_rad_s"] == pytest.approx(truth.steady, rel=0.02)
-    assert ds.attrs["time_constant_s"] == pytest.approx(truth.tau, rel=0.02)
-    for name in ("e", "r_phi"):
-        a = ds[name].attrs
-        assert a["ci_low"] <= TRUE[name] <= a["ci_high"], (name, a)
-    # the file has what INTERFACES.md promises
-    for name in ("omega_measured", "omega_fitted", "e", "r_phi", "psi"):
-        assert name in ds
-    assert ds["time"].attrs["units"] == "s" and ds["omega_fitted"].attrs["units"] == "rad/s"
-    corr = ds["correlation"].values
-    assert corr.shape == (4, 4)
-    assert np.allclose(np.diag(corr)[np.isfinite(np.diag(corr))], 1.0)
-    assert np.all(np.diff(ds["loss_trace"].values[:-1]) <= 1e-12)  # best-so-far per generation
+# ---------------------------------------------------------------- options, before any work
 
 
-def test_fit_is_deterministic_for_a_seed(synthetic):
-    curve = read_curve(synthetic)
-    small = FitSettings(
-        seed=5,
-        scan=32,
-        popsize=4,
-        maxiter=2,
-        local_nfev=5,
-        bootstrap=6,
-        realizations=2,
-        pilot=3,
-        pilot_points=2,
-    )
-    a = fit_curve(curve, small)
-    b = fit_curve(curve, small)
-    assert a.theta == b.theta
-    np.testing.assert_array_equal(a.boot, b.boot)
-    c = fit_curve(curve, FitSettings(**{**small.__dict__, "seed": 6}))
-    assert c.theta != a.theta
+def _run(args, capsys):
+    start = time.perf_counter()
+    code = main(["fit", *args])
+    return code, capsys.readouterr().err.strip().splitlines(), time.perf_counter() - start
 
 
-def test_fit_command_writes_file(synthetic, tmp_path, capsys):
+@pytest.mark.parametrize(
+    "extra,field",
+    [
+        (["--bootstrap", "0"], "--bootstrap"),
+        (["--bootstrap", "-3"], "--bootstrap"),
+        (["--bootstrap", "many"], "--bootstrap"),
+        (["--seed", "-1"], "--seed"),
+        (["--seed", "1.5"], "--seed"),
+        (["--members", "0"], "--members"),
+        (["--members", "x"], "--members"),
+        (["--cores", "0"], "--cores"),
+        (["--sidecar", "/nonexistent/side.yaml"], "--sidecar"),
+    ],
+)
+def test_bad_option_exits_2_before_work(periodic_csv, tmp_path, capsys, extra, field):
     out = tmp_path / "fit.nc"
-    code = main(["fit", str(synthetic), "-o", str(out), "--bootstrap", "4", "--seed", "2", "-q"])
+    code, err, wall = _run([str(periodic_csv), "-o", str(out), *extra], capsys)
+    assert code == 2 and len(err) == 1 and field in err[0]
+    assert err[0].startswith("bouncedisk: error: ") and not out.exists()
+    assert wall < 5.0  # nothing was fitted
+
+
+def test_output_is_an_existing_folder(periodic_csv, tmp_path, capsys):
+    code, err, _ = _run([str(periodic_csv), "-o", str(tmp_path)], capsys)
+    assert code == 2 and len(err) == 1 and "directory" in err[0]
+
+
+def test_output_equal_to_input(periodic_csv, capsys):
+    before = periodic_csv.read_bytes()
+    code, err, _ = _run([str(periodic_csv), "-o", str(periodic_csv)], capsys)
+    assert code == 2 and len(err) == 1 and "input" in err[0]
+    assert periodic_csv.read_bytes() == before
+
+
+def test_output_in_missing_folder(periodic_csv, tmp_path, capsys):
+    out = tmp_path / "nope" / "fit.nc"
+    code, err, _ = _run([str(periodic_csv), "-o", str(out)], capsys)
+    assert code == 2 and len(err) == 1 and "does not exist" in err[0] and not out.exists()
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only folders")
+def test_output_in_read_only_folder(periodic_csv, tmp_path, capsys):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o555)
+    try:
+        code, err, _ = _run([str(periodic_csv), "-o", str(ro / "fit.nc")], capsys)
+    finally:
+        ro.chmod(0o755)
+    assert code == 2 and len(err) == 1 and "not writable" in err[0]
+
+
+def test_read_only_check_uses_access(periodic_csv, tmp_path, capsys, monkeypatch):
+    """The writability check itself (also when the tests run as root)."""
+    real = os.access
+    monkeypatch.setattr(os, "access", lambda p, m: False if str(p) == str(tmp_path) else real(p, m))
+    code, err, _ = _run([str(periodic_csv), "-o", str(tmp_path / "fit.nc")], capsys)
+    assert code == 2 and "not writable" in err[0]
+
+
+# ---------------------------------------------------------------- bounded work
+
+
+def test_three_million_rows_are_bounded():
+    n = 3_000_000
+    t = np.arange(n) * 4e-8
+    curve = MotorCurve(time=t, omega=np.sin(t), sigma=0.1, drive_frequency_hz=F_HZ,
+                       phi0_rad=PHI0, source="", synthetic=True, path="x.csv")  # fmt: skip
+    start = time.perf_counter()
+    small, note = prepare_curve(curve)
+    assert time.perf_counter() - start < 2.0
+    assert len(small.time) <= MAX_SAMPLES and "samples kept" in note
+    assert small.time[1] - small.time[0] == pytest.approx(4e-8 * math.ceil(n / MAX_SAMPLES))
+
+
+def test_long_record_is_cropped():
+    t = np.arange(5000) * 1e-3  # 5 s at 15 kHz: 75,000 drive periods
+    curve = MotorCurve(time=t, omega=t, sigma=0.1, drive_frequency_hz=F_HZ, phi0_rad=PHI0,
+                       source="", synthetic=True, path="x.csv")  # fmt: skip
+    small, note = prepare_curve(curve)
+    assert "cropped" in note and small.time[-1] * F_HZ <= 20_000 + 1e-9
+
+
+# ---------------------------------------------------------------- the file and determinism
+
+
+def test_fit_file_has_the_interface(periodic_csv):
+    curve = read_curve(periodic_csv)
+    ds = fit_dataset(fit_curve(curve, TINY))
+    for name in ("omega_measured", "omega_fitted", "omega_fitted_low", "omega_fitted_high"):
+        assert ds[name].attrs["units"] == "rad/s" and ds[name].dims == ("time",)
+    assert ds["time"].attrs["units"] == "s"
+    assert np.all(ds["omega_fitted_low"] <= ds["omega_fitted_high"])
+    for name in ("e", "r_phi", "psi", "omega_s"):
+        a = ds[name].attrs
+        assert a["ci_low"] <= float(ds[name]) <= a["ci_high"], (name, a)
+        assert f"profile_chi2_{name}" in ds
+    assert ds["stat_steady_speed"].attrs["units"] == "rad/s"
+    assert ds["stat_rise_mean_1"].attrs["units"] == "rad/s"
+    assert float(ds["stat_steady_speed"].sel(source="measured")) == pytest.approx(
+        ds.attrs["steady_speed_rad_s"], rel=0.05
+    )
+    assert {"steady_speed_rad_s", "time_constant_s"} <= set(ds.attrs)
+
+
+def test_fit_is_deterministic_and_never_worse_than_evaluated(periodic_csv):
+    curve = read_curve(periodic_csv)
+    a = fit_curve(curve, TINY)
+    b = fit_curve(curve, TINY)
+    assert np.array_equal(a.x, b.x) and a.chi2 == b.chi2
+    # no profile point beats the reported estimate
+    for p in a.profiles:
+        assert np.all(p.chi2 >= a.chi2 - 1e-9)
+
+
+def test_fit_command_writes_file(periodic_csv, tmp_path, monkeypatch):
+    import bouncedisk.fitting.core as core
+
+    monkeypatch.setattr(core, "FitSettings", lambda **kw: TINY.__class__(**{**TINY.__dict__, **kw}))
+    out = tmp_path / "fit.nc"
+    code = main(["fit", str(periodic_csv), "-o", str(out), "--seed", "2", "--members", "4", "-q"])
     assert code == 0 and out.exists()
     ds = xr.open_dataset(out)
-    assert {"ci_low", "ci_high"} <= set(ds["e"].attrs)
-    assert "steady_speed_rad_s" in ds.attrs and "time_constant_s" in ds.attrs
+    assert {"ci_low", "ci_high"} <= set(ds["e"].attrs) and ds.attrs["seed"] == 2
+
+
+# ---------------------------------------------------------------- bad curves
 
 
 def _write(tmp_path, text, side=None):
@@ -151,3 +234,79 @@ def test_missing_sidecar(tmp_path, capsys):
     p.write_text(_rows(30))
     assert main(["fit", str(p), "-o", str(tmp_path / "f.nc"), "-q"]) == 2
     assert "sidecar" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------- recovery (the model's trend)
+
+
+def model_trend(curve: MotorCurve, true: dict, members: int = 16):
+    """First-order trend of the generating model's ensemble mean (noise-free members)."""
+    theta = {"e": true["e"], "log10_r_phi": math.log10(true["r_phi"]), "psi": true["psi"],
+             "omega_s": true["omega_s"]}  # fmt: skip
+    import dataclasses
+
+    runs = member_records(theta, dataclasses.replace(curve, sigma=0.0), range(members),
+                          EnsembleSpec(seed=99, cores=2))  # fmt: skip
+    return first_order_trend(uniform_grid(curve), np.mean(runs, axis=0))
+
+
+#: Issue 10 is open: one 0.06 s curve of the chaotic case differs from the generating model's
+#: ensemble trend by about -11 % (steady speed) and -56 % (time constant), more than (a) allows.
+CHAOTIC_OPEN = pytest.mark.xfail(
+    strict=True, reason="issue 10 open: the search misses the chaotic case's basin"
+)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "case",
+    [pytest.param(c, marks=CHAOTIC_OPEN) if c == "chaotic_reinjection" else c for c in CASES],
+)
+def test_recovery(tmp_path, case):
+    true = CASES[case]
+    path = make_curve(tmp_path / f"{case}.csv", true, 3, member=0)
+    curve = read_curve(path)
+    fit = fit_curve(curve, FitSettings(seed=1, cores=2))
+    ds = fit_dataset(fit)
+    truth = model_trend(curve, true)
+    print(f"\nRECOVERY {case}: chi2 {ds.attrs['chi2']:.4g} adequate {ds.attrs['fit_adequate']} "
+          f"wall {ds.attrs['wall_time_s']:.1f} s; trend fitted {ds.attrs['model_steady_speed_rad_s']:.4g}"
+          f" rad/s {ds.attrs['model_time_constant_s']:.4g} s, generating {truth.steady:.4g} rad/s "
+          f"{truth.tau:.4g} s")  # fmt: skip
+    for name in ("e", "r_phi", "psi", "omega_s"):
+        a = ds[name].attrs
+        print(f"  {name}: true {true[name]:.4g} fitted {float(ds[name]):.4g} "
+              f"[{a['ci_low']:.4g}, {a['ci_high']:.4g}] identified {a['identified']}")  # fmt: skip
+    assert ds.attrs["model_steady_speed_rad_s"] == pytest.approx(truth.steady, rel=0.03)
+    assert ds.attrs["model_time_constant_s"] == pytest.approx(truth.tau, rel=0.10)
+    for name in ("e", "r_phi", "psi", "omega_s"):
+        a = ds[name].attrs
+        if a["identified"]:
+            assert a["ci_low"] <= true[name] <= a["ci_high"], (name, a)
+
+
+def test_simulate_curve_reproduces_the_shipped_generator():
+    """The shipped curve is the single deterministic run (regenerated byte for byte)."""
+    curve = read_curve("data/prototype/synthetic_motor.csv")
+    theta = {"e": 0.55, "log10_r_phi": math.log10(0.002), "psi": 0.4, "omega_s": 1.7}
+    om = simulate_curve(theta, curve)
+    noise = np.random.default_rng(7).normal(0.0, 0.1, len(om))
+    np.testing.assert_array_equal(om + noise, curve.omega)
+
+
+@pytest.mark.slow
+def test_coverage_of_r_phi(tmp_path):
+    """Over 10 noise seeds (and realizations) of one case, the 95% interval of r_phi covers."""
+    true = CASES["periodic"]
+    hits = 0
+    for seed in range(10):
+        curve = read_curve(make_curve(tmp_path / f"c{seed}.csv", true, 100 + seed, member=seed))
+        fit = fit_dataset(fit_curve(curve, FitSettings(seed=1, cores=2, profile=("log10_r_phi",))))
+        a = fit["r_phi"].attrs
+        hit = a["ci_low"] <= true["r_phi"] <= a["ci_high"]
+        hits += hit
+        print(f"\nCOVERAGE seed {seed}: r_phi {float(fit['r_phi']):.4g} [{a['ci_low']:.4g}, "
+              f"{a['ci_high']:.4g}] covers {bool(hit)}; chi2 {fit.attrs['chi2']:.4g}, "
+              f"{fit.attrs['wall_time_s']:.1f} s")  # fmt: skip
+    print(f"COVERAGE: {hits}/10")
+    assert hits >= 8

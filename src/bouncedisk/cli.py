@@ -301,11 +301,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("curve", help="CSV with time_s, omega_rad_s[, sigma_rad_s]")
     p.add_argument("-o", "--output", required=True, help="fit netCDF file to write")
     p.add_argument("--sidecar", help="YAML sidecar (default: CURVE with .yaml)")
-    p.add_argument("--seed", type=int, default=12345, help="random seed (default: %(default)s)")
+    p.add_argument("--seed", default="12345", help="random seed, >= 0 (default: %(default)s)")
     p.add_argument(
-        "--bootstrap", type=int, default=40, help="bootstrap resamples (default: %(default)s)"
+        "--bootstrap",
+        default="40",
+        help="block-bootstrap resamples of the data, >= 2 (default: %(default)s)",
     )
-    p.add_argument("-q", "--quiet", action="store_true")
+    p.add_argument(
+        "--members", default="12", help="model members per evaluation, >= 4 (default: %(default)s)"
+    )
+    p.add_argument("--cores", default=None, help="threads for the members (default: all)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress or summary")
     _add_track_options(p)
     p.set_defaults(func=_cmd_fit)
     return parser

@@ -84,6 +84,7 @@ FIGURES = [
     "work_precision",
     "scaling",
     "stats_cost",
+    "fit_profiles",
 ]
 
 

@@ -166,6 +166,24 @@ rule fig5_prototype:
         "../scripts/figure.py"
 
 
+rule fit_profiles_figure:
+    input:
+        code=CODE,
+        fit=f"{RES}/fit/prototype.nc",
+    output:
+        **fig_out("fit_profiles", "fit_profiles", STUDY),
+    conda:
+        "../envs/bouncedisk.yaml"
+    log:
+        f"{RES}/logs/figures/fit_profiles.log",
+    benchmark:
+        f"{RES}/benchmarks/figures/fit_profiles.tsv"
+    params:
+        figure="fit_profiles",
+    script:
+        "../scripts/figure.py"
+
+
 rule work_precision_figure:
     input:
         code=CODE,

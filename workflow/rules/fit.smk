@@ -30,6 +30,7 @@ rule fit_prototype:
         compiled=rules.compile_engine.output,
     output:
         f"{RES}/fit/prototype.nc",
+    threads: 2
     conda:
         "../envs/bouncedisk.yaml"
     log:

@@ -34,6 +34,9 @@ with log_to(snakemake.log[0]) as log:
         df = {"time_s": curve.time, "omega_rad_s": curve.omega}
         fit = open_checked(inp.fit, required=("omega_measured", "omega_fitted"), what="fit")
         fig = plotting.fig5_motor(df, fitted=fit)
+    elif kind == "fit_profiles":
+        fit = open_checked(inp.fit, required=("omega_measured", "omega_fitted"), what="fit")
+        fig = plotting.fig_fit_profiles(fit)
     elif kind in ("work_precision", "scaling"):
         import pandas as pd
 

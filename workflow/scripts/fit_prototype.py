@@ -7,8 +7,12 @@ from bouncedisk.logutil import log_to
 
 with log_to(snakemake.log[0]) as log:
     curve = read_curve(snakemake.input.curve)
-    settings = FitSettings(seed=snakemake.params.seed, bootstrap=snakemake.params.bootstrap)
+    settings = FitSettings(
+        seed=snakemake.params.seed,
+        bootstrap=snakemake.params.bootstrap,
+        cores=snakemake.threads,
+    )
     fit = fit_curve(curve, settings, progress=log.info)
-    ds = fit_dataset(curve, fit)
+    ds = fit_dataset(fit)
     write_dataset(ds, snakemake.output[0])
     log.info("\n%s", summary_text(ds))

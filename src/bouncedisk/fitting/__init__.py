@@ -1,0 +1,31 @@
+"""Fit the bouncing-disk model to a measured rotor velocity–time curve.
+
+The model is chaotic, so it is not fitted point by point: the measured curve and the model's
+ensemble (MODEL.md "Long-run statistics of chaotic motion") are reduced to statistics of the
+trend and the ripple (:mod:`.statistics`), compared by a synthetic likelihood that counts the
+model's across-member spread (:mod:`.objective`), searched globally then locally
+(:mod:`.search`), and profiled for every parameter (:mod:`.uncertainty`). :mod:`.model` holds the
+physical conversion (MODEL.md "Physical conversion"), :mod:`.output` the fit file, and
+:mod:`.command` the ``bouncedisk fit`` command.
+"""
+
+from .command import fit_command
+from .core import FitResult, FitSettings, fit_curve, prepare_curve
+from .model import param_names, physical, simulate_curve, synthesize_curve, uniform_grid
+from .output import PUBLIC, fit_dataset, summary_text
+
+__all__ = [
+    "PUBLIC",
+    "FitResult",
+    "FitSettings",
+    "fit_command",
+    "fit_curve",
+    "fit_dataset",
+    "param_names",
+    "physical",
+    "prepare_curve",
+    "simulate_curve",
+    "summary_text",
+    "synthesize_curve",
+    "uniform_grid",
+]

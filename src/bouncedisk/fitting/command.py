@@ -1,0 +1,85 @@
+"""``bouncedisk fit CURVE.csv -o FIT.nc``: options checked before any work, progress, output.
+
+Every option a user can get wrong is checked before the curve is fitted (INTERFACES.md: exit 2,
+one line ``bouncedisk: error: FILE: FIELD: message``, no output file).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from pathlib import Path
+
+from ..errors import InputError
+
+ARG = "<arguments>"
+
+
+def _int_option(text, name: str, low: int, high: int) -> int:
+    """An integer option in ``[low, high]`` (given as text so argparse never prints usage)."""
+    try:
+        value = int(str(text), 10)
+    except ValueError:
+        raise InputError(ARG, name, f"must be an integer, got {text!r}") from None
+    if not low <= value <= high:
+        raise InputError(ARG, name, f"must be between {low} and {high}, got {value}")
+    return value
+
+
+def check_output(output: str, curve: str, sidecar: str | None) -> Path:
+    """The output path: a new or replaceable file in a writable folder, not an input."""
+    out = Path(output)
+    if out.is_dir():
+        raise InputError(str(out), "-o", "is a directory; give a file name such as fit.nc")
+    parent = out.parent if str(out.parent) else Path(".")
+    if not parent.is_dir():
+        raise InputError(str(out), "-o", f"folder {str(parent)!r} does not exist")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError(str(out), "-o", f"folder {str(parent)!r} is not writable")
+    inputs = [Path(curve), Path(sidecar) if sidecar else Path(curve).with_suffix(".yaml")]
+    for p in inputs:
+        if out.resolve() == p.resolve():
+            raise InputError(str(out), "-o", "is an input file; give another output name")
+    return out
+
+
+def validate(args) -> dict:
+    """Check every option (before any work); the fit's settings as a dictionary."""
+    seed = _int_option(args.seed, "--seed", 0, 2**63 - 1)
+    boot = _int_option(args.bootstrap, "--bootstrap", 2, 10_000)
+    members = _int_option(args.members, "--members", 4, 1024)
+    cores = _int_option(args.cores, "--cores", 1, 1024) if args.cores is not None else None
+    if args.sidecar is not None and not Path(args.sidecar).is_file():
+        raise InputError(str(args.sidecar), "--sidecar", "file not found")
+    check_output(args.output, args.curve, args.sidecar)
+    if cores is None:
+        from ..statscli import available_cores
+
+        cores = available_cores()
+    return {"seed": seed, "bootstrap": boot, "members": members, "cores": cores}
+
+
+def fit_command(args) -> None:
+    """Run ``bouncedisk fit`` (see :mod:`bouncedisk.cli`)."""
+    from ..curves import read_curve
+    from ..datasets import write_dataset
+    from .core import FitSettings, fit_curve
+    from .output import fit_dataset, summary_text
+
+    opts = validate(args)
+    start = time.perf_counter()
+
+    def progress(msg: str) -> None:
+        if not args.quiet:
+            print(f"fit: [{time.perf_counter() - start:6.1f} s] {msg}", file=sys.stderr, flush=True)
+
+    progress(f"reading {args.curve}")
+    curve = read_curve(args.curve, args.sidecar)
+    progress(f"{len(curve.time)} samples over {curve.time[-1] - curve.time[0]:.6g} s")
+    settings = FitSettings(**opts)
+    fit = fit_curve(curve, settings, progress)
+    ds = fit_dataset(fit, source_path=str(args.curve))
+    write_dataset(ds, args.output)
+    if not args.quiet:
+        print(summary_text(ds))

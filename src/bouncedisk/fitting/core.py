@@ -1,0 +1,219 @@
+"""Fit the model to a curve: data preparation, search, profiles, the fitted ensemble.
+
+The steps: bound the work (:func:`prepare_curve`), reduce the data to its statistics
+(:mod:`.statistics`), search the synthetic likelihood (:mod:`.search`), profile every parameter
+(:mod:`.uncertainty`), and run the fitted model's ensemble for the band of Fig. 5.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time as _time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import stats as _sps
+
+from ..curves import MotorCurve
+from ..observables import first_order_trend
+from .model import EnsembleSpec, member_records, param_names, physical, uniform_grid
+from .objective import Objective
+from .search import SearchSettings, search
+from .statistics import Layout, record_stats, stat_floor
+from .uncertainty import (
+    ADEQUATE_P,
+    THRESHOLD,
+    Profile,
+    adequate,
+    all_profiles,
+    birge,
+    combinations,
+    scan_acceptable,
+)
+
+#: At most this many samples are fitted (every k-th sample is kept beyond it).
+MAX_SAMPLES = 12_000
+#: At most this many drive periods are fitted (the record is cropped beyond it).
+MAX_PERIODS = 20_000
+
+
+@dataclass(frozen=True)
+class FitSettings:
+    """Knobs of the fit; the defaults fit the shipped curve within the pipeline's budget."""
+
+    seed: int = 12345
+    bootstrap: int = 40  # block-bootstrap resamples of the data (provisional scales, trend CI)
+    members: int = 12  # members per evaluation in the local search and the profiles
+    pilot_members: int = 32  # members measuring the model's covariance; also the band
+    global_members: int = 1
+    scan: int = 192
+    popsize: int = 10
+    maxiter: int = 12
+    local_nfev: int = 12
+    e_sigma: float = 1e-9  # restitution noise of the members (MODEL.md)
+    cores: int = 1
+    profile: tuple[str, ...] | None = None  # coordinates to profile (None: all)
+
+    def search_settings(self) -> SearchSettings:
+        """The search's share of the settings."""
+        return SearchSettings(
+            seed=self.seed, scan=self.scan, global_members=self.global_members,
+            popsize=self.popsize, maxiter=self.maxiter, members=self.members,
+            pilot_members=self.pilot_members, local_nfev=self.local_nfev,
+        )  # fmt: skip
+
+
+def prepare_curve(curve: MotorCurve) -> tuple[MotorCurve, str]:
+    """Bound the work: crop to :data:`MAX_PERIODS` drive periods, keep every k-th sample.
+
+    Subsampling (not averaging) keeps the curve a sample of the same process, so the model is
+    sampled the same way. Returns the curve to fit and a note (empty when nothing changed).
+    """
+    notes = []
+    t, om = curve.time, curve.omega
+    t_max = t[0] + MAX_PERIODS / curve.drive_frequency_hz
+    if t[-1] > t_max:
+        keep = t <= t_max
+        notes.append(f"cropped to the first {MAX_PERIODS} drive periods ({t_max - t[0]:.6g} s)")
+        t, om = t[keep], om[keep]
+    k = int(math.ceil(len(t) / MAX_SAMPLES))
+    if k > 1:
+        notes.append(f"every {k}th of {len(t)} samples kept ({len(t[::k])} samples)")
+        t, om = t[::k], om[::k]
+    return dataclasses.replace(curve, time=t, omega=om), "; ".join(notes)
+
+
+def data_layout(curve: MotorCurve) -> tuple[Layout, np.ndarray, np.ndarray]:
+    """The layout of the statistics, the data on the uniform grid, and its statistics."""
+    grid = uniform_grid(curve)
+    data = np.interp(grid, curve.time, curve.omega)
+    step = max(1, len(grid) // 300)
+    tau = first_order_trend(grid[::step], data[::step]).tau
+    tau = float(np.clip(tau, 2.0 * curve.dt, grid[-1] - grid[0]))
+    layout = Layout(grid, tau, curve.drive_frequency_hz)
+    return layout, data, record_stats(data, layout)
+
+
+def bootstrap_stats(layout: Layout, data: np.ndarray, n: int, seed: int) -> np.ndarray:
+    """Statistics of ``n`` moving-block resamples of the data's residual about its trend."""
+    rng = np.random.default_rng([seed, 77])
+    t = layout.t
+    step = max(1, len(t) // 300)
+    base = first_order_trend(t[::step], data[::step])(t)
+    resid = data - base
+    b = max(20, len(t) // 40)
+    out = np.empty((n, len(record_stats(data, layout))))
+    for i in range(n):
+        starts = rng.integers(0, len(t) - b + 1, size=len(t) // b + 1)
+        out[i] = record_stats(base + np.concatenate([resid[s : s + b] for s in starts])[: len(t)],
+                              layout)  # fmt: skip
+    return out
+
+
+def provisional_cov(target: np.ndarray, boot: np.ndarray) -> np.ndarray:
+    """Diagonal scales of the global search: the data's bootstrap spread, at least a few %."""
+    s = abs(target[0])
+    wide = np.array([0.02 * s, 0.05, 0.02 * s, 0.02 * s, 0.02 * s, 0.05, 0.03, 0.03, 0.03])
+    sd = np.maximum(np.maximum(boot.std(axis=0, ddof=1), 10 * stat_floor(target)), wide)
+    return np.diag(sd**2)
+
+
+@dataclass
+class FitResult:
+    """Estimate, profiles and diagnostics of a fit (search coordinates unless said otherwise)."""
+
+    names: list[str]
+    x: np.ndarray
+    chi2: float
+    profiles: list[Profile]
+    correlation: np.ndarray
+    local_sd: np.ndarray
+    comb_sd: np.ndarray
+    comb_vectors: np.ndarray
+    target: np.ndarray
+    fitted_stats: np.ndarray
+    fitted_sd: np.ndarray
+    layout: Layout
+    band: dict[str, np.ndarray]
+    trend_data: tuple[float, float]
+    trend_model: tuple[float, float]
+    trend_ci: tuple[tuple[float, float], tuple[float, float]]
+    physical: dict[str, float]
+    curve: MotorCurve
+    note: str
+    evaluations: int
+    wall_time_s: float
+    settings: FitSettings = field(default_factory=FitSettings)
+
+    @property
+    def theta(self) -> dict[str, float]:
+        """The estimate as a dictionary of search coordinates."""
+        return dict(zip(self.names, (float(v) for v in self.x), strict=True))
+
+
+def fitted_band(
+    theta: dict[str, float], curve: MotorCurve, layout: Layout, members: int, spec: EnsembleSpec
+) -> dict[str, np.ndarray]:
+    """The fitted model's noise-free members: ensemble mean, its 95 % interval, member band."""
+    runs = np.array(member_records(theta, dataclasses.replace(curve, sigma=0.0),
+                                   range(members), spec))  # fmt: skip
+    mean = runs.mean(axis=0)
+    half = _sps.t.ppf(0.975, members - 1) * runs.std(axis=0, ddof=1) / math.sqrt(members)
+    lo, hi = np.percentile(runs, [2.5, 97.5], axis=0)
+    return {"mean": mean, "low": mean - half, "high": mean + half, "p025": lo, "p975": hi,
+            "member0": runs[0]}  # fmt: skip
+
+
+def fit_curve(
+    curve: MotorCurve,
+    settings: FitSettings | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> FitResult:
+    """Fit the model to ``curve`` (module docstring). Deterministic for a given seed."""
+    s = settings or FitSettings()
+    start = _time.perf_counter()
+    fitted, note = prepare_curve(curve)
+    if note and progress:
+        progress(f"work bounded: {note}")
+    layout, data, target = data_layout(fitted)
+    boot = bootstrap_stats(layout, data, max(s.bootstrap, 2), s.seed)
+    spec = EnsembleSpec(e_sigma=s.e_sigma, seed=s.seed, cores=max(1, s.cores))
+    obj = Objective(fitted, param_names(fitted), layout, target, spec, s.members,
+                    cov=provisional_cov(target, boot))  # fmt: skip
+    best = search(obj, s.search_settings(), progress)
+    thr = birge(best.chi2, len(target), len(obj.names))
+    if progress is not None and thr > THRESHOLD:
+        progress(f"chi2 {best.chi2:.4g} on {len(target)} statistics: intervals widened "
+                 f"(delta chi2 {thr:.4g} instead of {THRESHOLD:.3f})")  # fmt: skip
+    extra = scan_acceptable(obj, s.global_members)
+    if progress is not None:
+        progress(f"scan: {len(extra)} points reproduce the data's statistics within its "
+                 "bootstrap scales")  # fmt: skip
+    profiles, jac, corr, sd = all_profiles(obj, best.x, s.members, s.profile and list(s.profile),
+                                           progress, thr, extra)  # fmt: skip
+    final = obj.best(s.members)  # a profile may have found a better point
+    if not adequate(final.chi2, len(target)):
+        # the best point found does not reproduce the data: nothing is identified by it
+        profiles = [dataclasses.replace(p, identified=False) for p in profiles]
+        if progress is not None:
+            progress(f"chi2 {final.chi2:.4g} on {len(target)} statistics (p < {ADEQUATE_P:g}): "
+                     "the fit does not reproduce the data; no parameter reported identified")  # fmt: skip
+    comb_sd, comb_vec = combinations(jac, obj.span)
+    ens = obj.ensemble(final.x, s.pilot_members)
+    theta = obj.theta(final.x)
+    band = fitted_band(theta, fitted, layout, s.pilot_members, spec)
+    step = max(1, len(layout.t) // 300)
+    tm = first_order_trend(layout.t[::step], band["mean"][::step])
+    td = first_order_trend(layout.t[::step], data[::step])
+    return FitResult(
+        names=obj.names, x=final.x, chi2=final.chi2, profiles=profiles, correlation=corr,
+        local_sd=sd, comb_sd=comb_sd, comb_vectors=comb_vec, target=target,
+        fitted_stats=ens.mean, fitted_sd=np.sqrt(np.diag(ens.cov)), layout=layout, band=band,
+        trend_data=(td.steady, td.tau), trend_model=(tm.steady, tm.tau),
+        trend_ci=(tuple(np.percentile(boot[:, 0], [2.5, 97.5])),
+                  tuple(np.exp(np.percentile(boot[:, 1], [2.5, 97.5])))),
+        physical=physical(theta, fitted), curve=fitted, note=note, evaluations=len(obj.cache),
+        wall_time_s=_time.perf_counter() - start, settings=s,
+    )  # fmt: skip

@@ -1,0 +1,184 @@
+"""The model side of the fit: parameter space, physical scales, members on the curve's grid.
+
+Physical conversion (MODEL.md "Physical conversion"): with the drive frequency ``f`` known,
+``omega_s = 2π f t_c`` gives the time scale ``t_c = omega_s / (2π f)``; time in seconds is
+``t · t_c`` and the rotor speed in rad/s is ``Ω · R_φ Φ0 / t_c``. With ``Φ0`` unknown the speed
+scale ``R_φ Φ0 / t_c`` is a free parameter of its own (``log10_speed_scale``).
+
+An ensemble member (MODEL.md "Long-run statistics of chaotic motion") is one run of the engine
+from the rotor at rest in contact at ``t = 0`` with restitution noise ``σ_e`` on its own stream
+``(seed, member)``, sampled on the measured curve's uniform time grid, plus Gaussian measurement
+noise of the curve's ``σ`` from a fixed stream per member (common random numbers: the same draw at
+every parameter point, so the objective is a smooth function of the parameters wherever the
+ensemble mean is).
+"""
+
+from __future__ import annotations
+
+import math
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from ..curves import MotorCurve
+from ..engine import EngineConfig, InitialState, simulate_arrays
+
+#: Search range of every search coordinate.
+BOUNDS: dict[str, tuple[float, float]] = {
+    "e": (0.05, 0.95),
+    "log10_r_phi": (-4.0, -1.0),
+    "psi": (-math.pi, math.pi),
+    "omega_s": (1.05, 4.0),
+    "log10_speed_scale": (-4.0, 3.0),
+}
+
+#: Noise stream offset of the measurement noise added to members (independent of the engine's).
+_NOISE_STREAM = 0x5EED
+
+
+def param_names(curve: MotorCurve) -> list[str]:
+    """Search coordinates: ``e, log10 R_φ, ψ, omega_s`` (+ ``log10`` speed scale if Φ0 is unknown)."""
+    names = ["e", "log10_r_phi", "psi", "omega_s"]
+    if curve.phi0_rad is None:
+        names.append("log10_speed_scale")
+    return names
+
+
+def physical(theta: dict[str, float], curve: MotorCurve) -> dict[str, float]:
+    """Nondimensional parameters and SI scales of a parameter point (MODEL.md, conversion).
+
+    Returns ``e, r_phi, psi, omega_s``, the time scale ``t_c`` (s) and ``speed_scale`` (rad/s
+    per unit of nondimensional ``Ω``).
+    """
+    w = theta["omega_s"]
+    r_phi = 10.0 ** theta["log10_r_phi"]
+    t_c = w / (2.0 * math.pi * curve.drive_frequency_hz)
+    if curve.phi0_rad is not None:
+        scale = r_phi * curve.phi0_rad / t_c
+    else:
+        scale = 10.0 ** theta["log10_speed_scale"]
+    return {"e": theta["e"], "r_phi": r_phi, "psi": theta["psi"], "omega_s": w, "t_c": t_c,
+            "speed_scale": scale}  # fmt: skip
+
+
+def uniform_grid(curve: MotorCurve) -> np.ndarray:
+    """The uniform time grid (s) the statistics are computed on: ``t0 + k·dt`` up to the end."""
+    dt = curve.dt
+    n = int(math.floor((curve.time[-1] - curve.time[0]) / dt + 1e-9)) + 1
+    return curve.time[0] + dt * np.arange(n)
+
+
+@dataclass(frozen=True)
+class EnsembleSpec:
+    """How model members are made: restitution noise, seed and the measurement noise added."""
+
+    e_sigma: float = 1e-9
+    seed: int = 0
+    cores: int = 1
+
+
+def simulate_curve(
+    theta: dict[str, float],
+    curve: MotorCurve,
+    member: int = 0,
+    e_sigma: float = 0.0,
+    seed: int = 0,
+) -> np.ndarray:
+    """Noise-free model rotor speed (rad/s) of one member on the curve's uniform grid.
+
+    The run starts at ``t = 0`` with the rotor at rest in contact (MODEL.md "Initial
+    condition") and samples ``Ω`` at ``(grid − grid[0]) / t_c``; ``e_sigma = 0`` is the single
+    deterministic run.
+    """
+    p = physical(theta, curve)
+    grid = uniform_grid(curve)
+    t_c = p["t_c"]
+    dt_nd = curve.dt / t_c
+    span_nd = (grid[-1] - grid[0]) / t_c
+    cfg = EngineConfig(
+        e=p["e"],
+        omega_s=p["omega_s"],
+        r_phi=p["r_phi"],
+        psi=p["psi"],
+        contact=True,
+        torsion=True,
+        t_end=span_nd + 0.5 * dt_nd,
+        max_events=50_000_000,
+        traj_dt=dt_nd,
+        traj_t0=0.0,
+        traj_t1=span_nd + 0.5 * dt_nd,
+        e_sigma=e_sigma,
+        seed=seed,
+        member=member,
+    )
+    res = simulate_arrays(cfg, InitialState(t=0.0, omega=0.0))
+    om = res.traj[: len(grid), 4] * p["speed_scale"]
+    if len(om) < len(grid):
+        om = np.concatenate([om, np.full(len(grid) - len(om), om[-1] if len(om) else 0.0)])
+    return om
+
+
+def measurement_noise(n: int, sigma: float, seed: int, member: int) -> np.ndarray:
+    """The fixed measurement-noise draw of member ``member`` (standard deviation ``sigma``)."""
+    if sigma <= 0:
+        return np.zeros(n)
+    rng = np.random.default_rng([_NOISE_STREAM, seed, member])
+    return rng.normal(0.0, sigma, n)
+
+
+def member_records(
+    theta: dict[str, float], curve: MotorCurve, members: range, spec: EnsembleSpec, reduce=None
+) -> list:
+    """Members ``members`` at ``theta`` as measured records (model + measurement noise).
+
+    ``reduce(record)`` (if given) is applied to each record on the worker thread, so only the
+    reduced values are kept. Members run on ``spec.cores`` threads (the kernel releases the GIL).
+    """
+    n = len(uniform_grid(curve))
+
+    def one(m: int):
+        om = simulate_curve(theta, curve, m, spec.e_sigma, spec.seed)
+        rec = om + measurement_noise(n, curve.sigma, spec.seed, m)
+        return reduce(rec) if reduce is not None else rec
+
+    if spec.cores <= 1 or len(members) == 1:
+        return [one(m) for m in members]
+    with ThreadPoolExecutor(max_workers=spec.cores) as pool:
+        return list(pool.map(one, members))
+
+
+def synthesize_curve(
+    true: dict[str, float],
+    drive_frequency_hz: float,
+    phi0_rad: float,
+    span_s: float,
+    dt_s: float,
+    sigma: float,
+    seed: int,
+    member: int | None = None,
+) -> pd.DataFrame:
+    """A synthetic measured curve: the model at ``true`` plus Gaussian noise ``sigma`` (rad/s).
+
+    ``true`` holds ``e, r_phi, psi, omega_s``. With ``member=None`` the curve is the single
+    deterministic run (the shipped curve); otherwise member ``member`` of the ensemble with
+    restitution noise 1e-9 and ensemble seed ``seed`` (a different realization per seed).
+    """
+    n = int(math.floor(span_s / dt_s + 1e-9)) + 1
+    t = dt_s * np.arange(n)
+    dummy = MotorCurve(time=t, omega=np.zeros(n), sigma=0.0, drive_frequency_hz=drive_frequency_hz,
+                       phi0_rad=phi0_rad, source="", synthetic=True, path="")  # fmt: skip
+    theta = {
+        "e": true["e"],
+        "log10_r_phi": math.log10(true["r_phi"]),
+        "psi": true["psi"],
+        "omega_s": true["omega_s"],
+    }
+    if member is None:
+        om = simulate_curve(theta, dummy)
+    else:
+        om = simulate_curve(theta, dummy, member, 1e-9, 1_000_000 + seed)
+    rng = np.random.default_rng(seed)
+    om_noisy = om + rng.normal(0.0, sigma, n)
+    return pd.DataFrame({"time_s": t, "omega_rad_s": om_noisy, "sigma_rad_s": np.full(n, sigma)})

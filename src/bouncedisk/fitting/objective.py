@@ -1,0 +1,149 @@
+"""The objective: a synthetic likelihood of the data's statistics under the model's ensemble.
+
+For a parameter point ``θ`` the model's ``K`` members (:func:`.model.member_records`) give
+statistics ``s_k(θ)`` (:func:`.statistics.record_stats`) with mean ``μ(θ)``. The measured curve is
+one more realization, so its statistics ``s_d`` differ from ``μ(θ)`` by the across-member spread
+``C`` (which includes the measurement noise, added to every member) plus the Monte-Carlo error of
+the mean, ``C / K``:
+
+    χ²(θ) = (s_d − μ(θ))ᵀ [C (1 + 1/K)]⁻¹ (s_d − μ(θ)),
+
+``−2 log`` of a Gaussian synthetic likelihood (Wood, Nature 466, 1102, 2010) with ``C`` held at
+its value near the optimum (regularized, :func:`.statistics.regularized_cov`). The members'
+noise streams are fixed (common random numbers), so ``χ²`` is deterministic for a seed.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..curves import MotorCurve
+from .model import BOUNDS, EnsembleSpec, member_records
+from .statistics import EnsembleStats, Layout, record_stats
+
+
+@dataclass
+class Evaluation:
+    """One evaluated point: search coordinates, members used and ``χ²`` under the metric then."""
+
+    x: np.ndarray
+    members: int
+    chi2: float
+
+
+@dataclass
+class Objective:
+    """``χ²`` and whitened residuals of the statistics, with a cache and a log of evaluations.
+
+    Parameters
+    ----------
+    curve : MotorCurve
+        The (possibly downsampled) measured curve.
+    names : list of str
+        Search coordinates (:func:`.model.param_names`).
+    layout : Layout
+        Where the statistics are taken.
+    target : ndarray
+        The data's statistics ``s_d``.
+    spec : EnsembleSpec
+        Restitution noise, seed and cores of the members.
+    members : int
+        Members per evaluation ``K`` (changeable between stages).
+    """
+
+    curve: MotorCurve
+    names: list[str]
+    layout: Layout
+    target: np.ndarray
+    spec: EnsembleSpec
+    members: int
+    cov: np.ndarray | None = None
+    cache: dict = field(default_factory=dict)
+    log: list[Evaluation] = field(default_factory=list)
+    on_eval: Callable[[int], None] | None = None
+    points_parallel: bool = False
+
+    def __post_init__(self):
+        b = np.array([BOUNDS[n] for n in self.names])
+        self.lo, self.hi = b[:, 0], b[:, 1]
+        if self.cov is None:
+            self.cov = np.eye(len(self.target))
+        self.set_cov(self.cov)
+
+    @property
+    def span(self) -> np.ndarray:
+        """Width of the search range of every coordinate."""
+        return self.hi - self.lo
+
+    def set_cov(self, cov: np.ndarray) -> None:
+        """Use the across-member covariance ``cov`` (already regularized) from now on."""
+        self.cov = np.asarray(cov, float)
+        self._chol = np.linalg.cholesky(self.cov)
+
+    def theta(self, x: np.ndarray) -> dict[str, float]:
+        """Parameter dictionary of search coordinates ``x`` (ψ wrapped into ``[−π, π)``)."""
+        th = dict(zip(self.names, (float(v) for v in x), strict=True))
+        if "psi" in th:
+            th["psi"] = (th["psi"] + math.pi) % (2.0 * math.pi) - math.pi
+        return th
+
+    def ensemble(self, x: np.ndarray, members: int | None = None) -> EnsembleStats:
+        """Statistics of the first ``members`` members at ``x`` (cached per point and size)."""
+        k = members or self.members
+        key = (k, *np.round(np.asarray(x, float), 12))
+        if key not in self.cache:
+            spec = replace(self.spec, cores=1) if self.points_parallel else self.spec
+            vals = member_records(
+                self.theta(x), self.curve, range(k), spec, lambda r: record_stats(r, self.layout)
+            )
+            self.cache[key] = EnsembleStats.from_values(np.array(vals))
+            if self.on_eval is not None:
+                self.on_eval(len(self.cache))
+        return self.cache[key]
+
+    def residuals(self, x: np.ndarray, members: int | None = None) -> np.ndarray:
+        """Whitened residuals ``L⁻¹ (μ(x) − s_d) / sqrt(1 + 1/K)`` (``C = L Lᵀ``)."""
+        k = members or self.members
+        d = self.ensemble(x, k).mean - self.target
+        return np.linalg.solve(self._chol, d) / math.sqrt(1.0 + 1.0 / k)
+
+    def chi2(self, x: np.ndarray, members: int | None = None) -> float:
+        """``χ²`` at ``x``; every call is logged (the search never returns a worse point)."""
+        x = np.asarray(x, float)
+        r = self.residuals(x, members)
+        value = float(r @ r)
+        if not math.isfinite(value):
+            value = 1e300
+        self.log.append(Evaluation(x.copy(), members or self.members, value))
+        return value
+
+    def robust(self, x: np.ndarray, members: int | None = None) -> float:
+        """``Σ log(1 + r²)``: the global search's loss, insensitive to far-off statistics."""
+        r = self.residuals(x, members)
+        self.chi2(x, members)
+        return float(np.sum(np.log1p(r * r)))
+
+    def map(self, fn: Callable, items) -> list:
+        """``[fn(item) …]`` with items on ``spec.cores`` threads (members of each run serially)."""
+        items = list(items)
+        if self.spec.cores <= 1 or len(items) < 2:
+            return [fn(i) for i in items]
+        self.points_parallel = True
+        try:
+            with ThreadPoolExecutor(max_workers=self.spec.cores) as pool:
+                return list(pool.map(fn, items))
+        finally:
+            self.points_parallel = False
+
+    def best(self, members: int | None = None) -> Evaluation:
+        """The best logged evaluation with ``members`` members under the current metric."""
+        k = members or self.members
+        pts = [ev for ev in self.log if ev.members == k]
+        scored = [(float(np.sum(self.residuals(ev.x, k) ** 2)), i) for i, ev in enumerate(pts)]
+        value, i = min(scored)
+        return Evaluation(pts[i].x.copy(), k, value)

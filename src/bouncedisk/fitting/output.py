@@ -1,0 +1,207 @@
+"""The fit file (INTERFACES.md) and its one-screen summary.
+
+Names kept from INTERFACES.md: ``omega_measured(time)``, ``omega_fitted(time)`` (rad/s, on the
+measured ``time`` in s), one scalar per parameter with ``ci_low``/``ci_high``, and the global
+attributes ``steady_speed_rad_s``/``time_constant_s`` (the first-order trend of the data). Added:
+the fitted model's band ``omega_fitted_low``/``omega_fitted_high`` (95 % interval of its ensemble
+mean), both trends, the profiles (``profile_chi2_<p>`` over ``profile_<p>``), correlations, the
+identified combinations, and every statistic measured and fitted (``stat_<name>(source)``, each in
+its own units).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+from scipy.stats import chi2 as chi2_dist
+
+from ..observables import first_order_trend
+from ..provenance import base_attrs, new_run_id, sha256_file
+from .core import FitResult
+from .model import BOUNDS
+from .statistics import STAT_LONG_NAMES, STAT_UNITS, STATS
+from .uncertainty import THRESHOLD, adequate
+
+#: Public name: (search coordinate, transform, units, long name).
+PUBLIC = {
+    "e": ("e", lambda v: v, "1", "coefficient of restitution"),
+    "r_phi": ("log10_r_phi", lambda v: 10.0**v, "1", "angular amplitude ratio R_phi"),
+    "psi": ("psi", lambda v: v, "rad", "phase of the torsional vibration"),
+    "omega_s": ("omega_s", lambda v: v, "1", "nondimensional stator frequency"),
+    "speed_scale": ("log10_speed_scale", lambda v: 10.0**v, "rad/s",
+                    "rad/s per unit of nondimensional rotor angular velocity"),
+}  # fmt: skip
+
+
+def _curves(fit: FitResult, ds_time: np.ndarray) -> dict:
+    """Measured and fitted curves on the measured time (fitted ones interpolated from the grid)."""
+    g = fit.layout.t
+    b = fit.band
+
+    def on_time(v):
+        return np.interp(ds_time, g, v)
+
+    step = max(1, len(g) // 300)
+    tm = first_order_trend(g[::step], b["mean"][::step])
+    td = first_order_trend(g[::step], np.interp(g, fit.curve.time, fit.curve.omega)[::step])
+
+    def var(v, long_name):
+        return ("time", v, {"units": "rad/s", "long_name": long_name})
+
+    return {
+        "omega_measured": var(fit.curve.omega, "measured rotor angular velocity"),
+        "omega_fitted": var(on_time(b["mean"]), "fitted model: ensemble mean of the rotor "
+                            "angular velocity (noise-free members)"),
+        "omega_fitted_low": var(on_time(b["low"]), "lower end of the 95% interval of the mean"),
+        "omega_fitted_high": var(on_time(b["high"]), "upper end of the 95% interval of the mean"),
+        "omega_fitted_p025": var(on_time(b["p025"]), "2.5th percentile of the fitted members"),
+        "omega_fitted_p975": var(on_time(b["p975"]), "97.5th percentile of the fitted members"),
+        "omega_fitted_member0": var(on_time(b["member0"]), "one member of the fitted model"),
+        "trend_fitted": var(tm(ds_time), "first-order trend of the fitted model's ensemble mean"),
+        "trend_measured": var(td(ds_time), "first-order trend of the data"),
+    }  # fmt: skip
+
+
+def _parameters(fit: FitResult) -> tuple[dict, list[str]]:
+    """Scalar parameter variables with intervals, and the names not identified."""
+    out, not_identified = {}, []
+    prof = {p.name: p for p in fit.profiles}
+    for pub, (internal, fn, units, long_name) in PUBLIC.items():
+        if internal not in fit.names:
+            continue
+        j = fit.names.index(internal)
+        lo_b, hi_b = BOUNDS[internal]
+        attrs = {"units": units, "long_name": long_name, "ci_level": 0.95,
+                 "search_low": fn(lo_b), "search_high": fn(hi_b),
+                 "search_coordinate": internal, "local_sd_search_coordinate": fit.local_sd[j]}  # fmt: skip
+        p = prof.get(internal)
+        if p is None:
+            attrs.update(ci_low=fn(lo_b), ci_high=fn(hi_b), identified=0,
+                         interval="not profiled: the search range")  # fmt: skip
+        else:
+            attrs.update(ci_low=fn(p.ci_low), ci_high=fn(p.ci_high), identified=int(p.identified),
+                         interval=f"profile likelihood, delta chi2 <= {p.threshold:.4g}"
+                         + (f" (scaled from {THRESHOLD:.3f} by chi2/dof)" if p.threshold > THRESHOLD
+                            else "")
+                         + ("; widened to every acceptable point found (several basins)"
+                            if p.multimodal else ""),
+                         multimodal=int(p.multimodal), delta_chi2=p.threshold,
+                         open_low=int(p.open_low), open_high=int(p.open_high))  # fmt: skip
+            if not p.identified:
+                not_identified.append(pub)
+        out[pub] = xr.DataArray(fn(fit.x[j]), attrs=attrs)
+    return out, not_identified
+
+
+def _profiles(fit: FitResult) -> dict:
+    out = {}
+    for p in fit.profiles:
+        pub = next(k for k, v in PUBLIC.items() if v[0] == p.name)
+        fn, units = PUBLIC[pub][1], PUBLIC[pub][2]
+        dim = f"profile_{pub}"
+        out[dim] = (dim, fn(p.values), {"units": units, "long_name": f"profiled value of {pub}"})
+        out[f"profile_chi2_{pub}"] = (dim, p.chi2 - fit.chi2, {"units": "1", "long_name":
+                                      f"profile of chi2 over {pub}, minus the best chi2"})  # fmt: skip
+    return out
+
+
+def _statistics(fit: FitResult) -> dict:
+    out = {}
+    for k, name in enumerate(STATS):
+        vals = [fit.target[k], fit.fitted_stats[k], fit.fitted_sd[k]]
+        out[f"stat_{name}"] = ("source", np.array(vals), {"units": STAT_UNITS[k],
+                               "long_name": STAT_LONG_NAMES[k]})  # fmt: skip
+    return out
+
+
+def fit_dataset(fit: FitResult, source_path: str | None = None) -> xr.Dataset:
+    """The fit file (module docstring)."""
+    curve = fit.curve
+    path = source_path or curve.path
+    ds = xr.Dataset(
+        {**_curves(fit, curve.time), **_statistics(fit), **_profiles(fit)},
+        coords={
+            "time": ("time", curve.time, {"units": "s", "long_name": "time", "axis": "T"}),
+            "source": ("source", ["measured", "fitted_mean", "fitted_member_sd"]),
+            "parameter": ("parameter", fit.names),
+            "parameter2": ("parameter2", fit.names),
+            "combination": ("combination", np.arange(len(fit.names))),
+        },
+    )
+    ds["correlation"] = (("parameter", "parameter2"), fit.correlation,
+                         {"units": "1", "long_name": "correlation of the search coordinates "
+                          "(inverse of J^T J at the estimate)"})  # fmt: skip
+    ds["combination_sd"] = ("combination", fit.comb_sd, {"units": "1", "long_name":
+                            "standard deviation of each eigen-combination, as a fraction of "
+                            "the search ranges (< 1: identified by the curve)"})  # fmt: skip
+    ds["combination_vector"] = (("combination", "parameter"), fit.comb_vectors,
+                                {"units": "1", "long_name": "eigen-combination of the search "
+                                 "coordinates scaled to their ranges"})  # fmt: skip
+    params, not_identified = _parameters(fit)
+    for k, v in params.items():
+        ds[k] = v
+    ds["t_c"] = xr.DataArray(fit.physical["t_c"], attrs={"units": "s", "long_name": "t_c"})
+    if "speed_scale" not in ds:
+        ds["speed_scale"] = xr.DataArray(fit.physical["speed_scale"], attrs={
+            "units": "rad/s", "long_name": "R_phi Phi0 / t_c (from the known Phi0)"})  # fmt: skip
+    ds.attrs.update(base_attrs(f"bouncedisk fit to {path}"))
+    ds.attrs.update(_global_attrs(fit, path, not_identified))
+    return ds
+
+
+def _global_attrs(fit: FitResult, path: str, not_identified: list[str]) -> dict:
+    th = fit.physical
+    return {
+        "run_id": new_run_id("fit", sha256_file(path)), "scene_name": "fit",
+        "status": "completed", "e": th["e"], "omega_s": th["omega_s"], "r_phi": th["r_phi"],
+        "psi": th["psi"], "effects": "contact,impacts,impulse_cap,restitution_noise,torsion",
+        "solver": "exact",
+        "steady_speed_rad_s": fit.trend_data[0], "time_constant_s": fit.trend_data[1],
+        "steady_speed_ci_rad_s": np.asarray(fit.trend_ci[0]),
+        "time_constant_ci_s": np.asarray(fit.trend_ci[1]),
+        "model_steady_speed_rad_s": fit.trend_model[0],
+        "model_time_constant_s": fit.trend_model[1],
+        "trend_comment": "steady_speed_rad_s, time_constant_s: first-order trend of the data "
+        "(95% intervals: block bootstrap); model_*: trend of the fitted model's ensemble mean",
+        "not_identified": ",".join(not_identified) or "none",
+        "chi2": fit.chi2, "n_statistics": len(STATS),
+        "chi2_p_value": float(chi2_dist.sf(fit.chi2, len(STATS))),
+        "fit_adequate": int(adequate(fit.chi2, len(STATS))), "evaluations": fit.evaluations,
+        "ensemble_members": fit.settings.members, "band_members": fit.settings.pilot_members,
+        "e_sigma": fit.settings.e_sigma, "seed": fit.settings.seed,
+        "n_bootstrap": fit.settings.bootstrap, "work_note": fit.note or "none",
+        "curve_file": path, "curve_sha256": sha256_file(path),
+        "curve_source": fit.curve.source, "curve_synthetic": int(fit.curve.synthetic),
+        "drive_frequency_hz": fit.curve.drive_frequency_hz,
+        "Phi0_rad": fit.curve.phi0_rad if fit.curve.phi0_rad is not None else "unknown",
+        "noise_sigma_rad_s": fit.curve.sigma, "wall_time_s": round(fit.wall_time_s, 3),
+        "method": "synthetic likelihood of ensemble statistics; Sobol scan of (e, omega_s) with "
+        "psi from a grid and r_phi matched to the trend, then multi-start least squares; profile "
+        "likelihoods widened to every acceptable point found",
+    }  # fmt: skip
+
+
+def summary_text(ds: xr.Dataset) -> str:
+    """A human-readable summary of a fit file."""
+    a = ds.attrs
+    lines = [f"fit of {a.get('curve_file')} (seed {a.get('seed')}, {a.get('wall_time_s')} s, "
+             f"chi2 {a.get('chi2', float('nan')):.4g} on {a.get('n_statistics')} statistics)"]  # fmt: skip
+    for name in PUBLIC:
+        if name in ds and "ci_low" in ds[name].attrs:
+            v = ds[name].attrs
+            flag = "" if v["identified"] else "   <- not identified"
+            lines.append(f"  {name:>12} = {float(ds[name]):.5g}   95% [{v['ci_low']:.5g}, "
+                         f"{v['ci_high']:.5g}] {v['units']}{flag}")  # fmt: skip
+    s_ci, t_ci = a["steady_speed_ci_rad_s"], a["time_constant_ci_s"]
+    lines.append(f"  trend of the data: steady speed {a['steady_speed_rad_s']:.5g} rad/s "
+                 f"[{s_ci[0]:.5g}, {s_ci[1]:.5g}], time constant {a['time_constant_s']:.4g} s "
+                 f"[{t_ci[0]:.4g}, {t_ci[1]:.4g}]")  # fmt: skip
+    lines.append(f"  trend of the fitted model: {a['model_steady_speed_rad_s']:.5g} rad/s, "
+                 f"{a['model_time_constant_s']:.4g} s; not identified: {a['not_identified']}")  # fmt: skip
+    if not a.get("fit_adequate", 1):
+        lines.append(f"  WARNING: chi2 {a['chi2']:.4g} on {a['n_statistics']} statistics "
+                     f"(p = {a['chi2_p_value']:.2g}): the best point found does not reproduce "
+                     "the data's statistics; the intervals are not trustworthy")  # fmt: skip
+    if a.get("work_note", "none") != "none":
+        lines.append(f"  note: {a['work_note']}")
+    return "\n".join(lines)

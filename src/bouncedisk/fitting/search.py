@@ -1,0 +1,221 @@
+"""Global-then-local search of the synthetic likelihood (:mod:`.objective`).
+
+1. A Sobol scan of the ``(e, omega_s)`` plane (the axial motion depends on nothing else, and the
+   landscape is rugged there: periodic windows); at every scan point ``ψ`` is chosen from a grid
+   and ``R_φ`` matched to the trend, on cheap ensembles (``global_members``) and the robust loss
+   ``Σ log(1 + r²)`` with provisional scales (a block bootstrap of the data).
+2. A pilot ensemble (``pilot_members``) at the best point measures the model's across-member
+   covariance ``C``; the objective switches to it.
+3. :func:`scipy.optimize.least_squares` on the whitened residuals, in coordinates scaled to the
+   search box, from each of the best few distinct global points (multi-start) re-evaluated with ``members``; then ``C`` is
+   measured again at the new best point and the search polished.
+
+Every evaluation is logged, and the result is the best logged point at the final ensemble size
+under the final metric: the search never returns a point worse than one it evaluated.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+from scipy.stats import qmc
+
+from .objective import Evaluation, Objective
+from .statistics import regularized_cov, stat_floor
+
+
+@dataclass(frozen=True)
+class SearchSettings:
+    """Sizes of the search stages (see the module docstring)."""
+
+    seed: int = 12345
+    scan: int = 256
+    global_members: int = 1
+    popsize: int = 10
+    maxiter: int = 12
+    members: int = 12
+    pilot_members: int = 32
+    local_nfev: int = 40
+    starts: int = 4
+
+
+def _say(progress: Callable[[str], None] | None, msg: str) -> None:
+    if progress is not None:
+        progress(msg)
+
+
+#: Coordinates set by matching the trend (:func:`matched_point`), not searched globally.
+MATCHED = ("log10_r_phi", "log10_speed_scale")
+
+
+def matched_point(obj: Objective, x: np.ndarray, members: int, steps: int = 2) -> np.ndarray:
+    """Move ``log10 R_φ`` (and the free speed scale) so the trend matches the data's.
+
+    MODEL.md's scaling: ``x = R_φ Ω`` evolves at a rate ``∝ R_φ`` while the axial motion does
+    not depend on ``R_φ``, so the time constant goes like ``1/R_φ`` and the steady speed barely
+    moves with it; with Φ0 unknown the speed in rad/s is proportional to the speed scale.
+    ``steps`` such corrections, each one evaluation; the point with the best robust loss is kept.
+    """
+    names = obj.names
+    x = np.clip(np.asarray(x, float), obj.lo, obj.hi)
+    best, best_loss = x, obj.robust(x, members)
+    for _ in range(steps):
+        m = obj.ensemble(x, members).mean
+        x = x.copy()
+        if "log10_r_phi" in names:
+            j = names.index("log10_r_phi")
+            x[j] += (m[1] - obj.target[1]) / np.log(10.0)
+        if "log10_speed_scale" in names and m[0] * obj.target[0] > 0:
+            j = names.index("log10_speed_scale")
+            x[j] += np.log10(obj.target[0] / m[0])
+        x = np.clip(x, obj.lo, obj.hi)
+        loss = obj.robust(x, members)
+        if loss < best_loss:
+            best, best_loss = x, loss
+    return best
+
+
+#: ψ values tried at every (e, omega_s) point of the scan (the trend's smooth dependence).
+PSI_GRID = 8
+#: Least-squares evaluations refining (ψ, R_φ) at every scan point.
+INNER_NFEV = 6
+#: Grid points of ψ refined at every scan point.
+INNER_STARTS = 2
+
+
+def _inner(obj: Objective, x: np.ndarray, members: int) -> np.ndarray:
+    """Best ``(ψ, R_φ)`` for fixed ``(e, omega_s)``: a ψ grid, each with a trend-matched ``R_φ``.
+
+    The axial motion depends only on ``(e, omega_s)`` (torsion never feeds back), so at a fixed
+    ``(e, omega_s)`` the statistics are smooth in ``ψ`` and scale simply with ``R_φ``
+    (MODEL.md); the rugged part of the problem is the 2-D ``(e, omega_s)`` plane only.
+    """
+    names = obj.names
+    if "psi" not in names:
+        return matched_point(obj, x, members, steps=1)
+    j = names.index("psi")
+    grid = []
+    for psi in np.linspace(-np.pi, np.pi, PSI_GRID, endpoint=False):
+        y = x.copy()
+        y[j] = psi
+        y = matched_point(obj, y, members, steps=1)
+        grid.append((obj.robust(y, members), y))
+    grid.sort(key=lambda g: g[0])
+    # refine (ψ, R_φ [, speed scale]) by least squares from the best INNER_STARTS grid points:
+    # the grid step is far coarser than the steady speed's sensitivity to ψ
+    free = [k for k, n in enumerate(names) if n in ("psi", *MATCHED)]
+    span = obj.span[free]
+    best, best_chi2 = grid[0][1], obj.chi2(grid[0][1], members)
+    for _, start in grid[:INNER_STARTS]:
+
+        def fun(u, start=start):
+            y = start.copy()
+            y[free] = obj.lo[free] + u * span
+            return obj.residuals(y, members)
+
+        u0 = np.clip((start[free] - obj.lo[free]) / span, 0.0, 1.0)
+        res = least_squares(fun, u0, bounds=(0.0, 1.0), diff_step=1e-3, max_nfev=INNER_NFEV)
+        y = start.copy()
+        y[free] = obj.lo[free] + res.x * span
+        c = obj.chi2(y, members)
+        if c < best_chi2:
+            best, best_chi2 = y, c
+    return best
+
+
+def global_stage(
+    obj: Objective, s: SearchSettings, progress: Callable[[str], None] | None = None
+) -> list[Evaluation]:
+    """Scan the rugged ``(e, omega_s)`` plane, with ``(ψ, R_φ)`` fitted at every point.
+
+    A Sobol sample of ``s.scan`` points of ``(e, omega_s)``; at each, :func:`_inner` chooses
+    ``ψ`` from a grid and matches ``R_φ`` (and a free speed scale) to the trend. Cheap ensembles
+    (``global_members``) under the provisional metric. Returns the logged cheap evaluations, best
+    first (by ``χ²`` under the provisional metric).
+    """
+    names = obj.names
+    axial = [names.index("e"), names.index("omega_s")]
+    sob = qmc.Sobol(2, seed=s.seed).random(s.scan)
+    base = 0.5 * (obj.lo + obj.hi)
+    if "log10_r_phi" in names:
+        base[names.index("log10_r_phi")] = -2.5
+    pts = []
+    for u in sob:
+        x = base.copy()
+        x[axial] = obj.lo[axial] + u * obj.span[axial]
+        pts.append(x)
+    done = []
+    chunk = 32
+    for i in range(0, len(pts), chunk):
+        done += obj.map(lambda x: _inner(obj, x, s.global_members), pts[i : i + chunk])
+        best = min(ev.chi2 for ev in obj.log if ev.members == s.global_members)
+        _say(progress, f"scan: {len(done)}/{s.scan} (e, omega_s) points, best chi2 {best:.4g}")
+    ranked = [ev for ev in obj.log if ev.members == s.global_members]
+    return sorted(ranked, key=lambda ev: ev.chi2)
+
+
+def measure_cov(obj: Objective, x: np.ndarray, members: int) -> np.ndarray:
+    """Regularized across-member covariance of the statistics at ``x`` (``members`` members)."""
+    ens = obj.ensemble(x, members)
+    return regularized_cov(ens.cov, stat_floor(obj.target))
+
+
+def local_stage(
+    obj: Objective,
+    starts: list[np.ndarray],
+    s: SearchSettings,
+    nfev: int,
+    progress: Callable[[str], None] | None = None,
+) -> Evaluation:
+    """Least squares on the whitened residuals from every one of ``starts`` (box-scaled).
+
+    Multi-start: the landscape in ``(e, omega_s)`` is rugged (periodic windows), so each start is
+    refined on its own and the best logged point is kept.
+    """
+    span = obj.span
+
+    def logged(u):
+        x = obj.lo + u * span
+        obj.chi2(x, s.members)
+        return obj.residuals(x, s.members)
+
+    for k, x0 in enumerate(starts):
+        u0 = np.clip((x0 - obj.lo) / span, 0.0, 1.0)
+        least_squares(logged, u0, bounds=(0.0, 1.0), diff_step=2e-3, max_nfev=nfev, x_scale=1.0)
+        _say(progress, f"local search: start {k + 1}/{len(starts)}, best chi2 "
+                       f"{obj.best(s.members).chi2:.4g}")  # fmt: skip
+    best = obj.best(s.members)
+    _say(progress, f"local search: chi2 {best.chi2:.4g} ({len(obj.cache)} ensembles evaluated)")
+    return best
+
+
+def search(
+    obj: Objective, s: SearchSettings, progress: Callable[[str], None] | None = None
+) -> Evaluation:
+    """The whole search (module docstring); returns the best logged point at ``s.members``."""
+    ranked = global_stage(obj, s, progress)
+    obj.set_cov(measure_cov(obj, ranked[0].x, s.pilot_members))
+    _say(progress, f"pilot: model covariance from {s.pilot_members} members")
+    # the pilot ensemble's first `members` members are the local stage's ensemble too
+    starts = [ev.x for ev in _distinct(ranked, obj.span, s.starts)]
+    for x in starts:
+        obj.chi2(x, s.members)
+    # the starts themselves, then each refined (never worse than the best start)
+    best = local_stage(obj, starts, s, s.local_nfev, progress)
+    obj.set_cov(measure_cov(obj, best.x, s.pilot_members))
+    best = local_stage(obj, [best.x], s, max(8, s.local_nfev // 3), progress)
+    return best
+
+
+def _distinct(ranked: list[Evaluation], span: np.ndarray, k: int) -> list[Evaluation]:
+    """The best ``k`` points at least 5 % of the range apart (in some coordinate)."""
+    out: list[Evaluation] = []
+    for ev in ranked:
+        if all(np.max(np.abs(ev.x - o.x) / span) > 0.05 for o in out):
+            out.append(ev)
+        if len(out) == k:
+            break
+    return out

@@ -1,0 +1,174 @@
+"""Summary statistics of a speed record, and of an ensemble of model records.
+
+The model is chaotic, so a measured curve is one realization; what the model predicts is the
+distribution of a realization's statistics (MODEL.md "Long-run statistics of chaotic motion").
+A record ``y(t)`` (rad/s on a uniform grid) is reduced to:
+
+* the trend: steady speed ``S`` and ``log τ`` of its first-order fit
+  (:func:`~bouncedisk.observables.first_order_trend`), and the rise curve as the mean speed over
+  three fixed windows ``[0, τ_ref/2]``, ``[τ_ref/2, τ_ref]``, ``[τ_ref, 2τ_ref]`` (``τ_ref`` the
+  data's time constant, fixed once per fit, so these are linear in the record);
+* the ripple, the residual about the trend once the rise is over (``t ≥ 3τ_ref``, or the last
+  half): ``log`` RMS, the power-weighted mean frequency as a fraction of the drive frequency, and
+  the fractions of its power in the low (``< f_N/8``) and middle (``f_N/8 … f_N/2``) bands of the
+  sampled spectrum (``f_N`` the Nyquist frequency).
+
+With the drive frequency and Φ0 known, MODEL.md's scaling (``x = R_φ Ω`` evolves at a rate
+``∝ R_φ`` while the axial motion does not depend on ``R_φ``) makes ``S`` fix one combination of
+``(e, omega_s, ψ)`` and ``τ`` mainly ``R_φ``; the rise shape and the ripple carry the rest.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.signal import welch
+
+from ..observables import first_order_trend
+
+#: Statistic names, in vector order, and the units of their values.
+STATS: tuple[str, ...] = (
+    "steady_speed",
+    "log_time_constant",
+    "rise_mean_1",
+    "rise_mean_2",
+    "rise_mean_3",
+    "log_ripple_rms",
+    "ripple_frequency",
+    "ripple_low_band",
+    "ripple_mid_band",
+)
+STAT_UNITS: tuple[str, ...] = ("rad/s", "1", "rad/s", "rad/s", "rad/s", "1", "1", "1", "1")
+STAT_LONG_NAMES: tuple[str, ...] = (
+    "steady speed S of the first-order trend",
+    "natural log of the time constant of the first-order trend (tau in s)",
+    "mean speed over [0, tau_ref/2]",
+    "mean speed over [tau_ref/2, tau_ref]",
+    "mean speed over [tau_ref, 2 tau_ref]",
+    "natural log of the RMS ripple about the trend (rms in rad/s)",
+    "power-weighted mean ripple frequency over the drive frequency",
+    "fraction of the ripple power below 1/8 of the Nyquist frequency",
+    "fraction of the ripple power between 1/8 and 1/2 of the Nyquist frequency",
+)
+#: Trend points used by the first-order fit (the record is subsampled evenly to about this).
+TREND_POINTS = 300
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Where the statistics are taken on a record: fixed once per fit from the data.
+
+    Parameters
+    ----------
+    t : ndarray
+        Uniform time grid (s), starting at the record's first sample.
+    tau_ref : float
+        The data's time constant (s): sets the rise windows and the start of the ripple part.
+    drive_frequency_hz : float
+        Drive frequency ``f`` (the ripple frequency is reported as a fraction of it).
+    """
+
+    t: np.ndarray
+    tau_ref: float
+    drive_frequency_hz: float
+
+    def windows(self) -> list[np.ndarray]:
+        """Boolean masks of the three rise windows (each at least two samples)."""
+        t0 = self.t[0]
+        edges = [0.0, 0.5, 1.0, 2.0]
+        out = []
+        for a, b in zip(edges[:-1], edges[1:], strict=True):
+            m = (self.t >= t0 + a * self.tau_ref) & (self.t < t0 + b * self.tau_ref)
+            if m.sum() < 2:
+                k = int(np.searchsorted(self.t, t0 + a * self.tau_ref))
+                m = np.zeros(len(self.t), bool)
+                m[min(k, len(self.t) - 2) : min(k, len(self.t) - 2) + 2] = True
+            out.append(m)
+        return out
+
+    def steady(self) -> np.ndarray:
+        """Mask of the ripple part: after three time constants, or the last half if too short."""
+        m = self.t >= self.t[0] + 3.0 * self.tau_ref
+        if m.sum() < max(32, len(self.t) // 4):
+            m = self.t >= self.t[len(self.t) // 2]
+        return m
+
+
+def record_stats(y: np.ndarray, layout: Layout) -> np.ndarray:
+    """The statistics (order of :data:`STATS`) of one record ``y`` (rad/s) on ``layout.t``."""
+    t = layout.t
+    step = max(1, len(t) // TREND_POINTS)
+    trend = first_order_trend(t[::step], y[::step])
+    rise = [float(np.mean(y[m])) for m in layout.windows()]
+    steady = layout.steady()
+    r = (y - trend(t))[steady]
+    r = r - r.mean()
+    dt = float(t[1] - t[0])
+    f, pxx = welch(r, fs=1.0 / dt, nperseg=min(256, len(r)))
+    f, pxx = f[1:], pxx[1:]
+    total = float(np.sum(pxx))
+    nyq = 0.5 / dt
+    if total > 0:
+        freq = float(np.sum(f * pxx) / total) / layout.drive_frequency_hz
+        low = float(np.sum(pxx[f < nyq / 8]) / total)
+        mid = float(np.sum(pxx[(f >= nyq / 8) & (f < nyq / 2)]) / total)
+    else:
+        freq, low, mid = 0.0, 0.0, 0.0
+    rms = max(float(np.std(r)), 1e-300)
+    return np.array(
+        [trend.steady, np.log(trend.tau), *rise, np.log(rms), freq, low, mid], dtype=float
+    )
+
+
+def dominant_frequency(y: np.ndarray, layout: Layout) -> float:
+    """Frequency of the largest peak of the ripple spectrum, as a fraction of the drive frequency.
+
+    Reported, not fitted: it jumps between spectral lines as the parameters move.
+    """
+    t = layout.t
+    step = max(1, len(t) // TREND_POINTS)
+    trend = first_order_trend(t[::step], y[::step])
+    r = (y - trend(t))[layout.steady()]
+    f, pxx = welch(r - r.mean(), fs=1.0 / float(t[1] - t[0]), nperseg=min(256, len(r)))
+    return float(f[1 + int(np.argmax(pxx[1:]))]) / layout.drive_frequency_hz
+
+
+@dataclass(frozen=True)
+class EnsembleStats:
+    """Statistics of ``members`` model records: their mean and their covariance across members."""
+
+    mean: np.ndarray
+    cov: np.ndarray
+    members: int
+    values: np.ndarray  # (members, n_stats)
+
+    @classmethod
+    def from_values(cls, values: np.ndarray) -> EnsembleStats:
+        """Summarise per-member statistics ``values`` of shape ``(members, n_stats)``."""
+        v = np.asarray(values, float)
+        cov = np.cov(v.T, ddof=1) if len(v) > 1 else np.zeros((v.shape[1],) * 2)
+        return cls(mean=v.mean(axis=0), cov=np.atleast_2d(cov), members=len(v), values=v)
+
+
+def regularized_cov(cov: np.ndarray, floor: np.ndarray, shrink: float = 0.2) -> np.ndarray:
+    """Shrink a sample covariance toward its diagonal and floor its variances.
+
+    ``(1 − shrink)·C + shrink·diag(C)``, then every variance raised to at least ``floor²``
+    (periodic members are identical: without measurement noise their spread is zero).
+    """
+    d = np.diag(cov).copy()
+    out = (1.0 - shrink) * cov + shrink * np.diag(d)
+    sd = np.sqrt(np.maximum(np.diag(out), 0.0))
+    new_sd = np.maximum(sd, floor)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = out / np.outer(np.where(sd > 0, sd, 1.0), np.where(sd > 0, sd, 1.0))
+    corr[~np.isfinite(corr)] = 0.0
+    np.fill_diagonal(corr, 1.0)
+    return corr * np.outer(new_sd, new_sd)
+
+
+def stat_floor(measured: np.ndarray) -> np.ndarray:
+    """Smallest standard deviation allowed per statistic (resolution of the statistic itself)."""
+    speed = 1e-3 * max(abs(measured[0]), 1e-12)
+    return np.array([speed, 2e-3, speed, speed, speed, 5e-3, 2e-3, 2e-3, 2e-3])

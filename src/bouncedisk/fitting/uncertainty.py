@@ -1,0 +1,271 @@
+"""Uncertainty of the fit: local curvature, profile likelihoods, intervals, identifiability.
+
+``χ²`` (:mod:`.objective`) is ``−2 log`` of the synthetic likelihood, so a 95 % profile
+interval of a parameter is where its profile ``min over the others χ²`` stays within
+``χ²₁(0.95) = 3.84`` of the overall minimum. Each profile steps out from the estimate on both
+sides; at every step the other coordinates are re-optimized by Gauss–Newton steps with the
+Jacobian of the whitened residuals at the estimate (chord method, each step one evaluation of
+the exact residuals) starting from the previous step's optimum. A side that reaches its search
+bound below the threshold is open; a parameter whose profile stays below the threshold over its
+whole search range is **not identified**. Correlations come from the inverse of ``JᵀJ``;
+well-identified combinations are its eigenvectors (MODEL.md's scaling predicts one combination of
+``(e, omega_s, ψ)`` from the steady speed and ``R_φ`` from the time constant).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import chi2 as chi2_dist
+
+from .objective import Objective
+
+#: Δχ² of a 95 % profile interval (one parameter).
+THRESHOLD = float(chi2_dist.ppf(0.95, 1))
+
+
+@dataclass
+class Profile:
+    """Profile of one coordinate: values, ``χ²`` and the other coordinates at each value."""
+
+    name: str
+    values: np.ndarray
+    chi2: np.ndarray
+    points: np.ndarray  # (n, d) search coordinates of each profile point
+    ci_low: float
+    ci_high: float
+    open_low: bool
+    open_high: bool
+    identified: bool
+    threshold: float = THRESHOLD  # Δχ² used (scaled when the fit is poor, :func:`birge`)
+    multimodal: bool = False  # acceptable points outside the profile's interval widened it
+
+
+def jacobian(obj: Objective, x: np.ndarray, members: int, rel_step: float = 0.01) -> np.ndarray:
+    """Central-difference Jacobian of the whitened residuals, per unit of each coordinate."""
+    d = len(x)
+    r0 = obj.residuals(x, members)
+    jac = np.empty((len(r0), d))
+    for j in range(d):
+        h = rel_step * obj.span[j]
+        xp, xm = x.copy(), x.copy()
+        xp[j] = min(obj.hi[j], x[j] + h)
+        xm[j] = max(obj.lo[j], x[j] - h)
+        obj.chi2(xp, members)
+        obj.chi2(xm, members)
+        jac[:, j] = (obj.residuals(xp, members) - obj.residuals(xm, members)) / (xp[j] - xm[j])
+    return jac
+
+
+def curvature(jac: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Covariance (pseudo-inverse of ``JᵀJ``), correlation, and standard deviations."""
+    info = jac.T @ jac
+    cov = np.linalg.pinv(info, rcond=1e-10)
+    sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(sd, sd)
+    return cov, corr, sd
+
+
+def combinations(jac: np.ndarray, span: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eigen-combinations of the coordinates scaled to their search ranges.
+
+    Returns the standard deviation of each combination (as a fraction of the ranges; below 1:
+    the curve constrains it) and the unit vectors (rows), best determined first.
+    """
+    js = jac * span[None, :]
+    w, v = np.linalg.eigh(js.T @ js)
+    order = np.argsort(w)[::-1]
+    sd = 1.0 / np.sqrt(np.maximum(w[order], 1e-300))
+    return sd, v[:, order].T
+
+
+def _side(obj, x0, j, sign, step, chi0, members, jac, max_steps, thr=THRESHOLD):
+    """Points of one side of the profile of coordinate ``j``: (values, χ², points)."""
+    others = [k for k in range(len(x0)) if k != j]
+    jo = jac[:, others]
+    pinv = np.linalg.pinv(jo, rcond=1e-8)
+    out = []
+    x = x0.copy()
+    v = x0[j]
+    for _ in range(max_steps):
+        if (sign > 0 and v >= obj.hi[j]) or (sign < 0 and v <= obj.lo[j]):
+            break
+        v = float(np.clip(v + sign * step, obj.lo[j], obj.hi[j]))
+        # linear prediction of the others, then two chord Gauss-Newton steps
+        x = x.copy()
+        x[others] -= pinv @ jac[:, j] * (v - x[j])
+        x[j] = v
+        x = np.clip(x, obj.lo, obj.hi)
+        best_x, best_c = x, obj.chi2(x, members)
+        for _ in range(2):
+            y = best_x.copy()
+            y[others] -= pinv @ obj.residuals(best_x, members)
+            y = np.clip(y, obj.lo, obj.hi)
+            c = obj.chi2(y, members)
+            if c < best_c:
+                best_x, best_c = y, c
+        x = best_x
+        out.append((v, best_c, x.copy()))
+        if best_c - chi0 > 2.0 * thr:
+            break
+        if best_c - chi0 < 0.25 * thr:
+            step *= 2.0
+    return out
+
+
+def profile(
+    obj: Objective, x0: np.ndarray, j: int, members: int, jac: np.ndarray, sd: float,
+    max_steps: int = 6, thr: float = THRESHOLD,
+) -> Profile:  # fmt: skip
+    """Profile likelihood of coordinate ``j`` about the estimate ``x0`` (module docstring)."""
+    chi0 = obj.chi2(x0, members)
+    step = float(np.clip(sd if np.isfinite(sd) else np.inf, 0.01 * obj.span[j], 0.2 * obj.span[j]))
+    lo = _side(obj, x0, j, -1.0, step, chi0, members, jac, max_steps, thr)
+    hi = _side(obj, x0, j, +1.0, step, chi0, members, jac, max_steps, thr)
+    pts = lo[::-1] + [(float(x0[j]), chi0, x0.copy())] + hi
+    values = np.array([p[0] for p in pts])
+    chis = np.array([p[1] for p in pts])
+    points = np.array([p[2] for p in pts])
+    return Profile(obj.names[j], values, chis, points, *_interval(values, chis, obj, j, thr), thr)
+
+
+def _interval(values, chis, obj, j, thr=THRESHOLD):
+    """95 % interval from a profile: crossings of the threshold, or the bounds if open."""
+    base = chis.min()
+    k0 = int(np.argmin(chis))
+    below = chis - base <= thr
+
+    def crossing(k_in, k_out):
+        a, b = chis[k_in] - base, chis[k_out] - base
+        f = (thr - a) / (b - a) if b != a else 0.0
+        return float(values[k_in] + f * (values[k_out] - values[k_in]))
+
+    k = k0
+    while k > 0 and below[k - 1]:
+        k -= 1
+    open_low = k == 0  # never crossed: open to the search bound
+    low = float(obj.lo[j]) if open_low else (crossing(k, k - 1) if k > 0 else float(values[0]))
+    k = k0
+    while k < len(values) - 1 and below[k + 1]:
+        k += 1
+    n = len(values) - 1
+    open_high = k == n
+    high = float(obj.hi[j]) if open_high else (crossing(k, k + 1) if k < n else float(values[-1]))
+    identified = not (open_low and open_high)
+    return low, high, bool(open_low), bool(open_high), identified
+
+
+def all_profiles(
+    obj: Objective,
+    x0: np.ndarray,
+    members: int,
+    which: list[str] | None = None,
+    progress: Callable[[str], None] | None = None,
+    thr: float = THRESHOLD,
+    extra: np.ndarray | None = None,
+) -> tuple[list[Profile], np.ndarray, np.ndarray, np.ndarray]:
+    """Profiles of the coordinates ``which`` (default all), with the curvature at ``x0``.
+
+    Each interval is then widened to hold every point the search evaluated (with ``members``
+    members, under the current metric) whose ``χ²`` is within ``thr`` of the best: the
+    landscape in ``(e, omega_s)`` is rugged, a profile that walks from the estimate sees one
+    basin only, and an acceptable point in another basin means the interval is (at least) the
+    hull of both (:func:`widen`); ``extra`` are further acceptable points (the scan's, judged
+    by the data's own resampling scales, :func:`scan_acceptable`). Returns the profiles, the Jacobian, the correlation matrix and
+    the local standard deviations.
+    """
+    jac = jacobian(obj, x0, members)
+    _cov, corr, sd = curvature(jac)
+    out = []
+    for j, name in enumerate(obj.names):
+        if which is not None and name not in which:
+            continue
+        out.append(profile(obj, x0, j, members, jac, sd[j], thr=thr))
+        if progress is not None:
+            p = out[-1]
+            progress(f"profile {name}: {len(p.values)} points")
+    # after every profile: a profile may have found a better point than the estimate
+    out = [widen(obj, p, members, extra) for p in out]
+    if progress is not None:
+        for p in out:
+            progress(f"interval {p.name}: 95% [{p.ci_low:.4g}, {p.ci_high:.4g}]"
+                     f"{'' if p.identified else ' (not identified)'}"
+                     f"{' (several basins)' if p.multimodal else ''}")  # fmt: skip
+    return out, jac, corr, sd
+
+
+#: A parameter whose acceptable points span at least this fraction of its range is not identified.
+SPREAD_NOT_IDENTIFIED = 0.5
+
+
+def acceptable_points(obj: Objective, members: int, thr: float) -> np.ndarray:
+    """Every evaluated point (``members`` members) within ``thr`` of the best ``χ²`` now."""
+    pts = {tuple(ev.x): ev.x for ev in obj.log if ev.members == members}
+    xs = np.array(list(pts.values()))
+    chis = np.array([float(np.sum(obj.residuals(x, members) ** 2)) for x in xs])
+    return xs[chis <= chis.min() + thr]
+
+
+def widen(obj: Objective, p: Profile, members: int, extra: np.ndarray | None = None) -> Profile:
+    """The interval of ``p`` widened to every acceptable evaluated point (union of basins).
+
+    A parameter is not identified when its profile is open on both sides or its acceptable
+    points span at least :data:`SPREAD_NOT_IDENTIFIED` of its search range.
+    """
+    j = obj.names.index(p.name)
+    xs = acceptable_points(obj, members, p.threshold)
+    if extra is not None and len(extra):
+        xs = np.vstack([xs, extra])
+    v = xs[:, j]
+    lo, hi = min(p.ci_low, float(v.min())), max(p.ci_high, float(v.max()))
+    multimodal = lo < p.ci_low or hi > p.ci_high
+    wide = (hi - lo) >= SPREAD_NOT_IDENTIFIED * obj.span[j]
+    identified = p.identified and not wide
+    return Profile(p.name, p.values, p.chi2, p.points, lo, hi, p.open_low, p.open_high,
+                   identified, p.threshold, multimodal)  # fmt: skip
+
+
+def birge(chi2_min: float, n_stats: int, n_params: int) -> float:
+    """Δχ² threshold of a 95 % interval, scaled by ``χ²/dof`` when that exceeds 1.
+
+    A best ``χ²`` far above its degrees of freedom means the model's point does not reproduce
+    the data within the stated variances; the usual remedy (the Particle Data Group's scale
+    factor) is to scale the variances by ``χ²/dof``, i.e. the threshold by the same factor.
+    The fit file says so (``fit_adequate = 0``, ``interval_scale``).
+    """
+    dof = max(1, n_stats - n_params)
+    return THRESHOLD * max(1.0, chi2_min / dof)
+
+
+def scan_acceptable(obj: Objective, members: int) -> np.ndarray:
+    """Scan points that reproduce the data's statistics within the data's own scales.
+
+    The scan's cheap evaluations (``members`` members, ``χ²`` under the provisional metric: the
+    data's block-bootstrap spread, at least a few % of each statistic) whose ``χ²`` is within the
+    (``χ²/dof``-scaled) 95 % threshold of the scan's best, or below twice the 95 % point of
+    ``χ²(n_stats)`` (one model realization against the data's: twice the variance). Distinct basins in this set mean the
+    curve does not single out one of them.
+    """
+    evs = [ev for ev in obj.log if ev.members == members]
+    if not evs:
+        return np.empty((0, len(obj.names)))
+    chis = np.array([ev.chi2 for ev in evs])
+    thr = birge(float(chis.min()), len(obj.target), len(obj.names))
+    # a cheap point is one realization compared with another: twice the variance, so it is
+    # consistent with the data when its chi2 is below twice the 95 % point of chi2(n_stats)
+    consistent = 2.0 * float(chi2_dist.ppf(0.95, len(obj.target)))
+    limit = max(chis.min() + thr, consistent)
+    return np.array([ev.x for ev, c in zip(evs, chis, strict=True) if c <= limit])
+
+
+#: A fit whose best ``χ²`` has a p-value below this (``χ²`` with one degree per statistic) is
+#: inadequate: it does not reproduce the data, and no parameter is reported identified by it.
+ADEQUATE_P = 1e-3
+
+
+def adequate(chi2_min: float, n_stats: int) -> bool:
+    """Whether the best point reproduces the data's statistics (p-value above :data:`ADEQUATE_P`)."""
+    return bool(chi2_dist.sf(chi2_min, n_stats) > ADEQUATE_P)
