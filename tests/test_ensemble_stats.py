@@ -215,3 +215,37 @@ def test_members_without_noise_are_refused(scene_file, capsys):
     f = scene_file(SINGLE)
     assert main(["stats", str(f), "--set", "ensemble.members=4", "-q"]) == 2
     assert "restitution_noise" in capsys.readouterr().err
+
+
+def test_output_that_is_not_a_regular_file_is_refused_before_work(scene_file, tmp_path, capsys):
+    """A pipe (like /dev/null, a device) at -o is refused, not replaced by a file."""
+    import os
+    import stat
+
+    f = scene_file(CHAOTIC)
+    fifo = tmp_path / "pipe.nc"
+    os.mkfifo(fifo)
+    assert main(["stats", str(f), "-o", str(fifo), "-q"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "-o" in err[0] and "not a regular file" in err[0]
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode)
+    assert main(["stats", str(f), "-o", "", "-q"]) == 2
+    assert "empty" in capsys.readouterr().err
+
+
+def test_members_with_zero_noise_are_refused(scene_file, capsys):
+    f = scene_file(CHAOTIC)
+    assert main(["stats", str(f), "--set", "parameters.e_sigma=0", "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "ensemble.members" in err and "e_sigma > 0" in err
+
+
+def test_intervals_of_rates_stay_nonnegative(scene_file, capsys):
+    """Few members and rare chatters: Student's interval would dip below 0; rates cannot."""
+    s = _json_stats(
+        capsys, scene_file(CHAOTIC), "ensemble.members=4", "stop.time=8000", "stats.discard=0"
+    )
+    for name in ("impact_rate", "chatter_rate", "chatter_interval"):
+        low = s[f"{name}_ci95"][0]
+        assert low is None or low >= 0.0, (name, s[f"{name}_ci95"])
+    assert s["chatter_rate"] > 0 and s["chatter_rate_ci95"][0] == 0.0

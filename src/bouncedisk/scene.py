@@ -464,12 +464,12 @@ def _ensemble(src: str, v: Any, effects: frozenset[str], params: Parameters) -> 
     seed = _int(src, "ensemble.seed", em.get("seed", 0), minimum=0)
     if seed >= 2**63:
         raise InputError(src, "ensemble.seed", f"must be < 2**63, got {seed}")
-    if members > 1 and "restitution_noise" not in effects:
+    if members > 1 and ("restitution_noise" not in effects or params.e_sigma == 0.0):
         raise InputError(
             src,
             "ensemble.members",
             "members differ only by their restitution noise: add the 'restitution_noise' "
-            "effect and parameters.e_sigma (e.g. 1e-9)",
+            "effect and parameters.e_sigma > 0 (e.g. 1e-9)",
         )
     return Ensemble(members=members, seed=seed)
 

@@ -29,10 +29,15 @@ QUANTITIES: dict[str, tuple[str, str]] = {
     "mean_slip": ("time-averaged slip s = r_phi * omega - omega_stator", "1"),
     "impact_rate": ("impacts per unit time (chattering tails not counted)", "1"),
     "chatter_rate": ("complete chattering sequences per unit time", "1"),
-    "chatter_interval": ("mean time between complete chattering sequences", "1"),
+    "chatter_interval": (
+        "mean time between complete chattering sequences (members with two or more)",
+        "1",
+    ),
     "lyapunov": ("largest Lyapunov exponent of the impact map per impact, between resets", "1"),
 }
 LEVEL = 0.95
+#: Quantities that cannot be negative: their intervals are cut at 0 (the parameter space).
+NONNEGATIVE = ("impact_rate", "chatter_rate", "chatter_interval")
 
 
 def confidence_interval(
@@ -85,6 +90,8 @@ class EnsembleStats:
         }
         for name in QUANTITIES:
             mean, low, high = confidence_interval(self.column(name))
+            if name in NONNEGATIVE and low < 0.0:
+                low = 0.0
             out[name] = _finite_or_none(mean)
             out[f"{name}_ci95"] = [_finite_or_none(low), _finite_or_none(high)]
         lam = self.column("lyapunov")

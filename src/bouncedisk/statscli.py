@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shlex
 import sys
 import time
-from pathlib import Path
 
 from .errors import InputError
 
@@ -67,18 +67,15 @@ def _row(name: str, value, ci) -> str:
 def stats_command(args: argparse.Namespace) -> dict:
     """Run ``bouncedisk stats`` (see :mod:`bouncedisk.stats`); returns the printed summary."""
     from .datasets import write_dataset
+    from .outputs import check_output_path
     from .runner import deferred_interrupts
     from .scene import load_scene
     from .stats import ensemble_window, run_stats, to_dataset
 
     if args.cores is not None and args.cores < 1:
         raise InputError("<arguments>", "--cores", f"must be >= 1, got {args.cores}")
-    if args.output:
-        out = Path(args.output)
-        if out.is_dir():
-            raise InputError(str(out), "-o", "is a directory; give a file name such as stats.nc")
-        if out.resolve() == Path(args.scene).resolve():
-            raise InputError(str(out), "-o", "is the scene file itself; give another name")
+    if args.output is not None:
+        check_output_path(args.output, "-o", inputs=[args.scene])
     scene = load_scene(args.scene, args.set or [])
     ensemble_window(scene)
     cores = args.cores or available_cores()
@@ -92,7 +89,10 @@ def stats_command(args: argparse.Namespace) -> dict:
         )
         wall = time.perf_counter() - start
         if args.output:
-            write_dataset(to_dataset(scene, result, wall), args.output)
+            ds = to_dataset(scene, result, wall)
+            command = "bouncedisk " + " ".join(shlex.quote(x) for x in sys.argv[1:])
+            ds.attrs["history"] = f"{ds.attrs['created']}: {command}"
+            write_dataset(ds, args.output)
     summary = result.summary()
     if args.json:
         print(json.dumps(summary))

@@ -41,7 +41,10 @@ def check_output(output: str, curve: str, sidecar: str | None) -> Path:
     for p in inputs:
         if out.resolve() == p.resolve():
             raise InputError(str(out), "-o", "is an input file; give another output name")
-    return out
+    # a device, pipe or socket in the way; a read-only file system (os.access misjudges root)
+    from ..outputs import check_output_path
+
+    return check_output_path(out, "-o", inputs=inputs)
 
 
 def validate(args) -> dict:
