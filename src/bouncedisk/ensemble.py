@@ -157,8 +157,9 @@ def run_member(
     """
     if not math.isfinite(cfg.t_end) or cfg.t_end <= t_from:
         raise ValueError("an ensemble member needs a finite end time after t_from")
-    cfg = dataclasses.replace(cfg, member=member, stats_from=t_from, traj_dt=0.0)
-    cfg = dataclasses.replace(cfg, stroboscopic=False)
+    cfg = dataclasses.replace(
+        cfg, member=member, stats_from=t_from, traj_dt=0.0, stroboscopic=False
+    )
     red = _Reducer(cfg.e, cfg.omega_s, t_from)
     gen = iterate(cfg, init)
     while True:
@@ -188,24 +189,15 @@ def run_ensemble(
     ``on_member(done, total)`` is called as members finish (progress); ``should_stop()`` is
     polled between chunks and stops every member with ``KeyboardInterrupt``.
     """
-    results: list[MemberStats | None] = [None] * members
-    done = 0
 
-    def one(m: int) -> tuple[int, MemberStats]:
-        return m, run_member(cfg, init, m, t_from, should_stop)[0]
+    def one(m: int) -> MemberStats:
+        return run_member(cfg, init, m, t_from, should_stop)[0]
 
-    if cores <= 1 or members == 1:
-        outcomes = map(one, range(members))
-        for m, st in outcomes:
-            results[m] = st
-            done += 1
+    results: list[MemberStats] = []
+    with ThreadPoolExecutor(max_workers=max(1, cores)) as pool:
+        # map keeps member order, whatever order the threads finish in
+        for st in pool.map(one, range(members)):
+            results.append(st)
             if on_member:
-                on_member(done, members)
-    else:
-        with ThreadPoolExecutor(max_workers=cores) as pool:
-            for m, st in pool.map(one, range(members)):
-                results[m] = st
-                done += 1
-                if on_member:
-                    on_member(done, members)
-    return [r for r in results if r is not None]
+                on_member(len(results), members)
+    return results
