@@ -21,7 +21,7 @@ from . import observables as ob
 from .engine import simulate_arrays
 from .errors import InputError
 from .provenance import base_attrs, new_run_id
-from .runner import engine_config, initial_state, scene_attrs
+from .runner import engine_config, scene_attrs
 from .scene import Scene
 
 #: Restitution noise of the band's members when the scene has none (MODEL.md: enough to
@@ -34,7 +34,7 @@ def _member_omega(scene: Scene, member: int, e_sigma: float, seed: int) -> np.nd
     cfg = engine_config(scene)
     sigma = cfg.e_sigma if cfg.e_sigma > 0 else e_sigma
     cfg = dataclasses.replace(cfg, e_sigma=sigma, seed=seed, member=member, stroboscopic=False)
-    res = simulate_arrays(cfg, initial_state(scene))
+    res = simulate_arrays(cfg, scene.initial)
     return res.traj[:, [0, 4]]
 
 

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from . import observables as ob
+from . import stator
 from .datasets import open_checked, open_simulation
 from .engine import EngineConfig, InitialState, simulate_arrays
 from .errors import InputError
@@ -226,7 +227,7 @@ def settles_on_period(e: float, gamma: float, n: int, phase: float, events: int)
     w = math.sqrt(gamma)
     res = simulate_arrays(
         EngineConfig(e=e, omega_s=w, max_events=events),
-        InitialState(t=phase / w, u=math.sin(phase), v=math.pi * n / w),
+        InitialState(t=phase / w, u=stator.position(phase), v=math.pi * n / w),
     )
     ev = res.events
     per = ob.find_period(ev["t"], ev["phase"], ev["v_rel"], ev["kind"], w, max_period=4)
@@ -261,7 +262,7 @@ def period_one_is_stable(e: float, gamma: float) -> bool:
     phi += 1e-4
     res = simulate_arrays(
         EngineConfig(e=e, omega_s=w, max_events=60_000),
-        InitialState(t=phi / w, u=math.sin(phi), v=vp),
+        InitialState(t=phi / w, u=stator.position(phi), v=vp),
     )
     return float(np.ptp(res.events["phase"][-200:])) < 1e-7
 

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import observables as ob
+from . import stator
 from .engine import EngineConfig, InitialState, iterate
 from .engine.kernel import KIND_CHATTER, KIND_IMPACT
 
@@ -110,7 +111,7 @@ class _Reducer:
         dur = t_end - self.t_from
         mean_om = omega_integral / dur
         # ∫Ω_s dt = φ_s(t_end) − φ_s(t_from), φ_s = sin(w t + ψ): the mean slip s = RΩ − Ω_s
-        twist = math.sin(self.w * t_end + psi) - math.sin(self.w * self.t_from + psi)
+        twist = stator.twist(self.w * t_end, psi) - stator.twist(self.w * self.t_from, psi)
         tl = self.tail
         lam = self.lyap_sum / self.lyap_count if self.lyap_count else math.nan
         reg = ob.classify(

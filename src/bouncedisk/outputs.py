@@ -163,7 +163,7 @@ def check_output_size(scene, path: str | Path, limit: int) -> float:
         One line with the estimate, the limit and how to change either.
     """
     from .engine import EngineConfig, iterate
-    from .runner import engine_config, initial_state
+    from .runner import engine_config
 
     ev_b, tr_b, sb_b = row_bytes(scene)
     size = 0.0
@@ -200,7 +200,7 @@ def check_output_size(scene, path: str | Path, limit: int) -> float:
     cfg = engine_config(scene)
     cfg = EngineConfig(**{**cfg.__dict__, "traj_dt": 0.0, "stroboscopic": False})
     t_now = t0
-    gen = iterate(cfg, initial_state(scene))
+    gen = iterate(cfg, scene.initial)
     while True:
         try:
             chunk = next(gen)

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .datasets import SimulationWriter
-from .engine import EngineConfig, EngineError, InitialState, RunResult, iterate, simulate_arrays
+from .engine import EngineConfig, EngineError, RunResult, iterate, simulate_arrays
 from .engine import kernel as K
 from .engine.driver import STATUS_TEXT, Chunk
 from .errors import InputError
@@ -53,16 +53,10 @@ def engine_config(scene: Scene) -> EngineConfig:
     )
 
 
-def initial_state(scene: Scene) -> InitialState:
-    """The engine's initial state for a scene."""
-    i = scene.initial
-    return InitialState(t=i.t, omega=i.omega, u=i.u, v=i.v)
-
-
 def _chunks(scene: Scene) -> Iterator[Chunk]:
     """Chunks from the scene's solver (the exact engine or a comparator)."""
     if scene.solver.method == "exact":
-        return iterate(engine_config(scene), initial_state(scene))
+        return iterate(engine_config(scene), scene.initial)
     from .solvers import iterate_comparator
 
     return iterate_comparator(scene)
@@ -340,7 +334,7 @@ def run_scene_arrays(scene: Scene) -> RunResult:
     """Run ``scene`` in memory (analysis, sweeps). Raises like :func:`run_scene`."""
     try:
         if scene.solver.method == "exact":
-            return simulate_arrays(engine_config(scene), initial_state(scene))
+            return simulate_arrays(engine_config(scene), scene.initial)
         from .solvers import simulate_comparator
 
         return simulate_comparator(scene)

@@ -20,7 +20,7 @@ from . import observables as ob
 from .ensemble import MemberStats, run_ensemble
 from .errors import InputError
 from .provenance import base_attrs, new_run_id
-from .runner import engine_config, initial_state, scene_attrs
+from .runner import engine_config, scene_attrs
 from .scene import Scene
 
 #: Ensemble statistics: field -> (long name, units) in nondimensional units (INTERFACES.md).
@@ -140,7 +140,7 @@ def run_stats(
     cfg = engine_config(scene)
     members = run_ensemble(
         cfg,
-        initial_state(scene),
+        scene.initial,
         scene.ensemble.members,
         t_from,
         cores=cores,

@@ -19,6 +19,7 @@ import numpy as np
 from numba import njit
 from scipy.integrate import solve_ivp
 
+from .. import stator
 from ..engine import kernel as K
 from ..engine.driver import STATUS_TEXT, Chunk, RunResult
 from ..errors import InputError
@@ -42,6 +43,13 @@ def _check(scene: Scene) -> None:
         )
     if scene.solver.method == "moreau" and scene.solver.step is None:
         raise InputError(scene.source, "solver.step", "is required by the Moreau–Jean scheme")
+
+
+def _gap_state(w: float, t0: float, u0: float | None, v0: float | None) -> tuple[float, float]:
+    """Gap ``z = u − u_s`` and its rate at ``t0`` (0, 0 for a rotor riding the stator)."""
+    if u0 is None:
+        return 0.0, 0.0
+    return u0 - stator.position(w * t0), v0 - stator.velocity(w * t0, w)
 
 
 def _separation_after(t: float, w: float) -> float:
@@ -72,7 +80,7 @@ def ivp_events(
 
     def rhs(t, y):
         """Gap dynamics in flight: ``z'' = −1 − a_s = −1 + w² sin(wt)`` (MODEL.md "Flight")."""
-        return [y[1], -1.0 + w * w * math.sin(w * t)]
+        return [y[1], -1.0 - stator.acceleration(w * t, w)]
 
     def gap(t, y):
         """Impact event: the gap ``z = u − u_s`` reaches 0 from above (eq. 20)."""
@@ -82,7 +90,7 @@ def ivp_events(
     gap.direction = -1.0
     t = t0
     in_contact = u0 is None
-    z, zd = (0.0, 0.0) if u0 is None else (u0 - math.sin(w * t0), v0 - w * math.cos(w * t0))
+    z, zd = _gap_state(w, t0, u0, v0)
     ts, vrel = [], []
     status = K.ST_EVENTS
     while len(ts) < max_events:
@@ -144,7 +152,7 @@ def _pack(ts, vrel, w) -> dict:
         "v_rel": np.asarray(vrel, float),
         "omega_after": np.zeros(n),
         "omega_before": np.zeros(n),
-        "u": np.sin(w * t),
+        "u": stator.position(w * t),
         "kind": np.zeros(n, dtype=np.int8),
     }
 
@@ -195,7 +203,7 @@ def moreau_events(
     v_rest: float = 1e-9,
 ) -> tuple[dict, int]:
     """Impacts from Moreau–Jean time-stepping with step ``h`` (module docstring)."""
-    z0, zd0 = (0.0, 0.0) if u0 is None else (u0 - math.sin(w * t0), v0 - w * math.cos(w * t0))
+    z0, zd0 = _gap_state(w, t0, u0, v0)
     out_t = np.empty(max_events)
     out_v = np.empty(max_events)
     cap_t = t_end if math.isfinite(t_end) else t0 + 50.0 * max_events * (1.0 + 1.0 / w)
