@@ -16,6 +16,7 @@ from bouncedisk.cli import main
 from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
 from bouncedisk.engine.noise import noisy_restitution, normals
 from bouncedisk.ensemble import run_ensemble
+from bouncedisk.records import TrajColumn as C
 from bouncedisk.scene import load_scene
 from bouncedisk.stats import confidence_interval, run_stats
 
@@ -89,7 +90,7 @@ def test_omega_integral_is_the_integral_of_the_dense_trajectory(e, psi):
             traj_dt=dt, stats_from=50.0,
         )  # fmt: skip
         res = simulate_arrays(cfg)
-        t, om = res.traj[:, 0], res.traj[:, 4]
+        t, om = res.traj[:, C.T], res.traj[:, C.OMEGA]
         sel = t >= 50.0
         jumps = np.abs(res.events["omega_after"] - res.events["omega_before"]).sum()
         err = abs(res.final["omega_integral"] - np.trapezoid(om[sel], t[sel]))

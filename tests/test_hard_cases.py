@@ -12,6 +12,7 @@ import pytest
 from invariants import check_events_sane, check_no_skipped_root, check_slip_never_reverses
 
 from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
+from bouncedisk.records import TrajColumn as C
 
 MILLION = 1_000_000
 
@@ -67,7 +68,7 @@ def test_omega_exactly_one_never_separates():
     assert len(res.events["t"]) == 0 and res.status == "completed"
     tr = res.traj
     assert len(tr) == 20_001
-    assert np.array_equal(tr[:, 1], tr[:, 3])  # the rotor rides the stator exactly
+    assert np.array_equal(tr[:, C.U], tr[:, C.U_STATOR])  # the rotor rides the stator exactly
 
 
 def test_omega_one_plus_1e_9_is_a_grazing_separation():
@@ -132,15 +133,15 @@ def test_stick_slip_stick_in_contact_matches_time_stepping(w, r, psi, cycles):
         InitialState(t=0.0, omega=0.0),
     )
     tr = res.traj
-    s = r * tr[:, 4] - w * np.cos(w * tr[:, 0] + psi)
+    s = r * tr[:, C.OMEGA] - w * np.cos(w * tr[:, C.T] + psi)
     sticking = np.abs(s) < 1e-9
     # the run passes through stick -> slip -> stick transitions (or, with a weak friction
     # R N < |α_s| wherever s = 0, slips throughout, reversing direction)
     changes = np.count_nonzero(np.diff(sticking.astype(int)))
     assert changes >= 4 if cycles else changes == 0
     t_ref, om_ref = _reference_contact_omega(w, r, psi, 0.0, t_end, 1e-4)
-    om_i = np.interp(tr[:, 0], t_ref, om_ref)
-    assert np.max(np.abs(r * (tr[:, 4] - om_i))) < 5e-3
+    om_i = np.interp(tr[:, C.T], t_ref, om_ref)
+    assert np.max(np.abs(r * (tr[:, C.OMEGA] - om_i))) < 5e-3
 
 
 def test_stator_inertia_and_kinetic_static_effects_run_stably():

@@ -8,6 +8,7 @@ from invariants import check_events_sane, check_no_skipped_root, check_slip_neve
 
 from bouncedisk import stator
 from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
+from bouncedisk.records import TrajColumn as C
 
 
 @given(
@@ -64,4 +65,4 @@ def test_dense_trajectory_never_below_stator(e, w, dt):
     res = simulate_arrays(cfg)
     tr = res.traj
     assert len(tr) == int(math.floor(60.0 / dt + 1e-9)) + 1
-    assert (tr[:, 1] - tr[:, 3]).min() >= -1e-9
+    assert (tr[:, C.U] - tr[:, C.U_STATOR]).min() >= -1e-9

@@ -21,6 +21,7 @@ from . import observables as ob
 from .engine import simulate_arrays
 from .errors import InputError
 from .provenance import base_attrs, new_run_id
+from .records import TrajColumn
 from .runner import engine_config, scene_attrs
 from .scene import Scene
 
@@ -35,7 +36,7 @@ def _member_omega(scene: Scene, member: int, e_sigma: float, seed: int) -> np.nd
     sigma = cfg.e_sigma if cfg.e_sigma > 0 else e_sigma
     cfg = dataclasses.replace(cfg, e_sigma=sigma, seed=seed, member=member, stroboscopic=False)
     res = simulate_arrays(cfg, scene.initial)
-    return res.traj[:, [0, 4]]
+    return res.traj[:, [TrajColumn.T, TrajColumn.OMEGA]]
 
 
 def omega_band(

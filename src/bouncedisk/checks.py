@@ -19,6 +19,7 @@ from . import stator
 from .datasets import open_checked, open_simulation
 from .engine import EngineConfig, InitialState, simulate_arrays
 from .errors import InputError
+from .records import TrajColumn
 from .runner import run_scene_arrays
 
 #: The pipeline's scene files: the checks read the same scenes the pipeline runs.
@@ -118,7 +119,7 @@ class _Source:
             out = (ev, traj, str(path))
         else:
             res = run_scene_arrays(workflow_scene(name))
-            traj = res.traj[:, [0, 4]] if len(res.traj) else None
+            traj = res.traj[:, [TrajColumn.T, TrajColumn.OMEGA]] if len(res.traj) else None
             out = (res.events, traj, f"simulated (scene {name}.yaml)")
         self.cache[name] = out
         return out

@@ -21,8 +21,7 @@ import numpy as np
 
 from . import observables as ob
 from . import stator
-from .engine import EngineConfig, InitialState, iterate
-from .engine.kernel import KIND_CHATTER, KIND_IMPACT
+from .engine import KIND_CHATTER, KIND_IMPACT, EngineConfig, InitialState, iterate
 
 #: Events kept from the end of each member's run to classify its regime.
 TAIL_EVENTS = 1200

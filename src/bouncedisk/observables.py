@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit
 
 from . import stator
-from .engine.kernel import KIND_CHATTER, KIND_IMPACT
+from .engine import KIND_CHATTER, KIND_IMPACT
 
 TWO_PI = 2.0 * math.pi
 

@@ -20,9 +20,9 @@ from numba import njit
 from scipy.integrate import solve_ivp
 
 from .. import stator
-from ..engine import kernel as K
-from ..engine.driver import STATUS_TEXT, Chunk, RunResult
+from ..engine.driver import Chunk, EngineError, RunResult
 from ..errors import InputError
+from ..records import RunStatus, StrobeColumn, TrajColumn
 from ..scene import Scene
 
 IVP_METHODS = {"rk45": "RK45", "dop853": "DOP853", "lsoda": "LSODA"}
@@ -92,14 +92,14 @@ def ivp_events(
     in_contact = u0 is None
     z, zd = _gap_state(w, t0, u0, v0)
     ts, vrel = [], []
-    status = K.ST_EVENTS
+    status = RunStatus.EVENTS
     while len(ts) < max_events:
         if in_contact:
             if not contact:
-                return _pack(ts, vrel, w), K.ST_NEED_CONTACT
+                return _pack(ts, vrel, w), RunStatus.NEED_CONTACT
             t = _separation_after(t, w)
             if not math.isfinite(t) or t > t_end:
-                status = K.ST_REST if not math.isfinite(t) else K.ST_TIME
+                status = RunStatus.REST if not math.isfinite(t) else RunStatus.TIME
                 break
             z, zd = 0.0, 0.0
             in_contact = False
@@ -124,7 +124,7 @@ def ivp_events(
             # solve_ivp's event search fails on bounces below its resolution: call it rest
             in_contact = True
             if w <= 1.0:
-                status = K.ST_REST
+                status = RunStatus.REST
                 break
             continue
         if sol.status == 1 and len(sol.t_events[0]):
@@ -138,9 +138,19 @@ def ivp_events(
                 continue
             z, zd = 0.0, e * v
         else:
-            status = K.ST_TIME
+            status = RunStatus.TIME
             break
     return _pack(ts, vrel, w), status
+
+
+def _no_traj() -> np.ndarray:
+    """Comparators sample no trajectory: zero rows of the engine's columns."""
+    return np.empty((0, len(TrajColumn)))
+
+
+def _no_strobe() -> np.ndarray:
+    """Comparators sample no stroboscopic section: zero rows of the engine's columns."""
+    return np.empty((0, len(StrobeColumn)))
 
 
 def _pack(ts, vrel, w) -> dict:
@@ -208,7 +218,7 @@ def moreau_events(
     out_v = np.empty(max_events)
     cap_t = t_end if math.isfinite(t_end) else t0 + 50.0 * max_events * (1.0 + 1.0 / w)
     n, _t = _moreau_kernel(e, w, h, t0, z0, zd0, max_events, cap_t, v_rest, out_t, out_v)
-    status = K.ST_EVENTS if n >= max_events else K.ST_TIME
+    status = RunStatus.EVENTS if n >= max_events else RunStatus.TIME
     return _pack(out_t[:n], out_v[:n], w), status
 
 
@@ -234,19 +244,15 @@ def simulate_comparator(scene: Scene) -> RunResult:
             t_end,
             contact=scene.has("contact"),
         )
-    return RunResult(
-        ev, np.empty((0, 5)), np.empty((0, 5)), STATUS_TEXT.get(status, "completed"), status
-    )
+    return RunResult(ev, _no_traj(), _no_strobe(), status.text, int(status))
 
 
 def iterate_comparator(scene: Scene):
     """The comparator's run as one engine-format chunk (generator, like the engine's)."""
     res = simulate_comparator(scene)
     ev = res.events
-    if res.status_code == K.ST_NEED_CONTACT:
-        from ..engine import EngineError
-
-        raise EngineError(STATUS_TEXT[K.ST_NEED_CONTACT], K.ST_NEED_CONTACT)
+    if res.status_code == RunStatus.NEED_CONTACT:
+        raise EngineError(RunStatus.NEED_CONTACT.text, RunStatus.NEED_CONTACT)
     if len(ev["t"]):
         yield Chunk(
             t=ev["t"],
@@ -256,8 +262,8 @@ def iterate_comparator(scene: Scene):
             u=ev["u"],
             omega_before=ev["omega_before"],
             kind=ev["kind"],
-            traj=np.empty((0, 5)),
-            strobe=np.empty((0, 5)),
+            traj=_no_traj(),
+            strobe=_no_strobe(),
             n_events_total=len(ev["t"]),
             t_now=float(ev["t"][-1]),
         )
