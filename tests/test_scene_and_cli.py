@@ -11,6 +11,7 @@ import xarray as xr
 from bouncedisk.cli import main
 from bouncedisk.errors import InputError
 from bouncedisk.params import PhysicalParameters
+from bouncedisk.provenance import REQUIRED_ATTRS
 from bouncedisk.scene import load_scene
 
 GOOD = """
@@ -197,29 +198,7 @@ def test_simulate_writes_interfaces_names_and_is_deterministic(scene_file, tmp_p
         assert name in da, name
         assert da[name].attrs["units"] and da[name].attrs["long_name"]
         np.testing.assert_array_equal(da[name].values, db[name].values)
-    for att in (
-        "e",
-        "omega_s",
-        "r_phi",
-        "psi",
-        "effects",
-        "solver",
-        "tol",
-        "scene_name",
-        "scene_sha256",
-        "run_id",
-        "bouncedisk_version",
-        "git_commit",
-        "created",
-        "wall_time_s",
-        "n_impacts",
-        "status",
-        "Conventions",
-        "title",
-        "history",
-        "source",
-        "references",
-    ):
+    for att in REQUIRED_ATTRS:
         assert att in da.attrs, att
     assert da.attrs["run_id"] != db.attrs["run_id"]
     assert da.attrs["n_impacts"] == 50 and da.attrs["status"] == "completed"

@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import xarray as xr
 
-from .provenance import base_attrs
+from .provenance import SCENE_ATTRS, base_attrs
 from .records import EventKind, TrajColumn
 from .runner import run_scene_arrays, scene_attrs
 from .scene import Scene
@@ -41,19 +41,7 @@ def poincare_dataset(sim: xr.Dataset, transient: int = 1000) -> xr.Dataset:
     if "period" in sim and "strobe_u" in sim:
         ds = ds.assign_coords(period=("period", sim["period"].values[s]))
     ds.attrs.update(base_attrs(f"Poincaré maps of run {sim.attrs.get('run_id')}"))
-    for k in (
-        "e",
-        "omega_s",
-        "r_phi",
-        "psi",
-        "effects",
-        "solver",
-        "tol",
-        "scene_name",
-        "scene_sha256",
-        "run_id",
-        "status",
-    ):
+    for k in (*SCENE_ATTRS, "run_id", "status"):
         if k in sim.attrs:
             ds.attrs[k if k != "run_id" else "source_run_id"] = sim.attrs[k]
     ds.attrs["run_id"] = f"{sim.attrs.get('run_id')}-poincare"

@@ -57,24 +57,9 @@ def _cmd_info(args: argparse.Namespace) -> int:
     from .datasets import open_simulation
 
     ds = open_simulation(args.file, lazy=True)  # the header only: memory stays flat
-    keys = (
-        "scene_name",
-        "run_id",
-        "e",
-        "omega_s",
-        "r_phi",
-        "psi",
-        "effects",
-        "solver",
-        "tol",
-        "status",
-        "n_impacts",
-        "n_chatter",
-        "wall_time_s",
-        "git_commit",
-        "created",
-    )
-    for k in keys:
+    from .provenance import RUN_ATTRS, SCENE_ATTRS
+
+    for k in dict.fromkeys(("scene_name", "run_id", *SCENE_ATTRS, *RUN_ATTRS, "n_chatter")):
         if k in ds.attrs:
             print(f"{k:>14}: {ds.attrs[k]}")
     print(f"{'variables':>14}: {', '.join(sorted(ds.data_vars))}")

@@ -279,11 +279,13 @@ def scene_from_mapping(raw: dict, source: str = "<scene>") -> Scene:
     outputs = _outputs(src, raw.get("outputs"), initial, stop)
     solver = _solver(src, raw.get("solver"))
     model = _model(src, raw.get("model", "bouncing"), stop, solver)
+    ensemble = _ensemble(src, raw.get("ensemble"), effects, params)
+    stats = _stats(src, raw.get("stats"), stop, initial)
     return Scene(
         name=name,
         model=model,
-        ensemble=_ensemble(src, raw.get("ensemble"), effects, params),
-        stats=_stats(src, raw.get("stats"), stop, initial),
+        ensemble=ensemble,
+        stats=stats,
         params=params,
         initial=initial,
         effects=effects,
