@@ -313,6 +313,18 @@ REGIMES: dict[int, str] = {
 REGIME_CODES: dict[str, int] = {name: code for code, name in REGIMES.items()}
 
 
+def regime_flags(dtype: type | str = np.int64) -> dict:
+    """CF ``flag_values``/``flag_meanings`` of a ``regime`` variable (:data:`REGIMES`).
+
+    CF flag meanings are single words, so ``chattering-periodic`` is written
+    ``chattering_periodic``.
+    """
+    return {
+        "flag_values": np.array(list(REGIMES), dtype=dtype),
+        "flag_meanings": " ".join(n.replace("-", "_") for n in REGIMES.values()),
+    }
+
+
 @dataclass(frozen=True)
 class Regime:
     """Dynamical regime of a run's tail: a name of :data:`REGIMES`, and ``[p, q]`` if periodic."""

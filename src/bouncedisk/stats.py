@@ -164,8 +164,7 @@ def to_dataset(scene: Scene, result: EnsembleStats, wall_time_s: float) -> xr.Da
     data["regime"][2].update(
         {
             "long_name": "dynamical regime of the member",
-            "flag_values": np.array(list(ob.REGIMES), dtype=np.int64),
-            "flag_meanings": " ".join(n.replace("-", "_") for n in ob.REGIMES.values()),
+            **ob.regime_flags(np.int64),
         }
     )
     data["period_p"][2]["long_name"] = "impacts per cycle (periodic regimes; 0 otherwise)"

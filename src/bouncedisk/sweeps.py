@@ -159,8 +159,7 @@ def regime_attrs() -> dict:
     return {
         "long_name": "dynamical regime (most common among members)",
         "units": "1",
-        "flag_values": np.array(list(ob.REGIMES), dtype=np.int16),
-        "flag_meanings": " ".join(n.replace("-", "_") for n in ob.REGIMES.values()),
+        **ob.regime_flags(np.int16),
         "comment": "periodic regimes: period_p impacts every period_q stator periods",
     }
 
