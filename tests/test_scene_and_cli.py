@@ -111,6 +111,32 @@ def test_bad_values_exit_2_with_one_line(scene_file, tmp_path, capsys, override,
 
 
 @pytest.mark.parametrize(
+    "override,named",
+    [
+        ("parameters.e=abc", "parameters.e (from --set parameters.e)"),
+        ("stop={impacts: 10, time: 5}", "stop (from --set stop)"),
+        ("effects=[impacts, warp_drive]", "effects.warp_drive (from --set effects)"),
+    ],
+)
+def test_bad_set_values_name_the_option(scene_file, tmp_path, capsys, override, named):
+    out = tmp_path / "out.nc"
+    code = main(["simulate", str(scene_file(GOOD)), "-o", str(out), "--set", override, "-q"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1
+    assert "scene.yaml" in err[0] and named in err[0]
+
+
+def test_a_bad_file_value_does_not_blame_an_unrelated_set_option(scene_file, tmp_path, capsys):
+    text = "name: x\nparameters: {e: 'high', omega_s: 1.5}\nstop: {impacts: 3}\n"
+    f = tmp_path / "bad.yaml"
+    f.write_text(text)
+    out = tmp_path / "out.nc"
+    assert main(["simulate", str(f), "-o", str(out), "--set", "stop.impacts=5", "-q"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "parameters.e: must be a number" in err and "--set" not in err
+
+
+@pytest.mark.parametrize(
     "text,field",
     [
         ("name: x\nparameters: {e: 0.3, omega_s: [1\n", "line"),

@@ -514,9 +514,29 @@ def load_scene(path: str | Path, overrides: list[str] | None = None) -> Scene:
     Raises
     ------
     InputError
-        Naming the file (or ``--set``) and the field at fault.
+        Naming the file and the field at fault; a field that a ``--set`` option gave (or a
+        field inside it) also names the option: ``parameters.e (from --set parameters.e)``.
     """
     raw = read_yaml(path)
-    if overrides:
-        raw = apply_overrides(raw, overrides)
-    return scene_from_mapping(raw, str(path))
+    if not overrides:
+        return scene_from_mapping(raw, str(path))
+    raw = apply_overrides(raw, overrides)
+    try:
+        return scene_from_mapping(raw, str(path))
+    except InputError as ex:
+        key = override_of(ex.field, overrides)
+        if key is None:
+            raise
+        raise InputError(ex.source, f"{ex.field} (from --set {key})", ex.message) from None
+
+
+def override_of(field: str, overrides: list[str]) -> str | None:
+    """The key of the last ``--set KEY=VALUE`` that gave ``field``, a field inside it, or a
+    mapping that holds it; ``None`` when the scene file gave it."""
+    for item in reversed(overrides):
+        key = item.partition("=")[0].strip()
+        if not key or not field:
+            continue
+        if field == key or field.startswith((key + ".", key + "[")) or key.startswith(field + "."):
+            return key
+    return None
