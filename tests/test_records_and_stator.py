@@ -61,7 +61,6 @@ def test_stator_scalars_and_arrays_agree_bit_for_bit(theta):
         (stator.normal_load, (w,)),
         (stator.twist, (psi,)),
         (stator.twist_rate, (w, psi)),
-        (stator.twist_acceleration, (w, psi)),
     ):
         scalar, vector = f(theta, *args), f(arr, *args)
         assert isinstance(scalar, float) and isinstance(vector, np.ndarray)
@@ -75,9 +74,6 @@ def test_stator_derivatives_and_load_follow_eq_1():
     np.testing.assert_allclose(d(stator.position), stator.velocity(w * t, w), atol=1e-7)
     np.testing.assert_allclose(d(stator.velocity, w), stator.acceleration(w * t, w), atol=1e-6)
     np.testing.assert_allclose(d(stator.twist, psi), stator.twist_rate(w * t, w, psi), atol=1e-7)
-    np.testing.assert_allclose(
-        d(stator.twist_rate, w, psi), stator.twist_acceleration(w * t, w, psi), atol=1e-6
-    )
     np.testing.assert_array_equal(
         stator.normal_load(w * t, w), 1.0 - w * w * np.sin(w * t)
     )  # N = 1 + a_s (eq. 17)

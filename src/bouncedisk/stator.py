@@ -2,14 +2,14 @@
 
 The stator moves as prescribed (paper eq. 1, nondimensional): axial ``u_s = sin(w t)``,
 ``v_s = w cos(w t)``, ``a_s = −w² sin(w t)``; twist ``φ_s = sin(w t + ψ)``,
-``Ω_s = w cos(w t + ψ)``, ``α_s = −w² sin(w t + ψ)``. The normal load in contact is
-``N = 1 + a_s`` (eq. 17, corrected in MODEL.md).
+``Ω_s = w cos(w t + ψ)`` (``α_s`` is needed by the compiled kernel only). The normal load in
+contact is ``N = 1 + a_s`` (eq. 17, corrected in MODEL.md).
 
 Every function takes the stator phase ``θ = w t`` (the engine records events by their phase), so
 a caller with a time passes ``w * t``. A Python ``float`` goes through :mod:`math` (fast in
 scalar loops such as a ``solve_ivp`` right-hand side), anything else through numpy (on the
-reference machine both give the same bits). All code outside the compiled engine uses this module; the compiled kernel has
-its own copy in :mod:`bouncedisk.engine.laws`.
+reference machine both give the same bits). All code outside the compiled engine uses this
+module; compiled code (the kernel, the Moreau–Jean comparator) uses :mod:`bouncedisk.engine.laws`.
 """
 
 from __future__ import annotations
@@ -24,7 +24,6 @@ __all__ = [
     "normal_load",
     "position",
     "twist",
-    "twist_acceleration",
     "twist_rate",
     "velocity",
 ]
@@ -66,8 +65,3 @@ def twist(theta: ArrayLike, psi: float) -> float | np.ndarray:
 def twist_rate(theta: ArrayLike, w: float, psi: float) -> float | np.ndarray:
     """Stator angular velocity ``Ω_s = w cos(θ + ψ)`` (eq. 1, differentiated)."""
     return w * _cos(theta + psi)
-
-
-def twist_acceleration(theta: ArrayLike, w: float, psi: float) -> float | np.ndarray:
-    """Stator angular acceleration ``α_s = −w² sin(θ + ψ)`` (eq. 1, differentiated twice)."""
-    return -(w * w * _sin(theta + psi))

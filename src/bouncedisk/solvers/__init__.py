@@ -20,6 +20,7 @@ from numba import njit
 from scipy.integrate import solve_ivp
 
 from .. import stator
+from ..engine import laws
 from ..engine.driver import Chunk, EngineError, RunResult
 from ..errors import InputError
 from ..records import RunStatus, StrobeColumn, TrajColumn
@@ -56,7 +57,7 @@ def _separation_after(t: float, w: float) -> float:
     """First time >= t where the contact load 1 − w² sin(wt) turns negative (inf if never)."""
     if w <= 1.0:
         return math.inf
-    ts = math.asin(1.0 / (w * w))
+    ts = laws.separation_phase(w)
     ph = w * t
     k = math.floor((ph - ts) / TWO_PI) + 1
     return (ts + TWO_PI * k) / w
@@ -180,7 +181,7 @@ def _moreau_kernel(e, w, h, t0, z0, zd0, max_events, t_end, v_rest, out_t, out_v
     while n < max_events and steps < max_steps:
         # free velocity: zd'' = −1 + w² sin(wt), midpoint force
         tm = t + 0.5 * h
-        f = -1.0 + w * w * np.sin(w * tm)
+        f = -laws.normal_load(w, w * tm)  # = −1 − a_s
         zd_free = zd + h * f
         z_pred = z + 0.5 * h * zd  # predicted gap at mid-step
         active = z_pred <= 0.0
