@@ -12,6 +12,7 @@ import pytest
 from invariants import check_events_sane, check_no_skipped_root, check_slip_never_reverses
 
 from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
+from bouncedisk.records import EventKind
 from bouncedisk.records import TrajColumn as C
 
 MILLION = 1_000_000
@@ -42,7 +43,7 @@ def test_near_grazing_orbits_e095():
     """Many low-velocity (near-tangential) impacts: strongly dissipative chaotic bouncing."""
     res, n = run_million(0.95, 1.2)
     assert n > 100
-    assert np.min(res.events["v_rel"][res.events["kind"] == 0]) < 1e-2
+    assert np.min(res.events["v_rel"][res.events["kind"] == EventKind.IMPACT]) < 1e-2
 
 
 def test_e_zero():
@@ -55,7 +56,7 @@ def test_e_zero():
 def test_e_one():
     res, n = run_million(1.0, 1.5)
     assert n > 1000
-    assert np.sum(res.events["kind"] == 1) == 0  # no chattering without dissipation
+    assert np.sum(res.events["kind"] == EventKind.CHATTER) == 0  # no chattering without dissipation
 
 
 def test_omega_exactly_one_never_separates():
@@ -79,7 +80,7 @@ def test_omega_one_plus_1e_9_is_a_grazing_separation():
 def test_omega_one_plus_1e_6_resolves_tiny_separations():
     res, _ = run_million(0.3, 1 + 1e-6)
     # each separation is a hop of height ~1e-11 ending in a chattering tail
-    assert np.sum(res.events["kind"] == 1) > 1000
+    assert np.sum(res.events["kind"] == EventKind.CHATTER) > 1000
 
 
 def test_omega_100():

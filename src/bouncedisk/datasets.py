@@ -178,9 +178,9 @@ class SimulationWriter:
         return self
 
     def _bytes(self, n_events: int, n_traj: int, n_strobe: int) -> float:
-        ev = 41 + (16 if self.torsion else 0) + (8 if self.t_c is not None else 0)
-        tr = 32 + (8 if self.torsion else 0) + (8 if self.t_c is not None else 0)
-        sb = 32 + (8 if self.torsion else 0)
+        from .outputs import file_row_bytes
+
+        ev, tr, sb = file_row_bytes(self.torsion, self.t_c is not None)
         return (
             (n_events * ev if self.events else 0)
             + (n_traj * tr if self.trajectory else 0)

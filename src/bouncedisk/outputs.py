@@ -133,15 +133,21 @@ def too_large(path: str | Path, size: float, limit: int, what: str) -> OutputToo
     )
 
 
-def row_bytes(scene) -> tuple[int, int, int]:
-    """Bytes per event, per trajectory sample and per stroboscopic sample of a scene's file."""
-    torsion = scene.has("torsion")
-    physical = scene.physical is not None
-    ev = EVENT_BYTES + (EVENT_TORSION_BYTES if torsion else 0) if scene.outputs.events else 0
-    ev += 8 if physical and scene.outputs.events else 0  # t_impact_s
+def file_row_bytes(torsion: bool, physical: bool) -> tuple[int, int, int]:
+    """Bytes per event, trajectory sample and stroboscopic sample of a simulation file.
+
+    ``physical`` files add ``t_impact_s`` and ``time_s`` (8 bytes each).
+    """
+    ev = EVENT_BYTES + (EVENT_TORSION_BYTES if torsion else 0) + (8 if physical else 0)
     tr = SAMPLE_BYTES + (SAMPLE_TORSION_BYTES if torsion else 0) + (8 if physical else 0)
     sb = STROBE_BYTES + (STROBE_TORSION_BYTES if torsion else 0)
     return ev, tr, sb
+
+
+def row_bytes(scene) -> tuple[int, int, int]:
+    """Bytes per event, per trajectory sample and per stroboscopic sample of a scene's file."""
+    ev, tr, sb = file_row_bytes(scene.has("torsion"), scene.physical is not None)
+    return (ev if scene.outputs.events else 0), tr, sb
 
 
 def _samples(t0: float, t1: float, dt: float) -> float:
