@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from bouncedisk import stator
 from bouncedisk.engine import KIND_IMPACT, RunResult
 
 
@@ -32,13 +33,13 @@ def check_no_skipped_root(
     t, ph, vr, kd = ev["t"], ev["phase"], ev["v_rel"], ev["kind"]
     if len(t) < 2:
         return 0
-    v_post = w * np.cos(ph) + e * vr
+    v_post = stator.velocity(ph, w) + e * vr
     dt = np.diff(t)
-    landing = np.sin(ph[:-1]) + v_post[:-1] * dt - 0.5 * dt**2
+    landing = stator.position(ph[:-1]) + v_post[:-1] * dt - 0.5 * dt**2
     free = (
         (kd[:-1] == KIND_IMPACT)
         & (kd[1:] == KIND_IMPACT)
-        & (np.abs(landing - np.sin(ph[1:])) < 1e-6 * (1 + dt**2))
+        & (np.abs(landing - stator.position(ph[1:])) < 1e-6 * (1 + dt**2))
     )
     idx = np.nonzero(free)[0]
     if len(idx) > n_check:
@@ -47,7 +48,12 @@ def check_no_skipped_root(
     for k in idx:
         tau = frac * dt[k]
         # stator phase carried from the impact phase, as the engine does
-        gap = np.sin(ph[k]) + v_post[k] * tau - 0.5 * tau**2 - np.sin(ph[k] + w * tau)
+        gap = (
+            stator.position(ph[k])
+            + v_post[k] * tau
+            - 0.5 * tau**2
+            - stator.position(ph[k] + w * tau)
+        )
         assert gap.min() >= -tol * (1.0 + w * dt[k]), (
             f"flight {k} dips {gap.min():.3e} below the stator before its recorded impact"
         )
@@ -58,7 +64,7 @@ def check_slip_never_reverses(res: RunResult, r_phi: float, w: float, psi: float
     """At every impact ``s⁺`` has the sign of ``s⁻`` (or is zero) and ``|s⁺| <= |s⁻|``."""
     ev = res.events
     sel = ev["kind"] == KIND_IMPACT
-    twist = w * np.cos(ev["phase"][sel] + psi)
+    twist = stator.twist_rate(ev["phase"][sel], w, psi)
     s_minus = r_phi * ev["omega_before"][sel] - twist
     s_plus = r_phi * ev["omega_after"][sel] - twist
     scale = 1e-12 * (1.0 + np.abs(r_phi * ev["omega_before"][sel]) + w)

@@ -8,13 +8,14 @@ import pytest
 import xarray as xr
 from matplotlib.figure import Figure
 
-from bouncedisk import plotting
+from bouncedisk import plotting, stator
 from bouncedisk.analysis import clipped_comparison, poincare_dataset
 from bouncedisk.bands import omega_band
 from bouncedisk.cli import main
 from bouncedisk.datasets import open_simulation
 from bouncedisk.engine import EngineConfig, simulate_arrays
 from bouncedisk.observables import REGIMES
+from bouncedisk.records import TrajColumn as C
 from bouncedisk.scene import scene_from_mapping
 from bouncedisk.sweeps import combine_shards, run_continuation, run_sweep
 
@@ -85,9 +86,9 @@ def test_clipped_model_rides_the_stator_and_coasts_when_unloaded():
     res = simulate_arrays(cfg)
     tr = res.traj
     assert len(res.events["t"]) == 0
-    np.testing.assert_array_equal(tr[:, 1], tr[:, 3])
+    np.testing.assert_array_equal(tr[:, C.U], tr[:, C.U_STATOR])
     # where 1 - w² sin(wt) < 0 there is no torque: omega is constant there
-    unloaded = 1 - 1.5**2 * np.sin(1.5 * tr[:, 0]) < -0.05
+    unloaded = stator.normal_load(1.5 * tr[:, C.T], 1.5) < -0.05
     runs = np.flatnonzero(np.diff(unloaded.astype(int)))
     seg = slice(runs[0] + 2, runs[1] - 1)
     assert unloaded[seg].all() and np.ptp(tr[seg, 4]) < 1e-12

@@ -15,9 +15,12 @@ import xarray as xr
 from bouncedisk.cli import main
 from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
 from bouncedisk.engine.noise import noisy_restitution, normals
-from bouncedisk.ensemble import run_ensemble
+from bouncedisk.ensemble import MemberStats, run_ensemble
+from bouncedisk.observables import REGIME_CODES
+from bouncedisk.records import TrajColumn as C
 from bouncedisk.scene import load_scene
-from bouncedisk.stats import confidence_interval, run_stats
+from bouncedisk.stats import EnsembleStats, confidence_interval, run_stats
+from bouncedisk.statscli import format_summary
 
 CHAOTIC = """\
 name: chaotic
@@ -89,7 +92,7 @@ def test_omega_integral_is_the_integral_of_the_dense_trajectory(e, psi):
             traj_dt=dt, stats_from=50.0,
         )  # fmt: skip
         res = simulate_arrays(cfg)
-        t, om = res.traj[:, 0], res.traj[:, 4]
+        t, om = res.traj[:, C.T], res.traj[:, C.OMEGA]
         sel = t >= 50.0
         jumps = np.abs(res.events["omega_after"] - res.events["omega_before"]).sum()
         err = abs(res.final["omega_integral"] - np.trapezoid(om[sel], t[sel]))
@@ -249,3 +252,19 @@ def test_intervals_of_rates_stay_nonnegative(scene_file, capsys):
         low = s[f"{name}_ci95"][0]
         assert low is None or low >= 0.0, (name, s[f"{name}_ci95"])
     assert s["chatter_rate"] > 0 and s["chatter_rate_ci95"][0] == 0.0
+
+
+def _member(k: int, regime: str) -> MemberStats:
+    p = 1 if regime == "periodic" else 0
+    return MemberStats(k, 1.0, 0.0, 1.0, 0.0, math.nan, 0.5, REGIME_CODES[regime], p, p, 10, 0, 1.0)
+
+
+def test_a_regime_tie_is_reported_as_a_tie():
+    tied = EnsembleStats([_member(0, "periodic"), _member(1, "chaotic")], 0.0, 1.0)
+    s = tied.summary()
+    assert s["regime_tie"] == ["periodic", "chaotic"] and s["regime_fraction"] == 0.5
+    assert "tie between periodic and chaotic, 50% of members each" in format_summary(s)
+    clear = EnsembleStats([_member(0, "chaotic"), _member(1, "chaotic"), _member(2, "periodic")], 0.0, 1.0)  # fmt: skip
+    s = clear.summary()
+    assert s["regime"] == "chaotic" and s["regime_tie"] == []
+    assert "chaotic, 67% of members" in format_summary(s) and "tie" not in format_summary(s)

@@ -12,6 +12,8 @@ import pytest
 from invariants import check_events_sane, check_no_skipped_root, check_slip_never_reverses
 
 from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
+from bouncedisk.records import EventKind
+from bouncedisk.records import TrajColumn as C
 
 MILLION = 1_000_000
 
@@ -41,7 +43,7 @@ def test_near_grazing_orbits_e095():
     """Many low-velocity (near-tangential) impacts: strongly dissipative chaotic bouncing."""
     res, n = run_million(0.95, 1.2)
     assert n > 100
-    assert np.min(res.events["v_rel"][res.events["kind"] == 0]) < 1e-2
+    assert np.min(res.events["v_rel"][res.events["kind"] == EventKind.IMPACT]) < 1e-2
 
 
 def test_e_zero():
@@ -54,7 +56,7 @@ def test_e_zero():
 def test_e_one():
     res, n = run_million(1.0, 1.5)
     assert n > 1000
-    assert np.sum(res.events["kind"] == 1) == 0  # no chattering without dissipation
+    assert np.sum(res.events["kind"] == EventKind.CHATTER) == 0  # no chattering without dissipation
 
 
 def test_omega_exactly_one_never_separates():
@@ -67,7 +69,7 @@ def test_omega_exactly_one_never_separates():
     assert len(res.events["t"]) == 0 and res.status == "completed"
     tr = res.traj
     assert len(tr) == 20_001
-    assert np.array_equal(tr[:, 1], tr[:, 3])  # the rotor rides the stator exactly
+    assert np.array_equal(tr[:, C.U], tr[:, C.U_STATOR])  # the rotor rides the stator exactly
 
 
 def test_omega_one_plus_1e_9_is_a_grazing_separation():
@@ -78,7 +80,7 @@ def test_omega_one_plus_1e_9_is_a_grazing_separation():
 def test_omega_one_plus_1e_6_resolves_tiny_separations():
     res, _ = run_million(0.3, 1 + 1e-6)
     # each separation is a hop of height ~1e-11 ending in a chattering tail
-    assert np.sum(res.events["kind"] == 1) > 1000
+    assert np.sum(res.events["kind"] == EventKind.CHATTER) > 1000
 
 
 def test_omega_100():
@@ -132,15 +134,15 @@ def test_stick_slip_stick_in_contact_matches_time_stepping(w, r, psi, cycles):
         InitialState(t=0.0, omega=0.0),
     )
     tr = res.traj
-    s = r * tr[:, 4] - w * np.cos(w * tr[:, 0] + psi)
+    s = r * tr[:, C.OMEGA] - w * np.cos(w * tr[:, C.T] + psi)
     sticking = np.abs(s) < 1e-9
     # the run passes through stick -> slip -> stick transitions (or, with a weak friction
     # R N < |α_s| wherever s = 0, slips throughout, reversing direction)
     changes = np.count_nonzero(np.diff(sticking.astype(int)))
     assert changes >= 4 if cycles else changes == 0
     t_ref, om_ref = _reference_contact_omega(w, r, psi, 0.0, t_end, 1e-4)
-    om_i = np.interp(tr[:, 0], t_ref, om_ref)
-    assert np.max(np.abs(r * (tr[:, 4] - om_i))) < 5e-3
+    om_i = np.interp(tr[:, C.T], t_ref, om_ref)
+    assert np.max(np.abs(r * (tr[:, C.OMEGA] - om_i))) < 5e-3
 
 
 def test_stator_inertia_and_kinetic_static_effects_run_stably():

@@ -11,6 +11,7 @@ import xarray as xr
 from bouncedisk.cli import main
 from bouncedisk.errors import InputError
 from bouncedisk.params import PhysicalParameters
+from bouncedisk.provenance import REQUIRED_ATTRS
 from bouncedisk.scene import load_scene
 
 GOOD = """
@@ -106,7 +107,19 @@ def test_bad_values_exit_2_with_one_line(scene_file, tmp_path, capsys, override,
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2
     assert len(err) == 1 and "scene.yaml" in err[0] and field in err[0]
+    # the line also names the option that gave the bad value
+    assert f"(from --set {override.partition('=')[0]})" in err[0]
     assert not out.exists() and not list(tmp_path.glob(".out.nc*"))
+
+
+def test_a_bad_file_value_does_not_blame_an_unrelated_set_option(scene_file, tmp_path, capsys):
+    text = "name: x\nparameters: {e: 'high', omega_s: 1.5}\nstop: {impacts: 3}\n"
+    f = tmp_path / "bad.yaml"
+    f.write_text(text)
+    out = tmp_path / "out.nc"
+    assert main(["simulate", str(f), "-o", str(out), "--set", "stop.impacts=5", "-q"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "parameters.e: must be a number" in err and "--set" not in err
 
 
 @pytest.mark.parametrize(
@@ -197,29 +210,7 @@ def test_simulate_writes_interfaces_names_and_is_deterministic(scene_file, tmp_p
         assert name in da, name
         assert da[name].attrs["units"] and da[name].attrs["long_name"]
         np.testing.assert_array_equal(da[name].values, db[name].values)
-    for att in (
-        "e",
-        "omega_s",
-        "r_phi",
-        "psi",
-        "effects",
-        "solver",
-        "tol",
-        "scene_name",
-        "scene_sha256",
-        "run_id",
-        "bouncedisk_version",
-        "git_commit",
-        "created",
-        "wall_time_s",
-        "n_impacts",
-        "status",
-        "Conventions",
-        "title",
-        "history",
-        "source",
-        "references",
-    ):
+    for att in REQUIRED_ATTRS:
         assert att in da.attrs, att
     assert da.attrs["run_id"] != db.attrs["run_id"]
     assert da.attrs["n_impacts"] == 50 and da.attrs["status"] == "completed"

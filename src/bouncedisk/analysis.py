@@ -7,8 +7,8 @@ import dataclasses
 import numpy as np
 import xarray as xr
 
-from .engine.kernel import KIND_IMPACT
-from .provenance import base_attrs
+from .provenance import SCENE_ATTRS, base_attrs
+from .records import EventKind, TrajColumn
 from .runner import run_scene_arrays, scene_attrs
 from .scene import Scene
 
@@ -22,7 +22,7 @@ def poincare_dataset(sim: xr.Dataset, transient: int = 1000) -> xr.Dataset:
     kind = sim["kind"].values
     keep = np.zeros(len(kind), dtype=bool)
     keep[transient:] = True
-    keep &= kind == KIND_IMPACT
+    keep &= kind == EventKind.IMPACT
     data = {
         "t_impact": ("impact", sim["t_impact"].values[keep]),
         "phase": ("impact", sim["phase"].values[keep]),
@@ -41,19 +41,7 @@ def poincare_dataset(sim: xr.Dataset, transient: int = 1000) -> xr.Dataset:
     if "period" in sim and "strobe_u" in sim:
         ds = ds.assign_coords(period=("period", sim["period"].values[s]))
     ds.attrs.update(base_attrs(f"Poincaré maps of run {sim.attrs.get('run_id')}"))
-    for k in (
-        "e",
-        "omega_s",
-        "r_phi",
-        "psi",
-        "effects",
-        "solver",
-        "tol",
-        "scene_name",
-        "scene_sha256",
-        "run_id",
-        "status",
-    ):
+    for k in (*SCENE_ATTRS, "run_id", "status"):
         if k in sim.attrs:
             ds.attrs[k if k != "run_id" else "source_run_id"] = sim.attrs[k]
     ds.attrs["run_id"] = f"{sim.attrs.get('run_id')}-poincare"
@@ -88,8 +76,10 @@ def clipped_comparison(
             )
             res = run_scene_arrays(sc)
             if time is None:
-                time = res.traj[:, 0]
-            series[model, p] = np.interp(time, res.traj[:, 0], res.traj[:, 4])
+                time = res.traj[:, TrajColumn.T]
+            series[model, p] = np.interp(
+                time, res.traj[:, TrajColumn.T], res.traj[:, TrajColumn.OMEGA]
+            )
     om = np.array([[series[m, p] for p in psis] for m in models])
     band_vars = {}
     bands = [

@@ -21,7 +21,8 @@ from . import observables as ob
 from .engine import simulate_arrays
 from .errors import InputError
 from .provenance import base_attrs, new_run_id
-from .runner import engine_config, initial_state, scene_attrs
+from .records import TrajColumn
+from .runner import engine_config, scene_attrs
 from .scene import Scene
 
 #: Restitution noise of the band's members when the scene has none (MODEL.md: enough to
@@ -34,8 +35,48 @@ def _member_omega(scene: Scene, member: int, e_sigma: float, seed: int) -> np.nd
     cfg = engine_config(scene)
     sigma = cfg.e_sigma if cfg.e_sigma > 0 else e_sigma
     cfg = dataclasses.replace(cfg, e_sigma=sigma, seed=seed, member=member, stroboscopic=False)
-    res = simulate_arrays(cfg, initial_state(scene))
-    return res.traj[:, [0, 4]]
+    res = simulate_arrays(cfg, scene.initial)
+    return res.traj[:, [TrajColumn.T, TrajColumn.OMEGA]]
+
+
+def _band_dataset(t: np.ndarray, om: np.ndarray) -> xr.Dataset:
+    """Band variables of member speeds ``om`` (member, time): mean with a Student-t 95 %
+    interval, 2.5/97.5 percentiles, and each member's first-order trend."""
+    members = len(om)
+    mean = om.mean(axis=0)
+    half = _sps.t.ppf(0.975, members - 1) * om.std(axis=0, ddof=1) / np.sqrt(members)
+    lo, hi = np.percentile(om, [2.5, 97.5], axis=0)
+    trends = [ob.first_order_trend(t, row) for row in om]
+
+    def var(values, long_name):
+        return ("time", values, {"long_name": long_name, "units": "1"})
+
+    def per_member(values, long_name):
+        return ("member", np.asarray(values, float), {"long_name": long_name, "units": "1"})
+
+    return xr.Dataset(
+        {
+            "omega_member0": var(om[0], "rotor angular velocity of member 0"),
+            "omega_mean": var(mean, "ensemble mean of the rotor angular velocity"),
+            "omega_ci_low": var(mean - half, "lower end of the 95% interval of the mean"),
+            "omega_ci_high": var(mean + half, "upper end of the 95% interval of the mean"),
+            "omega_p025": var(lo, "2.5th percentile of the members"),
+            "omega_p975": var(hi, "97.5th percentile of the members"),
+            "trend_steady": per_member(
+                [x.steady for x in trends], "steady speed of the first-order trend"
+            ),  # fmt: skip
+            "trend_tau": per_member(
+                [x.tau for x in trends], "time constant of the first-order trend"
+            ),  # fmt: skip
+            "ripple_rms": per_member(
+                [x.ripple_rms for x in trends], "RMS of the ripple about the trend"
+            ),  # fmt: skip
+        },
+        coords={
+            "time": ("time", t, {"long_name": "time", "units": "1"}),
+            "member": ("member", np.arange(members), {"long_name": "ensemble member"}),
+        },
+    )
 
 
 def omega_band(
@@ -67,43 +108,11 @@ def omega_band(
     n = min(len(r) for r in runs)
     t = runs[0][:n, 0]
     om = np.stack([r[:n, 1] for r in runs])  # (member, time)
-    mean = om.mean(axis=0)
-    half = _sps.t.ppf(0.975, members - 1) * om.std(axis=0, ddof=1) / np.sqrt(members)
-    lo, hi = np.percentile(om, [2.5, 97.5], axis=0)
-    trends = [ob.first_order_trend(t, row) for row in om]
+    ds = _band_dataset(t, om)
+    mean = ds["omega_mean"].values
     mean_trend = ob.first_order_trend(t, mean)
     resid = mean - mean_trend(t)
     r2 = 1.0 - float(np.var(resid) / np.var(mean)) if np.var(mean) > 0 else float("nan")
-
-    def var(values, long_name):
-        return ("time", values, {"long_name": long_name, "units": "1"})
-
-    def per_member(values, long_name):
-        return ("member", np.asarray(values, float), {"long_name": long_name, "units": "1"})
-
-    ds = xr.Dataset(
-        {
-            "omega_member0": var(om[0], "rotor angular velocity of member 0"),
-            "omega_mean": var(mean, "ensemble mean of the rotor angular velocity"),
-            "omega_ci_low": var(mean - half, "lower end of the 95% interval of the mean"),
-            "omega_ci_high": var(mean + half, "upper end of the 95% interval of the mean"),
-            "omega_p025": var(lo, "2.5th percentile of the members"),
-            "omega_p975": var(hi, "97.5th percentile of the members"),
-            "trend_steady": per_member(
-                [x.steady for x in trends], "steady speed of the first-order trend"
-            ),  # fmt: skip
-            "trend_tau": per_member(
-                [x.tau for x in trends], "time constant of the first-order trend"
-            ),  # fmt: skip
-            "ripple_rms": per_member(
-                [x.ripple_rms for x in trends], "RMS of the ripple about the trend"
-            ),  # fmt: skip
-        },
-        coords={
-            "time": ("time", t, {"long_name": "time", "units": "1"}),
-            "member": ("member", np.arange(members), {"long_name": "ensemble member"}),
-        },
-    )
     ds.attrs.update(
         base_attrs(f"bouncedisk ensemble band of the rotor speed, scene '{scene.name}'")
     )

@@ -15,9 +15,11 @@ from pathlib import Path
 import numpy as np
 
 from . import observables as ob
+from . import stator
 from .datasets import open_checked, open_simulation
 from .engine import EngineConfig, InitialState, simulate_arrays
 from .errors import InputError
+from .records import TrajColumn
 from .runner import run_scene_arrays
 
 #: The pipeline's scene files: the checks read the same scenes the pipeline runs.
@@ -117,7 +119,7 @@ class _Source:
             out = (ev, traj, str(path))
         else:
             res = run_scene_arrays(workflow_scene(name))
-            traj = res.traj[:, [0, 4]] if len(res.traj) else None
+            traj = res.traj[:, [TrajColumn.T, TrajColumn.OMEGA]] if len(res.traj) else None
             out = (res.events, traj, f"simulated (scene {name}.yaml)")
         self.cache[name] = out
         return out
@@ -226,7 +228,7 @@ def settles_on_period(e: float, gamma: float, n: int, phase: float, events: int)
     w = math.sqrt(gamma)
     res = simulate_arrays(
         EngineConfig(e=e, omega_s=w, max_events=events),
-        InitialState(t=phase / w, u=math.sin(phase), v=math.pi * n / w),
+        InitialState(t=phase / w, u=stator.position(phase), v=math.pi * n / w),
     )
     ev = res.events
     per = ob.find_period(ev["t"], ev["phase"], ev["v_rel"], ev["kind"], w, max_period=4)
@@ -261,7 +263,7 @@ def period_one_is_stable(e: float, gamma: float) -> bool:
     phi += 1e-4
     res = simulate_arrays(
         EngineConfig(e=e, omega_s=w, max_events=60_000),
-        InitialState(t=phi / w, u=math.sin(phi), v=vp),
+        InitialState(t=phi / w, u=stator.position(phi), v=vp),
     )
     return float(np.ptp(res.events["phase"][-200:])) < 1e-7
 

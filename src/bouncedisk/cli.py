@@ -57,24 +57,9 @@ def _cmd_info(args: argparse.Namespace) -> int:
     from .datasets import open_simulation
 
     ds = open_simulation(args.file, lazy=True)  # the header only: memory stays flat
-    keys = (
-        "scene_name",
-        "run_id",
-        "e",
-        "omega_s",
-        "r_phi",
-        "psi",
-        "effects",
-        "solver",
-        "tol",
-        "status",
-        "n_impacts",
-        "n_chatter",
-        "wall_time_s",
-        "git_commit",
-        "created",
-    )
-    for k in keys:
+    from .provenance import RUN_ATTRS, SCENE_ATTRS
+
+    for k in dict.fromkeys(("scene_name", "run_id", *SCENE_ATTRS, *RUN_ATTRS, "n_chatter")):
         if k in ds.attrs:
             print(f"{k:>14}: {ds.attrs[k]}")
     print(f"{'variables':>14}: {', '.join(sorted(ds.data_vars))}")
@@ -233,16 +218,27 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"bouncedisk {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for add in (_add_simulate, _add_stats, _add_info, _add_runs, _add_check, _add_fit):
+        add(sub)
+    return parser
 
-    p = sub.add_parser("simulate", help="run one scene and write one netCDF file")
-    p.add_argument("scene", help="scene file (YAML)")
-    p.add_argument("-o", "--output", required=True, help="netCDF file to write")
+
+def _add_set_option(p: argparse.ArgumentParser, example: str) -> None:
+    """``--set KEY=VALUE`` (repeatable): override a scene field."""
     p.add_argument(
         "--set",
         action="append",
         metavar="KEY=VALUE",
-        help="override a scene field, e.g. --set parameters.e=0.6 (repeatable)",
+        help=f"override a scene field, e.g. --set {example} (repeatable)",
     )
+
+
+def _add_simulate(sub) -> None:
+    """``bouncedisk simulate SCENE -o OUT.nc`` (INTERFACES.md)."""
+    p = sub.add_parser("simulate", help="run one scene and write one netCDF file")
+    p.add_argument("scene", help="scene file (YAML)")
+    p.add_argument("-o", "--output", required=True, help="netCDF file to write")
+    _add_set_option(p, "parameters.e=0.6")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress or summary")
     p.add_argument(
         "--max-output",
@@ -253,17 +249,15 @@ def build_parser() -> argparse.ArgumentParser:
     _add_track_options(p)
     p.set_defaults(func=_cmd_simulate)
 
+
+def _add_stats(sub) -> None:
+    """``bouncedisk stats SCENE [-o STATS.nc] [--json]`` (INTERFACES.md "Statistics")."""
     p = sub.add_parser(
         "stats", help="long-run statistics of a scene's ensemble, with 95%% confidence intervals"
     )
     p.add_argument("scene", help="scene file (YAML) with stop.time; ensemble: {members, seed}")
     p.add_argument("-o", "--output", help="also write per-member values to this netCDF file")
-    p.add_argument(
-        "--set",
-        action="append",
-        metavar="KEY=VALUE",
-        help="override a scene field, e.g. --set ensemble.members=32 (repeatable)",
-    )
+    _add_set_option(p, "ensemble.members=32")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.add_argument(
         "--cores", type=int, default=None, help="members run on this many cores (default: all)"
@@ -272,10 +266,16 @@ def build_parser() -> argparse.ArgumentParser:
     _add_track_options(p)
     p.set_defaults(func=_cmd_stats)
 
+
+def _add_info(sub) -> None:
+    """``bouncedisk info FILE``."""
     p = sub.add_parser("info", help="summarise a simulation netCDF file")
     p.add_argument("file")
     p.set_defaults(func=_cmd_info)
 
+
+def _add_runs(sub) -> None:
+    """``bouncedisk runs [list | show RUN | diff A B]`` (INTERFACES.md "Experiment tracking")."""
     p = sub.add_parser(
         "runs",
         help="the tracked runs: list, show RUN, diff A B",
@@ -292,11 +292,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.error = _one_line_error("runs")
     p.set_defaults(func=_cmd_runs)
 
+
+def _add_check(sub) -> None:
+    """``bouncedisk check [--results DIR]``: the paper's claims."""
     p = sub.add_parser("check", help="verify the paper's claims (exit 0 only if all pass)")
     p.add_argument("--results", help="folder of built results to check (default: simulate)")
     p.add_argument("-o", "--output", help="also write the report as Markdown")
     p.set_defaults(func=_cmd_check)
 
+
+def _add_fit(sub) -> None:
+    """``bouncedisk fit CURVE.csv -o FIT.nc`` (INTERFACES.md)."""
     p = sub.add_parser("fit", help="fit the model to a measured velocity-time curve")
     p.add_argument("curve", help="CSV with time_s, omega_rad_s[, sigma_rad_s]")
     p.add_argument("-o", "--output", required=True, help="fit netCDF file to write")
@@ -314,7 +320,6 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-q", "--quiet", action="store_true", help="no progress or summary")
     _add_track_options(p)
     p.set_defaults(func=_cmd_fit)
-    return parser
 
 
 def _interrupt(signum, frame):

@@ -15,7 +15,6 @@ rad/s), optional ``sigma_rad_s`` (measurement standard deviation). The sidecar (
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -23,6 +22,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import InputError
+from .params import number
 from .scene import read_yaml
 
 MIN_ROWS = 20
@@ -50,14 +50,6 @@ class MotorCurve:
     def dt(self) -> float:
         """Median sampling interval (s)."""
         return float(np.median(np.diff(self.time)))
-
-
-def _number(src: str, name: str, v, positive: bool = True) -> float:
-    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(float(v)):
-        raise InputError(src, name, f"must be a finite number, got {v!r}")
-    if positive and not float(v) > 0:
-        raise InputError(src, name, f"must be > 0, got {v!r}")
-    return float(v)
 
 
 def read_sidecar(path: str | Path) -> dict:
@@ -97,11 +89,11 @@ def read_sidecar(path: str | Path) -> dict:
             )
     if "drive_frequency_hz" not in motor:
         raise InputError(src, "motor.drive_frequency_hz", "is required")
-    _number(src, "motor.drive_frequency_hz", motor["drive_frequency_hz"])
+    number(src, "motor.drive_frequency_hz", motor["drive_frequency_hz"], positive=True)
     if motor.get("Phi0_rad") is not None:
-        _number(src, "motor.Phi0_rad", motor["Phi0_rad"])
+        number(src, "motor.Phi0_rad", motor["Phi0_rad"], positive=True)
     if data.get("noise_sigma_rad_s") is not None:
-        _number(src, "noise_sigma_rad_s", data["noise_sigma_rad_s"], positive=False)
+        number(src, "noise_sigma_rad_s", data["noise_sigma_rad_s"])
     if not isinstance(data.get("source", ""), str):
         raise InputError(src, "source", "must be text")
     return data

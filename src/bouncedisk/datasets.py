@@ -19,9 +19,9 @@ import xarray as xr
 from .atomic import atomic_path
 from .engine.driver import Chunk
 from .errors import InputError
+from .records import KIND_NAMES, EventKind, StrobeColumn, TrajColumn
 
 ENCODING = {"zlib": True, "complevel": 4}
-KIND_MEANINGS = "impact chatter"
 
 #: (long_name, units) of every variable a simulation file may hold.
 VARIABLES: dict[str, tuple[str, str]] = {
@@ -144,8 +144,8 @@ class SimulationWriter:
         if self.t_c is not None:
             self._var("t_impact_s", "f8", "impact")
         self._var("kind", "i1", "impact")
-        nc["kind"].flag_values = np.array([0, 1], dtype="i1")
-        nc["kind"].flag_meanings = KIND_MEANINGS
+        nc["kind"].flag_values = np.array(list(EventKind), dtype="i1")
+        nc["kind"].flag_meanings = KIND_NAMES
         nc["phase"].valid_range = np.array([0.0, 2.0 * math.pi])
         if self.torsion:
             self._var("omega_before", "f8", "impact")
@@ -178,9 +178,9 @@ class SimulationWriter:
         return self
 
     def _bytes(self, n_events: int, n_traj: int, n_strobe: int) -> float:
-        ev = 41 + (16 if self.torsion else 0) + (8 if self.t_c is not None else 0)
-        tr = 32 + (8 if self.torsion else 0) + (8 if self.t_c is not None else 0)
-        sb = 32 + (8 if self.torsion else 0)
+        from .outputs import file_row_bytes
+
+        ev, tr, sb = file_row_bytes(self.torsion, self.t_c is not None)
         return (
             (n_events * ev if self.events else 0)
             + (n_traj * tr if self.trajectory else 0)
@@ -205,8 +205,8 @@ class SimulationWriter:
             from .outputs import too_large
 
             raise too_large(self.path, size, int(self.max_bytes), "this run")
-        self.n_impacts += int(np.count_nonzero(c.kind == 0))
-        self.n_chatter += int(np.count_nonzero(c.kind == 1))
+        self.n_impacts += int(np.count_nonzero(c.kind == EventKind.IMPACT))
+        self.n_chatter += int(np.count_nonzero(c.kind == EventKind.CHATTER))
         if n and self.events:
             a, b = self.n_events, self.n_events + n
             nc["t_impact"][a:b] = c.t
@@ -224,24 +224,26 @@ class SimulationWriter:
         m = len(c.traj)
         if m and self.trajectory:
             a, b = self.n_traj, self.n_traj + m
-            nc["time"][a:b] = c.traj[:, 0]
+            col = TrajColumn
+            nc["time"][a:b] = c.traj[:, col.T]
             if self.t_c is not None:
-                nc["time_s"][a:b] = c.traj[:, 0] * self.t_c
-            nc["u_rotor"][a:b] = c.traj[:, 1]
-            nc["v_rotor"][a:b] = c.traj[:, 2]
-            nc["u_stator"][a:b] = c.traj[:, 3]
+                nc["time_s"][a:b] = c.traj[:, col.T] * self.t_c
+            nc["u_rotor"][a:b] = c.traj[:, col.U]
+            nc["v_rotor"][a:b] = c.traj[:, col.V]
+            nc["u_stator"][a:b] = c.traj[:, col.U_STATOR]
             if self.torsion:
-                nc["omega_rotor"][a:b] = c.traj[:, 4]
+                nc["omega_rotor"][a:b] = c.traj[:, col.OMEGA]
             self.n_traj = b
         m = len(c.strobe)
         if m and self.strobe:
             a, b = self.n_strobe, self.n_strobe + m
-            nc["period"][a:b] = c.strobe[:, 0].astype(np.int64)
-            nc["strobe_t"][a:b] = c.strobe[:, 1]
-            nc["strobe_u"][a:b] = c.strobe[:, 2]
-            nc["strobe_v"][a:b] = c.strobe[:, 3]
+            col = StrobeColumn
+            nc["period"][a:b] = c.strobe[:, col.PERIOD].astype(np.int64)
+            nc["strobe_t"][a:b] = c.strobe[:, col.T]
+            nc["strobe_u"][a:b] = c.strobe[:, col.U]
+            nc["strobe_v"][a:b] = c.strobe[:, col.V]
             if self.torsion:
-                nc["strobe_omega"][a:b] = c.strobe[:, 4]
+                nc["strobe_omega"][a:b] = c.strobe[:, col.OMEGA]
             self.n_strobe = b
 
     def set_attrs(self, attrs: dict[str, Any]) -> None:

@@ -20,8 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import observables as ob
-from .engine import EngineConfig, InitialState, iterate
-from .engine.kernel import KIND_CHATTER, KIND_IMPACT
+from . import stator
+from .engine import KIND_CHATTER, KIND_IMPACT, EngineConfig, InitialState, iterate
 
 #: Events kept from the end of each member's run to classify its regime.
 TAIL_EVENTS = 1200
@@ -110,7 +110,7 @@ class _Reducer:
         dur = t_end - self.t_from
         mean_om = omega_integral / dur
         # ∫Ω_s dt = φ_s(t_end) − φ_s(t_from), φ_s = sin(w t + ψ): the mean slip s = RΩ − Ω_s
-        twist = math.sin(self.w * t_end + psi) - math.sin(self.w * self.t_from + psi)
+        twist = stator.twist(self.w * t_end, psi) - stator.twist(self.w * self.t_from, psi)
         tl = self.tail
         lam = self.lyap_sum / self.lyap_count if self.lyap_count else math.nan
         reg = ob.classify(

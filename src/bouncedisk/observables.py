@@ -13,7 +13,8 @@ from math import isfinite, log, sqrt
 import numpy as np
 from numba import njit
 
-from .engine.kernel import KIND_CHATTER, KIND_IMPACT
+from . import stator
+from .engine import KIND_CHATTER, KIND_IMPACT
 
 TWO_PI = 2.0 * math.pi
 
@@ -127,15 +128,15 @@ def impact_jacobians(
     w = omega_s
     if len(t) < 2:
         return np.empty((0, 2, 2)), np.empty(0, dtype=int)
-    vs = w * np.cos(phase)
+    vs = stator.velocity(phase, w)
     v_post = vs + e * v_rel
     dt = np.diff(t)
-    u0 = np.sin(phase[:-1])
+    u0 = stator.position(phase[:-1])
     landing = u0 + v_post[:-1] * dt - 0.5 * dt**2
     ok = (
         (kind[:-1] == KIND_IMPACT)
         & (kind[1:] == KIND_IMPACT)
-        & (np.abs(landing - np.sin(phase[1:])) < 1e-7 * (1.0 + dt**2))
+        & (np.abs(landing - stator.position(phase[1:])) < 1e-7 * (1.0 + dt**2))
         & (v_rel[1:] > 0.0)
     )
     idx = np.nonzero(ok)[0]
@@ -310,6 +311,18 @@ REGIMES: dict[int, str] = {
     5: "rest",
 }
 REGIME_CODES: dict[str, int] = {name: code for code, name in REGIMES.items()}
+
+
+def regime_flags(dtype: type | str = np.int64) -> dict:
+    """CF ``flag_values``/``flag_meanings`` of a ``regime`` variable (:data:`REGIMES`).
+
+    CF flag meanings are single words, so ``chattering-periodic`` is written
+    ``chattering_periodic``.
+    """
+    return {
+        "flag_values": np.array(list(REGIMES), dtype=dtype),
+        "flag_meanings": " ".join(n.replace("-", "_") for n in REGIMES.values()),
+    }
 
 
 @dataclass(frozen=True)

@@ -133,15 +133,21 @@ def too_large(path: str | Path, size: float, limit: int, what: str) -> OutputToo
     )
 
 
-def row_bytes(scene) -> tuple[int, int, int]:
-    """Bytes per event, per trajectory sample and per stroboscopic sample of a scene's file."""
-    torsion = scene.has("torsion")
-    physical = scene.physical is not None
-    ev = EVENT_BYTES + (EVENT_TORSION_BYTES if torsion else 0) if scene.outputs.events else 0
-    ev += 8 if physical and scene.outputs.events else 0  # t_impact_s
+def file_row_bytes(torsion: bool, physical: bool) -> tuple[int, int, int]:
+    """Bytes per event, trajectory sample and stroboscopic sample of a simulation file.
+
+    ``physical`` files add ``t_impact_s`` and ``time_s`` (8 bytes each).
+    """
+    ev = EVENT_BYTES + (EVENT_TORSION_BYTES if torsion else 0) + (8 if physical else 0)
     tr = SAMPLE_BYTES + (SAMPLE_TORSION_BYTES if torsion else 0) + (8 if physical else 0)
     sb = STROBE_BYTES + (STROBE_TORSION_BYTES if torsion else 0)
     return ev, tr, sb
+
+
+def row_bytes(scene) -> tuple[int, int, int]:
+    """Bytes per event, per trajectory sample and per stroboscopic sample of a scene's file."""
+    ev, tr, sb = file_row_bytes(scene.has("torsion"), scene.physical is not None)
+    return (ev if scene.outputs.events else 0), tr, sb
 
 
 def _samples(t0: float, t1: float, dt: float) -> float:
@@ -163,7 +169,7 @@ def check_output_size(scene, path: str | Path, limit: int) -> float:
         One line with the estimate, the limit and how to change either.
     """
     from .engine import EngineConfig, iterate
-    from .runner import engine_config, initial_state
+    from .runner import engine_config
 
     ev_b, tr_b, sb_b = row_bytes(scene)
     size = 0.0
@@ -200,7 +206,7 @@ def check_output_size(scene, path: str | Path, limit: int) -> float:
     cfg = engine_config(scene)
     cfg = EngineConfig(**{**cfg.__dict__, "traj_dt": 0.0, "stroboscopic": False})
     t_now = t0
-    gen = iterate(cfg, initial_state(scene))
+    gen = iterate(cfg, scene.initial)
     while True:
         try:
             chunk = next(gen)

@@ -15,11 +15,27 @@ from dataclasses import asdict, dataclass
 from .errors import InputError
 
 
-def number(source: str, name: str, value: object) -> float:
+def number(
+    source: str, name: str, value: object, *, positive: bool = False, nonneg: bool = False
+) -> float:
     """The one number validator: a finite float from a YAML number or any text ``float()`` reads.
 
     Accepts ``1e-6``, ``1E300``, ``-2.5e+3`` and ``1_000.5`` whether YAML gave a number or a
     string; refuses booleans, other text, NaN and infinities.
+
+    Parameters
+    ----------
+    source, name : str
+        The file (or ``--set``) and the dotted field, for the error message.
+    value : object
+        What the user wrote.
+    positive, nonneg : bool
+        Also require ``> 0`` or ``>= 0``.
+
+    Raises
+    ------
+    InputError
+        Naming ``source`` and ``name``.
     """
     if isinstance(value, str):
         try:
@@ -35,10 +51,30 @@ def number(source: str, name: str, value: object) -> float:
             raise InputError(source, name, f"must be finite, got {value!r}") from None
     if not math.isfinite(x):
         raise InputError(source, name, f"must be finite, got {value!r}")
+    if positive and not x > 0:
+        raise InputError(source, name, f"must be > 0, got {value!r}")
+    if nonneg and x < 0:
+        raise InputError(source, name, f"must be >= 0, got {value!r}")
     return x
 
 
-_finite = number
+def whole_number(source: str, name: str, value: object, *, minimum: int = 1) -> int:
+    """A whole number ``>= minimum`` (``3``, ``3.0``, ``"1e3"``; not ``2.5`` or ``true``).
+
+    Raises
+    ------
+    InputError
+        Naming ``source`` and ``name``.
+    """
+    if isinstance(value, str):
+        value = number(source, name, value)
+    if isinstance(value, float) and value.is_integer():
+        value = int(value)
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise InputError(source, name, f"must be a whole number, got {value!r}")
+    if value < minimum:
+        raise InputError(source, name, f"must be >= {minimum}, got {value}")
+    return value
 
 
 @dataclass(frozen=True)
@@ -87,14 +123,14 @@ class Parameters:
             if key not in data:
                 raise InputError(source, f"{prefix}.{key}", "is required")
         vals = {
-            k: _finite(source, f"{prefix}.{k}", v) for k, v in data.items() if k != "inertia_ratio"
+            k: number(source, f"{prefix}.{k}", v) for k, v in data.items() if k != "inertia_ratio"
         }
         if "inertia_ratio" in data:
             j = data["inertia_ratio"]
             if isinstance(j, str) and j.strip().lower() in ("inf", "infinity", ".inf"):
                 vals["inertia_ratio"] = math.inf
             else:
-                vals["inertia_ratio"] = _finite(source, f"{prefix}.inertia_ratio", j)
+                vals["inertia_ratio"] = number(source, f"{prefix}.inertia_ratio", j)
         p = cls(**vals)
         p.validate(source, prefix)
         return p
@@ -199,7 +235,7 @@ class PhysicalParameters:
         for key in required:
             if key not in data:
                 raise InputError(source, f"{prefix}.{key}", "is required")
-        vals = {k: _finite(source, f"{prefix}.{k}", v) for k, v in data.items()}
+        vals = {k: number(source, f"{prefix}.{k}", v) for k, v in data.items()}
         p = cls(**vals)
         for key in ("m_r", "r_g", "r_c", "mu", "g", "f", "U0", "Phi0"):
             if not getattr(p, key) > 0.0:

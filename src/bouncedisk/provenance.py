@@ -61,6 +61,37 @@ def sha256_file(path: str | Path, block: int = 1 << 20) -> str:
     return h.hexdigest()
 
 
+#: Global attributes of a simulation file (INTERFACES.md "netCDF files"), the one list: the run's
+#: scene and solver, the run itself, and the CF/ACDD attributes every file carries.
+SCENE_ATTRS = (
+    "e",
+    "omega_s",
+    "r_phi",
+    "psi",
+    "effects",
+    "solver",
+    "tol",
+    "scene_name",
+    "scene_sha256",
+)
+RUN_ATTRS = (
+    "run_id",
+    "bouncedisk_version",
+    "git_commit",
+    "created",
+    "wall_time_s",
+    "n_impacts",
+    "status",
+)
+CF_ATTRS = ("Conventions", "title", "history", "source", "references")
+#: Every attribute INTERFACES.md requires of a simulation file.
+REQUIRED_ATTRS = SCENE_ATTRS + RUN_ATTRS + CF_ATTRS
+#: MLflow tags of the code version a tracked run ran (:mod:`bouncedisk.tracking` writes them).
+TAG_VERSION = "bouncedisk.version"
+TAG_GIT_COMMIT = "bouncedisk.git_commit"
+TAG_GIT_DIRTY = "bouncedisk.git_dirty"
+
+
 KEYWORDS = (
     "bouncing disk, ultrasonic motor, piezoelectric motor, impact oscillator, bouncing ball, "
     "restitution, friction, stick-slip, chattering, Zeno, nonsmooth dynamics, event-driven "

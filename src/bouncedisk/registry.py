@@ -17,12 +17,13 @@ from typing import Any
 
 from . import tracking as tr
 from .errors import InputError
+from .provenance import TAG_GIT_COMMIT, TAG_GIT_DIRTY, TAG_VERSION
 
 # tags worth comparing between runs (not pid, host, process start)
 COMPARED_TAGS = (
-    "bouncedisk.git_commit",
-    "bouncedisk.git_dirty",
-    "bouncedisk.version",
+    TAG_GIT_COMMIT,
+    TAG_GIT_DIRTY,
+    TAG_VERSION,
     "snakemake_version",
     "python_version",
     "cores",
@@ -164,8 +165,8 @@ def row(runs: Runs, run) -> dict[str, Any]:
         "status": status(run),
         "start": _when(run.info.start_time),
         "end": _when(run.info.end_time),
-        "git_commit": t.get("bouncedisk.git_commit", ""),
-        "git_dirty": t.get("bouncedisk.git_dirty", ""),
+        "git_commit": t.get(TAG_GIT_COMMIT, ""),
+        "git_dirty": t.get(TAG_GIT_DIRTY, ""),
         "jobs_run": int(m["pipeline.jobs_run"]) if "pipeline.jobs_run" in m else None,
         "checks_passed": int(passed) if passed is not None else None,
         "checks_total": int(total) if total is not None else None,

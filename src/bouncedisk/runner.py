@@ -16,11 +16,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .datasets import SimulationWriter
-from .engine import EngineConfig, EngineError, InitialState, RunResult, iterate, simulate_arrays
-from .engine import kernel as K
-from .engine.driver import STATUS_TEXT, Chunk
+from .engine import EngineConfig, EngineError, RunResult, iterate, simulate_arrays
+from .engine.driver import Chunk
 from .errors import InputError
 from .provenance import base_attrs, new_run_id
+from .records import RunStatus
 from .scene import Scene
 
 
@@ -53,25 +53,19 @@ def engine_config(scene: Scene) -> EngineConfig:
     )
 
 
-def initial_state(scene: Scene) -> InitialState:
-    """The engine's initial state for a scene."""
-    i = scene.initial
-    return InitialState(t=i.t, omega=i.omega, u=i.u, v=i.v)
-
-
 def _chunks(scene: Scene) -> Iterator[Chunk]:
     """Chunks from the scene's solver (the exact engine or a comparator)."""
     if scene.solver.method == "exact":
-        return iterate(engine_config(scene), initial_state(scene))
+        return iterate(engine_config(scene), scene.initial)
     from .solvers import iterate_comparator
 
     return iterate_comparator(scene)
 
 
 def _status_text(scene: Scene, code: int) -> str:
-    if code == K.ST_EVENTS and scene.stop.kind == "time":
+    if code == RunStatus.EVENTS and scene.stop.kind == "time":
         return f"cap: stopped at the safety cap stop.max_events = {scene.stop.max_events}"
-    return STATUS_TEXT[code]
+    return RunStatus(code).text
 
 
 class Progress:
@@ -258,7 +252,6 @@ def run_scene(
     out = Path(out)
     limit = default_max_output() if max_output_bytes is None else max_output_bytes
     check_output_size(scene, out, limit)
-    torsion = scene.has("torsion")
     run_id = new_run_id(scene.name, scene.sha256)
     prog = (
         Progress(scene.name, scene.stop.impacts, scene.stop.time, scene.initial.t)
@@ -268,65 +261,14 @@ def run_scene(
     start = time.perf_counter()
     gen = _chunks(scene)
     try:
-        with (
-            deferred_interrupts() as stop_request,
-            SimulationWriter(
-                out,
-                torsion=torsion,
-                events=scene.outputs.events,
-                trajectory=scene.outputs.trajectory is not None,
-                strobe=scene.outputs.stroboscopic,
-                omega_s=scene.params.omega_s,
-                t_c=scene.scales.t_c if scene.scales else None,
-                max_bytes=limit,
-            ) as writer,
-        ):
-            while True:
-                stop_request.check()
-                try:
-                    c = next(gen)
-                except StopIteration as stop:
-                    code, final = stop.value
-                    break
-                stop_request.check()
-                writer.append(c)
-                if on_chunk is not None:
-                    on_chunk(c)
-                if prog:
-                    prog.update(c.n_events_total, c.t_now)
+        with deferred_interrupts() as stop_request, _writer(scene, out, limit) as writer:
+            code, final = _stream(gen, writer, stop_request, on_chunk, prog)
             wall = time.perf_counter() - start
             status = _status_text(scene, code)
-            attrs = base_attrs(
-                f"bouncedisk simulation of scene '{scene.name}'",
-                summary=(
-                    "Event-driven simulation of a rotor bouncing on a vibrating, twisting stator "
-                    f"(scene '{scene.name}': e = {scene.params.e:g}, omega_s = "
-                    f"{scene.params.omega_s:g}): one row per impact or chattering tail"
-                    + (", a dense trajectory" if scene.outputs.trajectory else "")
-                    + (", a stroboscopic section" if scene.outputs.stroboscopic else "")
-                    + ". Nondimensional units (lengths by U0, time by t_c) unless a variable "
-                    "says otherwise."
-                ),
-            )
-            attrs.update(scene_attrs(scene))
-            attrs.update(
-                {
-                    "run_id": run_id,
-                    "wall_time_s": round(wall, 6),
-                    "n_impacts": writer.n_impacts,
-                    "n_chatter": writer.n_chatter,
-                    "n_events": writer.n_events,
-                    "status": status,
-                    "final_t": final["t"],
-                    "final_omega": final["omega"],
-                    "final_in_contact": int(bool(final["in_contact"]) or code == K.ST_REST),
-                    "history": f"{attrs['created']}: {command or 'bouncedisk.runner.run_scene'}",
-                }
-            )
+            attrs = _run_attrs(scene, writer, run_id, wall, status, code, final, command)
             writer.set_attrs(attrs)
     except EngineError as ex:
-        if ex.code == K.ST_NEED_CONTACT:
-            raise InputError(scene.source, "effects", str(ex)) from None
+        _raise_missing_effect(scene, ex)
         raise
     finally:
         if prog:
@@ -336,15 +278,100 @@ def run_scene(
     )
 
 
+def _writer(scene: Scene, out: Path, limit: float) -> SimulationWriter:
+    """The streaming netCDF writer for what ``scene`` asks to output."""
+    return SimulationWriter(
+        out,
+        torsion=scene.has("torsion"),
+        events=scene.outputs.events,
+        trajectory=scene.outputs.trajectory is not None,
+        strobe=scene.outputs.stroboscopic,
+        omega_s=scene.params.omega_s,
+        t_c=scene.scales.t_c if scene.scales else None,
+        max_bytes=limit,
+    )
+
+
+def _stream(
+    gen: Iterator[Chunk],
+    writer: SimulationWriter,
+    stop_request: StopRequest,
+    on_chunk: Callable[[Chunk], None] | None,
+    prog: Progress | None,
+) -> tuple[int, dict[str, float]]:
+    """Write every chunk of a run; return the engine's ``(status code, final state)``.
+
+    A stop request (SIGINT, SIGTERM) is honoured between chunks, never inside a write.
+    """
+    while True:
+        stop_request.check()
+        try:
+            c = next(gen)
+        except StopIteration as stop:
+            return stop.value
+        stop_request.check()
+        writer.append(c)
+        if on_chunk is not None:
+            on_chunk(c)
+        if prog:
+            prog.update(c.n_events_total, c.t_now)
+
+
+def _run_attrs(
+    scene: Scene,
+    writer: SimulationWriter,
+    run_id: str,
+    wall: float,
+    status: str,
+    code: int,
+    final: dict[str, float],
+    command: str,
+) -> dict:
+    """Global attributes of a simulation file: CF/ACDD, the scene, the run and its final state."""
+    attrs = base_attrs(
+        f"bouncedisk simulation of scene '{scene.name}'",
+        summary=(
+            "Event-driven simulation of a rotor bouncing on a vibrating, twisting stator "
+            f"(scene '{scene.name}': e = {scene.params.e:g}, omega_s = "
+            f"{scene.params.omega_s:g}): one row per impact or chattering tail"
+            + (", a dense trajectory" if scene.outputs.trajectory else "")
+            + (", a stroboscopic section" if scene.outputs.stroboscopic else "")
+            + ". Nondimensional units (lengths by U0, time by t_c) unless a variable "
+            "says otherwise."
+        ),
+    )
+    attrs.update(scene_attrs(scene))
+    attrs.update(
+        {
+            "run_id": run_id,
+            "wall_time_s": round(wall, 6),
+            "n_impacts": writer.n_impacts,
+            "n_chatter": writer.n_chatter,
+            "n_events": writer.n_events,
+            "status": status,
+            "final_t": final["t"],
+            "final_omega": final["omega"],
+            "final_in_contact": int(bool(final["in_contact"]) or code == RunStatus.REST),
+            "history": f"{attrs['created']}: {command or 'bouncedisk.runner.run_scene'}",
+        }
+    )
+    return attrs
+
+
+def _raise_missing_effect(scene: Scene, ex: EngineError) -> None:
+    """A run that needs the ``contact`` effect is the scene's fault: an :class:`InputError`."""
+    if ex.code == RunStatus.NEED_CONTACT:
+        raise InputError(scene.source, "effects", str(ex)) from None
+
+
 def run_scene_arrays(scene: Scene) -> RunResult:
     """Run ``scene`` in memory (analysis, sweeps). Raises like :func:`run_scene`."""
     try:
         if scene.solver.method == "exact":
-            return simulate_arrays(engine_config(scene), initial_state(scene))
+            return simulate_arrays(engine_config(scene), scene.initial)
         from .solvers import simulate_comparator
 
         return simulate_comparator(scene)
     except EngineError as ex:
-        if ex.code == K.ST_NEED_CONTACT:
-            raise InputError(scene.source, "effects", str(ex)) from None
+        _raise_missing_effect(scene, ex)
         raise

@@ -13,13 +13,13 @@ import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import yaml
 
-from . import yamlio
+from . import stator, yamlio
 from .errors import InputError
-from .params import Parameters, PhysicalParameters, Scales, number
+from .params import Parameters, PhysicalParameters, Scales, number, whole_number
 
 #: Effects a scene may name (MODEL.md "Optional effects").
 EFFECTS = (
@@ -54,15 +54,8 @@ TOP_KEYS = (
 MAX_MEMBERS = 100_000
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 
-
-@dataclass(frozen=True)
-class Initial:
-    """Initial condition; ``u is None`` means in contact, moving with the stator (default)."""
-
-    t: float = 0.0
-    omega: float = 0.0
-    u: float | None = None
-    v: float | None = None
+if TYPE_CHECKING:  # the engine (numba) is imported only when a scene is validated
+    from .engine import InitialState
 
 
 @dataclass(frozen=True)
@@ -130,7 +123,7 @@ class Scene:
 
     name: str
     params: Parameters
-    initial: Initial
+    initial: InitialState
     effects: frozenset[str]
     stop: Stop
     outputs: Outputs
@@ -160,27 +153,6 @@ class Scene:
 
 
 # ------------------------------------------------------------------------------------ helpers
-def _num(src: str, name: str, v: Any, *, positive: bool = False, nonneg: bool = False) -> float:
-    x = number(src, name, v)
-    if positive and not x > 0:
-        raise InputError(src, name, f"must be > 0, got {v!r}")
-    if nonneg and x < 0:
-        raise InputError(src, name, f"must be >= 0, got {v!r}")
-    return x
-
-
-def _int(src: str, name: str, v: Any, *, minimum: int = 1) -> int:
-    if isinstance(v, str):
-        v = number(src, name, v)
-    if isinstance(v, float) and v.is_integer():
-        v = int(v)
-    if isinstance(v, bool) or not isinstance(v, int):
-        raise InputError(src, name, f"must be a whole number, got {v!r}")
-    if v < minimum:
-        raise InputError(src, name, f"must be >= {minimum}, got {v}")
-    return v
-
-
 def _mapping(src: str, name: str, v: Any, keys: tuple[str, ...]) -> dict:
     if v is None:
         return {}
@@ -287,145 +259,26 @@ def _effects(src: str, v: Any) -> frozenset[str]:
 
 
 def scene_from_mapping(raw: dict, source: str = "<scene>") -> Scene:
-    """Validate a raw scene mapping into a :class:`Scene`."""
+    """Validate a raw scene mapping into a :class:`Scene`, one section after another.
+
+    Raises
+    ------
+    InputError
+        Naming ``source`` and the dotted field at fault.
+    """
     src = source
     for k in raw:
         if k not in TOP_KEYS:
             raise InputError(src, str(k), f"unknown key (known: {', '.join(TOP_KEYS)})")
-    name = raw.get("name", Path(source).stem if source and not source.startswith("<") else "scene")
-    if not isinstance(name, str) or not _NAME_RE.match(name):
-        raise InputError(
-            src, "name", f"must be a simple name (letters, digits, _ . -), got {name!r}"
-        )
-    description = raw.get("description", "")
-    if not isinstance(description, str):
-        raise InputError(src, "description", "must be text")
-
-    physical = None
-    if "parameters" in raw and "physical" in raw:
-        raise InputError(src, "physical", "give either 'parameters' or 'physical', not both")
-    if "physical" in raw:
-        pm = _mapping(
-            src, "physical", raw["physical"], tuple(PhysicalParameters.__dataclass_fields__)
-        )
-        physical = PhysicalParameters.from_mapping(pm, src)
-        params = physical.to_nondimensional()
-        params.validate(src, "physical")
-    elif "parameters" in raw:
-        pm = raw["parameters"]
-        if not isinstance(pm, dict):
-            raise InputError(src, "parameters", "must be a mapping")
-        params = Parameters.from_mapping(pm, src)
-    else:
-        raise InputError(src, "parameters", "is required (or 'physical')")
-
+    name, description = _name(src, raw)
+    params, physical = _parameters(src, raw)
     effects = _effects(src, raw.get("effects"))
-    if "stator_inertia" in effects and math.isinf(params.inertia_ratio):
-        raise InputError(
-            src, "parameters.inertia_ratio", "is required by the 'stator_inertia' effect"
-        )
-    if (
-        "kinetic_static" in effects
-        and params.mu_ratio == 1.0
-        and "mu_ratio" not in (raw.get("parameters") or {})
-    ):
-        raise InputError(src, "parameters.mu_ratio", "is required by the 'kinetic_static' effect")
-    _check_noise(src, raw, effects)
-
-    im = _mapping(src, "initial", raw.get("initial"), ("t", "omega", "u", "v"))
-    t0 = _num(src, "initial.t", im.get("t", 0.0))
-    om0 = _num(src, "initial.omega", im.get("omega", 0.0))
-    u0 = im.get("u")
-    v0 = im.get("v")
-    if (u0 is None) != (v0 is None):
-        raise InputError(
-            src, "initial.u" if u0 is None else "initial.v", "give both u and v to start in flight"
-        )
-    if u0 is not None:
-        u0 = _num(src, "initial.u", u0)
-        v0 = _num(src, "initial.v", v0)
-        us = math.sin(params.omega_s * t0)
-        if u0 < us - 1e-12:
-            raise InputError(
-                src, "initial.u", f"must be >= u_s(t) = {us:.12g} (rotor above the stator)"
-            )
-    if abs(t0) > 1e12:
-        raise InputError(src, "initial.t", "must be within ±1e12")
-    initial = Initial(t=t0, omega=om0, u=u0, v=v0)
-
-    sm = _mapping(src, "stop", raw.get("stop"), ("impacts", "time", "periods", "max_events"))
-    given = [k for k in ("impacts", "time", "periods") if sm.get(k) is not None]
-    if len(given) != 1:
-        raise InputError(src, "stop", "give exactly one of impacts, time or periods")
-    max_ev = _int(src, "stop.max_events", sm.get("max_events", DEFAULT_MAX_EVENTS))
-    if given[0] == "impacts":
-        n = _int(src, "stop.impacts", sm["impacts"])
-        if n > max_ev:
-            raise InputError(
-                src,
-                "stop.impacts",
-                f"{n} is above the safety cap stop.max_events = {max_ev}; "
-                "ask for fewer impacts or raise stop.max_events",
-            )
-        stop = Stop(impacts=n, max_events=max_ev)
-    elif given[0] == "time":
-        t_stop = _num(src, "stop.time", sm["time"], positive=True)
-        stop = Stop(time=t0 + t_stop, max_events=max_ev)
-    else:
-        periods = _num(src, "stop.periods", sm["periods"], positive=True)
-        stop = Stop(time=t0 + periods * 2.0 * math.pi / params.omega_s, max_events=max_ev)
-
-    om = _mapping(src, "outputs", raw.get("outputs"), ("events", "trajectory", "stroboscopic"))
-    events = _bool(src, "outputs.events", om.get("events", True))
-    traj = None
-    tm = om.get("trajectory")
-    if tm is not None and tm is not False:
-        if tm is True:
-            tm = {"dt": 0.01}
-        tm = _mapping(src, "outputs.trajectory", tm, ("dt", "t_start", "t_stop"))
-        if "dt" not in tm:
-            raise InputError(src, "outputs.trajectory.dt", "is required")
-        dt = _num(src, "outputs.trajectory.dt", tm["dt"], positive=True)
-        ts = tm.get("t_start")
-        te = tm.get("t_stop")
-        ts = None if ts is None else _num(src, "outputs.trajectory.t_start", ts)
-        te = None if te is None else _num(src, "outputs.trajectory.t_stop", te)
-        if ts is not None and te is not None and te < ts:
-            raise InputError(src, "outputs.trajectory.t_stop", "must be >= t_start")
-        horizon = te if te is not None else stop.time
-        if horizon is not None and (horizon - (ts if ts is not None else t0)) / dt > 5e8:
-            raise InputError(src, "outputs.trajectory.dt", "would produce more than 5e8 samples")
-        traj = Trajectory(dt=dt, t_start=ts, t_stop=te)
-    strobe = _bool(src, "outputs.stroboscopic", om.get("stroboscopic", False))
-    outputs = Outputs(events=events, trajectory=traj, stroboscopic=strobe)
-
-    vm = _mapping(src, "solver", raw.get("solver"), ("method", "tol", "step"))
-    method = vm.get("method", "exact")
-    if method not in SOLVERS:
-        raise InputError(
-            src, "solver.method", f"unknown method {method!r} (known: {', '.join(SOLVERS)})"
-        )
-    tol = _num(src, "solver.tol", vm.get("tol", 1e-12), positive=True)
-    if tol > 1e-2:
-        raise InputError(src, "solver.tol", f"must be <= 1e-2, got {tol}")
-    step = vm.get("step")
-    if step is not None:
-        step = _num(src, "solver.step", step, positive=True)
-    solver = Solver(method=method, tol=tol, step=step)
-
-    model = raw.get("model", "bouncing")
-    if model not in MODELS:
-        raise InputError(src, "model", f"unknown model {model!r} (known: {', '.join(MODELS)})")
-    if model == "clipped":
-        if stop.time is None:
-            raise InputError(
-                src, "stop", "the clipped model has no impacts: stop on time or periods"
-            )
-        if method != "exact":
-            raise InputError(
-                src, "solver.method", "the clipped model runs with the exact solver only"
-            )
-
+    _check_effect_parameters(src, raw, effects, params)
+    initial = _initial(src, raw.get("initial"), params)
+    stop = _stop(src, raw.get("stop"), initial, params)
+    outputs = _outputs(src, raw.get("outputs"), initial, stop)
+    solver = _solver(src, raw.get("solver"))
+    model = _model(src, raw.get("model", "bouncing"), stop, solver)
     ensemble = _ensemble(src, raw.get("ensemble"), effects, params)
     stats = _stats(src, raw.get("stats"), stop, initial)
     return Scene(
@@ -446,6 +299,174 @@ def scene_from_mapping(raw: dict, source: str = "<scene>") -> Scene:
     )
 
 
+def _name(src: str, raw: dict) -> tuple[str, str]:
+    """``name`` (default: the file's stem) and ``description``."""
+    default = Path(src).stem if src and not src.startswith("<") else "scene"
+    name = raw.get("name", default)
+    if not isinstance(name, str) or not _NAME_RE.match(name):
+        raise InputError(
+            src, "name", f"must be a simple name (letters, digits, _ . -), got {name!r}"
+        )
+    description = raw.get("description", "")
+    if not isinstance(description, str):
+        raise InputError(src, "description", "must be text")
+    return name, description
+
+
+def _parameters(src: str, raw: dict) -> tuple[Parameters, PhysicalParameters | None]:
+    """``parameters`` (nondimensional) or ``physical`` (SI, converted: MODEL.md eqs. 2, 13–15)."""
+    if "parameters" in raw and "physical" in raw:
+        raise InputError(src, "physical", "give either 'parameters' or 'physical', not both")
+    if "physical" in raw:
+        pm = _mapping(
+            src, "physical", raw["physical"], tuple(PhysicalParameters.__dataclass_fields__)
+        )
+        physical = PhysicalParameters.from_mapping(pm, src)
+        params = physical.to_nondimensional()
+        params.validate(src, "physical")
+        return params, physical
+    if "parameters" in raw:
+        pm = raw["parameters"]
+        if not isinstance(pm, dict):
+            raise InputError(src, "parameters", "must be a mapping")
+        return Parameters.from_mapping(pm, src), None
+    raise InputError(src, "parameters", "is required (or 'physical')")
+
+
+def _check_effect_parameters(
+    src: str, raw: dict, effects: frozenset[str], params: Parameters
+) -> None:
+    """The parameters an effect needs are given (MODEL.md "Optional effects")."""
+    if "stator_inertia" in effects and math.isinf(params.inertia_ratio):
+        raise InputError(
+            src, "parameters.inertia_ratio", "is required by the 'stator_inertia' effect"
+        )
+    if (
+        "kinetic_static" in effects
+        and params.mu_ratio == 1.0
+        and "mu_ratio" not in (raw.get("parameters") or {})
+    ):
+        raise InputError(src, "parameters.mu_ratio", "is required by the 'kinetic_static' effect")
+    _check_noise(src, raw, effects)
+
+
+def _initial(src: str, v: Any, params: Parameters) -> InitialState:
+    """``initial: {t, omega, u, v}``; ``u >= u_s(t)`` (eq. 1) for a start in flight.
+
+    The scene holds the engine's own :class:`~bouncedisk.engine.InitialState`.
+    """
+    from .engine import InitialState
+
+    im = _mapping(src, "initial", v, ("t", "omega", "u", "v"))
+    t0 = number(src, "initial.t", im.get("t", 0.0))
+    om0 = number(src, "initial.omega", im.get("omega", 0.0))
+    u0 = im.get("u")
+    v0 = im.get("v")
+    if (u0 is None) != (v0 is None):
+        raise InputError(
+            src, "initial.u" if u0 is None else "initial.v", "give both u and v to start in flight"
+        )
+    if u0 is not None:
+        u0 = number(src, "initial.u", u0)
+        v0 = number(src, "initial.v", v0)
+        us = stator.position(params.omega_s * t0)
+        if u0 < us - 1e-12:
+            raise InputError(
+                src, "initial.u", f"must be >= u_s(t) = {us:.12g} (rotor above the stator)"
+            )
+    if abs(t0) > 1e12:
+        raise InputError(src, "initial.t", "must be within ±1e12")
+    return InitialState(t=t0, omega=om0, u=u0, v=v0)
+
+
+def _stop(src: str, v: Any, initial: InitialState, params: Parameters) -> Stop:
+    """``stop``: exactly one of ``impacts``, ``time``, ``periods``; the cap ``max_events``."""
+    sm = _mapping(src, "stop", v, ("impacts", "time", "periods", "max_events"))
+    given = [k for k in ("impacts", "time", "periods") if sm.get(k) is not None]
+    if len(given) != 1:
+        raise InputError(src, "stop", "give exactly one of impacts, time or periods")
+    max_ev = whole_number(src, "stop.max_events", sm.get("max_events", DEFAULT_MAX_EVENTS))
+    if given[0] == "impacts":
+        n = whole_number(src, "stop.impacts", sm["impacts"])
+        if n > max_ev:
+            raise InputError(
+                src,
+                "stop.impacts",
+                f"{n} is above the safety cap stop.max_events = {max_ev}; "
+                "ask for fewer impacts or raise stop.max_events",
+            )
+        return Stop(impacts=n, max_events=max_ev)
+    if given[0] == "time":
+        t_stop = number(src, "stop.time", sm["time"], positive=True)
+        return Stop(time=initial.t + t_stop, max_events=max_ev)
+    periods = number(src, "stop.periods", sm["periods"], positive=True)
+    return Stop(time=initial.t + periods * 2.0 * math.pi / params.omega_s, max_events=max_ev)
+
+
+def _outputs(src: str, v: Any, initial: InitialState, stop: Stop) -> Outputs:
+    """``outputs: {events, trajectory, stroboscopic}``."""
+    om = _mapping(src, "outputs", v, ("events", "trajectory", "stroboscopic"))
+    events = _bool(src, "outputs.events", om.get("events", True))
+    traj = _trajectory(src, om.get("trajectory"), initial, stop)
+    strobe = _bool(src, "outputs.stroboscopic", om.get("stroboscopic", False))
+    return Outputs(events=events, trajectory=traj, stroboscopic=strobe)
+
+
+def _trajectory(src: str, tm: Any, initial: InitialState, stop: Stop) -> Trajectory | None:
+    """``outputs.trajectory``: ``true`` (``dt = 0.01``) or ``{dt, t_start, t_stop}``."""
+    if tm is None or tm is False:
+        return None
+    if tm is True:
+        tm = {"dt": 0.01}
+    tm = _mapping(src, "outputs.trajectory", tm, ("dt", "t_start", "t_stop"))
+    if "dt" not in tm:
+        raise InputError(src, "outputs.trajectory.dt", "is required")
+    dt = number(src, "outputs.trajectory.dt", tm["dt"], positive=True)
+    ts = tm.get("t_start")
+    te = tm.get("t_stop")
+    ts = None if ts is None else number(src, "outputs.trajectory.t_start", ts)
+    te = None if te is None else number(src, "outputs.trajectory.t_stop", te)
+    if ts is not None and te is not None and te < ts:
+        raise InputError(src, "outputs.trajectory.t_stop", "must be >= t_start")
+    horizon = te if te is not None else stop.time
+    if horizon is not None and (horizon - (ts if ts is not None else initial.t)) / dt > 5e8:
+        raise InputError(src, "outputs.trajectory.dt", "would produce more than 5e8 samples")
+    return Trajectory(dt=dt, t_start=ts, t_stop=te)
+
+
+def _solver(src: str, v: Any) -> Solver:
+    """``solver: {method, tol, step}``."""
+    vm = _mapping(src, "solver", v, ("method", "tol", "step"))
+    method = vm.get("method", "exact")
+    if method not in SOLVERS:
+        raise InputError(
+            src, "solver.method", f"unknown method {method!r} (known: {', '.join(SOLVERS)})"
+        )
+    tol = number(src, "solver.tol", vm.get("tol", 1e-12), positive=True)
+    if tol > 1e-2:
+        raise InputError(src, "solver.tol", f"must be <= 1e-2, got {tol}")
+    step = vm.get("step")
+    if step is not None:
+        step = number(src, "solver.step", step, positive=True)
+    return Solver(method=method, tol=tol, step=step)
+
+
+def _model(src: str, model: Any, stop: Stop, solver: Solver) -> str:
+    """``model``: ``bouncing`` or ``clipped`` (time stop and exact solver only)."""
+    if model not in MODELS:
+        raise InputError(src, "model", f"unknown model {model!r} (known: {', '.join(MODELS)})")
+    if model == "clipped":
+        if stop.time is None:
+            raise InputError(
+                src, "stop", "the clipped model has no impacts: stop on time or periods"
+            )
+        if solver.method != "exact":
+            raise InputError(
+                src, "solver.method", "the clipped model runs with the exact solver only"
+            )
+    return model
+
+
 def _check_noise(src: str, raw: dict, effects: frozenset[str]) -> None:
     """``parameters.e_sigma`` goes with the ``restitution_noise`` effect, both or neither."""
     given = "e_sigma" in (raw.get("parameters") or {})
@@ -458,10 +479,10 @@ def _check_noise(src: str, raw: dict, effects: frozenset[str]) -> None:
 def _ensemble(src: str, v: Any, effects: frozenset[str], params: Parameters) -> Ensemble:
     """Validate ``ensemble: {members, seed}`` (INTERFACES.md)."""
     em = _mapping(src, "ensemble", v, ("members", "seed"))
-    members = _int(src, "ensemble.members", em.get("members", 1))
+    members = whole_number(src, "ensemble.members", em.get("members", 1))
     if members > MAX_MEMBERS:
         raise InputError(src, "ensemble.members", f"must be <= {MAX_MEMBERS}, got {members}")
-    seed = _int(src, "ensemble.seed", em.get("seed", 0), minimum=0)
+    seed = whole_number(src, "ensemble.seed", em.get("seed", 0), minimum=0)
     if seed >= 2**63:
         raise InputError(src, "ensemble.seed", f"must be < 2**63, got {seed}")
     if members > 1 and ("restitution_noise" not in effects or params.e_sigma == 0.0):
@@ -474,10 +495,10 @@ def _ensemble(src: str, v: Any, effects: frozenset[str], params: Parameters) -> 
     return Ensemble(members=members, seed=seed)
 
 
-def _stats(src: str, v: Any, stop: Stop, initial: Initial) -> StatsSettings:
+def _stats(src: str, v: Any, stop: Stop, initial: InitialState) -> StatsSettings:
     """Validate ``stats: {discard}``: a transient shorter than the run."""
     sm = _mapping(src, "stats", v, ("discard",))
-    discard = _num(src, "stats.discard", sm.get("discard", 0.0), nonneg=True)
+    discard = number(src, "stats.discard", sm.get("discard", 0.0), nonneg=True)
     if stop.time is not None and discard >= stop.time - initial.t:
         raise InputError(
             src,
@@ -493,9 +514,29 @@ def load_scene(path: str | Path, overrides: list[str] | None = None) -> Scene:
     Raises
     ------
     InputError
-        Naming the file (or ``--set``) and the field at fault.
+        Naming the file and the field at fault; a field that a ``--set`` option gave (or a
+        field inside it) also names the option: ``parameters.e (from --set parameters.e)``.
     """
     raw = read_yaml(path)
-    if overrides:
-        raw = apply_overrides(raw, overrides)
-    return scene_from_mapping(raw, str(path))
+    if not overrides:
+        return scene_from_mapping(raw, str(path))
+    raw = apply_overrides(raw, overrides)
+    try:
+        return scene_from_mapping(raw, str(path))
+    except InputError as ex:
+        key = override_of(ex.field, overrides)
+        if key is None:
+            raise
+        raise InputError(ex.source, f"{ex.field} (from --set {key})", ex.message) from None
+
+
+def override_of(field: str, overrides: list[str]) -> str | None:
+    """The key of the last ``--set KEY=VALUE`` that gave ``field``, a field inside it, or a
+    mapping that holds it; ``None`` when the scene file gave it."""
+    for item in reversed(overrides):
+        key = item.partition("=")[0].strip()
+        if not key or not field:
+            continue
+        if field == key or field.startswith((key + ".", key + "[")) or key.startswith(field + "."):
+            return key
+    return None

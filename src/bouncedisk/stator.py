@@ -1,42 +1,67 @@
-"""Closed-form stator kinematics (paper eq. 1, nondimensional; MODEL.md "Variables").
+"""Stator kinematics and normal load: the one numpy copy (MODEL.md "Variables and scales").
 
-Axial: ``u_s = sin(wt)``, ``v_s = w cos(wt)``, ``a_s = −w² sin(wt)``. Torsional:
-``φ_s = sin(wt + ψ)``, ``Ω_s = w cos(wt + ψ)``, ``α_s = −w² sin(wt + ψ)``. Normal load in contact
-``N = 1 + a_s`` (eq. 17, corrected). These numpy versions serve analysis and plotting; the engine
-inlines the same formulas.
+The stator moves as prescribed (paper eq. 1, nondimensional): axial ``u_s = sin(w t)``,
+``v_s = w cos(w t)``, ``a_s = −w² sin(w t)``; twist ``φ_s = sin(w t + ψ)``,
+``Ω_s = w cos(w t + ψ)`` (``α_s`` is needed by the compiled kernel only). The normal load in
+contact is ``N = 1 + a_s`` (eq. 17, corrected in MODEL.md).
+
+Every function takes the stator phase ``θ = w t`` (the engine records events by their phase), so
+a caller with a time passes ``w * t``. A Python ``float`` goes through :mod:`math` (fast in
+scalar loops such as a ``solve_ivp`` right-hand side), anything else through numpy (on the
+reference machine both give the same bits). All code outside the compiled engine uses this
+module; compiled code (the kernel, the Moreau–Jean comparator) uses :mod:`bouncedisk.engine.laws`.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike
 
-
-def position(t: ArrayLike, w: float) -> np.ndarray:
-    """Stator axial displacement ``u_s(t) = sin(w t)``."""
-    return np.sin(w * np.asarray(t, dtype=float))
-
-
-def velocity(t: ArrayLike, w: float) -> np.ndarray:
-    """Stator axial velocity ``v_s(t) = w cos(w t)``."""
-    return w * np.cos(w * np.asarray(t, dtype=float))
-
-
-def acceleration(t: ArrayLike, w: float) -> np.ndarray:
-    """Stator axial acceleration ``a_s(t) = −w² sin(w t)``."""
-    return -(w**2) * np.sin(w * np.asarray(t, dtype=float))
+__all__ = [
+    "acceleration",
+    "normal_load",
+    "position",
+    "twist",
+    "twist_rate",
+    "velocity",
+]
 
 
-def twist_rate(t: ArrayLike, w: float, psi: float) -> np.ndarray:
-    """Stator angular velocity ``Ω_s(t) = w cos(w t + ψ)``."""
-    return w * np.cos(w * np.asarray(t, dtype=float) + psi)
+def _sin(x):
+    return math.sin(x) if type(x) is float or type(x) is int else np.sin(x)
 
 
-def twist_acceleration(t: ArrayLike, w: float, psi: float) -> np.ndarray:
-    """Stator angular acceleration ``α_s(t) = −w² sin(w t + ψ)``."""
-    return -(w**2) * np.sin(w * np.asarray(t, dtype=float) + psi)
+def _cos(x):
+    return math.cos(x) if type(x) is float or type(x) is int else np.cos(x)
 
 
-def normal_load(t: ArrayLike, w: float) -> np.ndarray:
-    """Contact load ``N = 1 + a_s`` (units of ``m_r g``); contact is possible only where ``N >= 0``."""
-    return 1.0 + acceleration(t, w)
+def position(theta: ArrayLike) -> float | np.ndarray:
+    """Stator axial displacement ``u_s = sin θ`` (eq. 1)."""
+    return _sin(theta)
+
+
+def velocity(theta: ArrayLike, w: float) -> float | np.ndarray:
+    """Stator axial velocity ``v_s = w cos θ`` (eq. 1, differentiated)."""
+    return w * _cos(theta)
+
+
+def acceleration(theta: ArrayLike, w: float) -> float | np.ndarray:
+    """Stator axial acceleration ``a_s = −w² sin θ`` (eq. 1, differentiated twice)."""
+    return -(w * w * _sin(theta))
+
+
+def normal_load(theta: ArrayLike, w: float) -> float | np.ndarray:
+    """Contact load ``N = 1 + a_s`` in units of ``m_r g`` (eq. 17); contact needs ``N >= 0``."""
+    return 1.0 + acceleration(theta, w)
+
+
+def twist(theta: ArrayLike, psi: float) -> float | np.ndarray:
+    """Stator twist ``φ_s = sin(θ + ψ)`` (eq. 1), in units of ``Φ0``."""
+    return _sin(theta + psi)
+
+
+def twist_rate(theta: ArrayLike, w: float, psi: float) -> float | np.ndarray:
+    """Stator angular velocity ``Ω_s = w cos(θ + ψ)`` (eq. 1, differentiated)."""
+    return w * _cos(theta + psi)

@@ -20,7 +20,7 @@ from . import observables as ob
 from .ensemble import MemberStats, run_ensemble
 from .errors import InputError
 from .provenance import base_attrs, new_run_id
-from .runner import engine_config, initial_state, scene_attrs
+from .runner import engine_config, scene_attrs
 from .scene import Scene
 
 #: Ensemble statistics: field -> (long name, units) in nondimensional units (INTERFACES.md).
@@ -81,6 +81,17 @@ class EnsembleStats:
         period = [p, q] if p > 0 else None
         return ob.REGIMES[code], n / len(self.members), period
 
+    @property
+    def regime_tie(self) -> list[str]:
+        """The regimes that share the largest number of members, when several do (else ``[]``).
+
+        :attr:`regime` then names the first of them met in member order.
+        """
+        by_regime = Counter(m.regime for m in self.members)
+        top = max(by_regime.values())
+        tied = [ob.REGIMES[code] for code, n in by_regime.items() if n == top]
+        return tied if len(tied) > 1 else []
+
     def summary(self) -> dict:
         """The JSON object of ``bouncedisk stats --json`` (non-finite numbers as ``null``)."""
         out: dict = {
@@ -100,6 +111,7 @@ class EnsembleStats:
         name, frac, period = self.regime
         out["regime"] = name
         out["regime_fraction"] = frac
+        out["regime_tie"] = self.regime_tie
         out["period"] = period
         return out
 
@@ -140,7 +152,7 @@ def run_stats(
     cfg = engine_config(scene)
     members = run_ensemble(
         cfg,
-        initial_state(scene),
+        scene.initial,
         scene.ensemble.members,
         t_from,
         cores=cores,
@@ -164,8 +176,7 @@ def to_dataset(scene: Scene, result: EnsembleStats, wall_time_s: float) -> xr.Da
     data["regime"][2].update(
         {
             "long_name": "dynamical regime of the member",
-            "flag_values": np.array(list(ob.REGIMES), dtype=np.int64),
-            "flag_meanings": " ".join(n.replace("-", "_") for n in ob.REGIMES.values()),
+            **ob.regime_flags(np.int64),
         }
     )
     data["period_p"][2]["long_name"] = "impacts per cycle (periodic regimes; 0 otherwise)"
@@ -177,7 +188,9 @@ def to_dataset(scene: Scene, result: EnsembleStats, wall_time_s: float) -> xr.Da
     ds.attrs.update(scene_attrs(scene))
     summary = result.summary()
     for k, v in summary.items():
-        if isinstance(v, list):
+        if isinstance(v, list) and v and isinstance(v[0], str):
+            v = ",".join(v)  # regime_tie: names of the tied regimes
+        elif isinstance(v, list):
             v = [math.nan if x is None else x for x in v] if v else "none"
         ds.attrs[f"stats_{k}"] = math.nan if v is None else v
     ds.attrs.update(

@@ -52,7 +52,12 @@ def format_summary(summary: dict) -> str:
     period = summary["period"]
     reg = summary["regime"] + (f" ({period[0]} impacts / {period[1]} periods)" if period else "")
     frac = summary["regime_fraction"]
-    lines.append(f"{'regime':>18}: {reg}, {100 * frac:.0f}% of members")
+    tie = summary.get("regime_tie") or []
+    if tie:
+        reg = f"tie between {', '.join(tie[:-1])} and {tie[-1]}"
+        lines.append(f"{'regime':>18}: {reg}, {100 * frac:.0f}% of members each")
+    else:
+        lines.append(f"{'regime':>18}: {reg}, {100 * frac:.0f}% of members")
     return "\n".join(lines)
 
 

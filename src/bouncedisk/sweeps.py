@@ -21,12 +21,13 @@ import numpy as np
 import xarray as xr
 
 from . import observables as ob
+from . import stator
 from .engine import InitialState
 from .ensemble import run_member
 from .errors import InputError
 from .params import Parameters
 from .provenance import base_attrs, new_run_id
-from .runner import engine_config, initial_state, scene_attrs
+from .runner import engine_config, scene_attrs
 from .scene import Scene
 from .stats import QUANTITIES, EnsembleStats, confidence_interval, ensemble_window
 
@@ -72,7 +73,7 @@ def run_point(scene: Scene, init: InitialState | None = None) -> PointResult:
     """Run a scene's ensemble at one grid point (members in turn; shards give parallelism)."""
     t_from, t_end = ensemble_window(scene)
     cfg = engine_config(scene)
-    init = init or initial_state(scene)
+    init = init or scene.initial
     members, tail, final = [], {}, {}
     for m in range(scene.ensemble.members):
         st, fin, tl = run_member(cfg, init, m, t_from)
@@ -158,8 +159,7 @@ def regime_attrs() -> dict:
     return {
         "long_name": "dynamical regime (most common among members)",
         "units": "1",
-        "flag_values": np.array(list(ob.REGIMES), dtype=np.int16),
-        "flag_meanings": " ".join(n.replace("-", "_") for n in ob.REGIMES.values()),
+        **ob.regime_flags(np.int16),
         "comment": "periodic regimes: period_p impacts every period_q stator periods",
     }
 
@@ -242,7 +242,7 @@ def _continued(final: dict[str, float], scene: Scene) -> InitialState:
     w = scene.params.omega_s
     period = 2.0 * np.pi / w
     t = scene.initial.t + float(np.mod(final["t"] - scene.initial.t, period))
-    us, vs = np.sin(w * final["t"]), w * np.cos(w * final["t"])
+    us, vs = stator.position(w * final["t"]), stator.velocity(w * final["t"], w)
     riding = abs(final["u"] - us) <= 1e-9 and abs(final["v"] - vs) <= 1e-9 * (1.0 + w)
     if final["in_contact"] or riding:
         return InitialState(t=t, omega=final["omega"])

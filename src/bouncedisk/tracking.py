@@ -49,6 +49,7 @@ from typing import Any
 
 from . import __version__
 from .errors import InputError
+from .provenance import TAG_GIT_COMMIT, TAG_GIT_DIRTY, TAG_VERSION
 
 ENV_URI = "MLFLOW_TRACKING_URI"
 ENV_TRACK = "BOUNCEDISK_TRACK"  # "1": simulate/fit/stats track without --track
@@ -653,9 +654,9 @@ def provenance_tags(kind: str, cwd: Path | None = None) -> dict[str, str]:
     g = git_state(cwd)
     tags = {
         TAG_KIND: kind,
-        "bouncedisk.version": __version__,
-        "bouncedisk.git_commit": g["git_commit"],
-        "bouncedisk.git_dirty": g["git_dirty"],
+        TAG_VERSION: __version__,
+        TAG_GIT_COMMIT: g["git_commit"],
+        TAG_GIT_DIRTY: g["git_dirty"],
         "python_version": platform.python_version(),
         TAG_HOST: socket.gethostname(),
         TAG_PID: str(os.getpid()),

@@ -19,9 +19,11 @@ import numpy as np
 from numba import njit
 from scipy.integrate import solve_ivp
 
-from ..engine import kernel as K
-from ..engine.driver import STATUS_TEXT, Chunk, RunResult
+from .. import stator
+from ..engine import laws
+from ..engine.driver import Chunk, EngineError, RunResult
 from ..errors import InputError
+from ..records import RunStatus, StrobeColumn, TrajColumn
 from ..scene import Scene
 
 IVP_METHODS = {"rk45": "RK45", "dop853": "DOP853", "lsoda": "LSODA"}
@@ -44,11 +46,18 @@ def _check(scene: Scene) -> None:
         raise InputError(scene.source, "solver.step", "is required by the Moreau–Jean scheme")
 
 
+def _gap_state(w: float, t0: float, u0: float | None, v0: float | None) -> tuple[float, float]:
+    """Gap ``z = u − u_s`` and its rate at ``t0`` (0, 0 for a rotor riding the stator)."""
+    if u0 is None:
+        return 0.0, 0.0
+    return u0 - stator.position(w * t0), v0 - stator.velocity(w * t0, w)
+
+
 def _separation_after(t: float, w: float) -> float:
     """First time >= t where the contact load 1 − w² sin(wt) turns negative (inf if never)."""
     if w <= 1.0:
         return math.inf
-    ts = math.asin(1.0 / (w * w))
+    ts = laws.separation_phase(w)
     ph = w * t
     k = math.floor((ph - ts) / TWO_PI) + 1
     return (ts + TWO_PI * k) / w
@@ -72,7 +81,7 @@ def ivp_events(
 
     def rhs(t, y):
         """Gap dynamics in flight: ``z'' = −1 − a_s = −1 + w² sin(wt)`` (MODEL.md "Flight")."""
-        return [y[1], -1.0 + w * w * math.sin(w * t)]
+        return [y[1], -1.0 - stator.acceleration(w * t, w)]
 
     def gap(t, y):
         """Impact event: the gap ``z = u − u_s`` reaches 0 from above (eq. 20)."""
@@ -82,16 +91,16 @@ def ivp_events(
     gap.direction = -1.0
     t = t0
     in_contact = u0 is None
-    z, zd = (0.0, 0.0) if u0 is None else (u0 - math.sin(w * t0), v0 - w * math.cos(w * t0))
+    z, zd = _gap_state(w, t0, u0, v0)
     ts, vrel = [], []
-    status = K.ST_EVENTS
+    status = RunStatus.EVENTS
     while len(ts) < max_events:
         if in_contact:
             if not contact:
-                return _pack(ts, vrel, w), K.ST_NEED_CONTACT
+                return _pack(ts, vrel, w), RunStatus.NEED_CONTACT
             t = _separation_after(t, w)
             if not math.isfinite(t) or t > t_end:
-                status = K.ST_REST if not math.isfinite(t) else K.ST_TIME
+                status = RunStatus.REST if not math.isfinite(t) else RunStatus.TIME
                 break
             z, zd = 0.0, 0.0
             in_contact = False
@@ -116,7 +125,7 @@ def ivp_events(
             # solve_ivp's event search fails on bounces below its resolution: call it rest
             in_contact = True
             if w <= 1.0:
-                status = K.ST_REST
+                status = RunStatus.REST
                 break
             continue
         if sol.status == 1 and len(sol.t_events[0]):
@@ -130,9 +139,19 @@ def ivp_events(
                 continue
             z, zd = 0.0, e * v
         else:
-            status = K.ST_TIME
+            status = RunStatus.TIME
             break
     return _pack(ts, vrel, w), status
+
+
+def _no_traj() -> np.ndarray:
+    """Comparators sample no trajectory: zero rows of the engine's columns."""
+    return np.empty((0, len(TrajColumn)))
+
+
+def _no_strobe() -> np.ndarray:
+    """Comparators sample no stroboscopic section: zero rows of the engine's columns."""
+    return np.empty((0, len(StrobeColumn)))
 
 
 def _pack(ts, vrel, w) -> dict:
@@ -144,7 +163,7 @@ def _pack(ts, vrel, w) -> dict:
         "v_rel": np.asarray(vrel, float),
         "omega_after": np.zeros(n),
         "omega_before": np.zeros(n),
-        "u": np.sin(w * t),
+        "u": stator.position(w * t),
         "kind": np.zeros(n, dtype=np.int8),
     }
 
@@ -162,7 +181,7 @@ def _moreau_kernel(e, w, h, t0, z0, zd0, max_events, t_end, v_rest, out_t, out_v
     while n < max_events and steps < max_steps:
         # free velocity: zd'' = −1 + w² sin(wt), midpoint force
         tm = t + 0.5 * h
-        f = -1.0 + w * w * np.sin(w * tm)
+        f = -laws.normal_load(w, w * tm)  # = −1 − a_s
         zd_free = zd + h * f
         z_pred = z + 0.5 * h * zd  # predicted gap at mid-step
         active = z_pred <= 0.0
@@ -195,12 +214,12 @@ def moreau_events(
     v_rest: float = 1e-9,
 ) -> tuple[dict, int]:
     """Impacts from Moreau–Jean time-stepping with step ``h`` (module docstring)."""
-    z0, zd0 = (0.0, 0.0) if u0 is None else (u0 - math.sin(w * t0), v0 - w * math.cos(w * t0))
+    z0, zd0 = _gap_state(w, t0, u0, v0)
     out_t = np.empty(max_events)
     out_v = np.empty(max_events)
     cap_t = t_end if math.isfinite(t_end) else t0 + 50.0 * max_events * (1.0 + 1.0 / w)
     n, _t = _moreau_kernel(e, w, h, t0, z0, zd0, max_events, cap_t, v_rest, out_t, out_v)
-    status = K.ST_EVENTS if n >= max_events else K.ST_TIME
+    status = RunStatus.EVENTS if n >= max_events else RunStatus.TIME
     return _pack(out_t[:n], out_v[:n], w), status
 
 
@@ -226,19 +245,15 @@ def simulate_comparator(scene: Scene) -> RunResult:
             t_end,
             contact=scene.has("contact"),
         )
-    return RunResult(
-        ev, np.empty((0, 5)), np.empty((0, 5)), STATUS_TEXT.get(status, "completed"), status
-    )
+    return RunResult(ev, _no_traj(), _no_strobe(), status.text, int(status))
 
 
 def iterate_comparator(scene: Scene):
     """The comparator's run as one engine-format chunk (generator, like the engine's)."""
     res = simulate_comparator(scene)
     ev = res.events
-    if res.status_code == K.ST_NEED_CONTACT:
-        from ..engine import EngineError
-
-        raise EngineError(STATUS_TEXT[K.ST_NEED_CONTACT], K.ST_NEED_CONTACT)
+    if res.status_code == RunStatus.NEED_CONTACT:
+        raise EngineError(RunStatus.NEED_CONTACT.text, RunStatus.NEED_CONTACT)
     if len(ev["t"]):
         yield Chunk(
             t=ev["t"],
@@ -248,8 +263,8 @@ def iterate_comparator(scene: Scene):
             u=ev["u"],
             omega_before=ev["omega_before"],
             kind=ev["kind"],
-            traj=np.empty((0, 5)),
-            strobe=np.empty((0, 5)),
+            traj=_no_traj(),
+            strobe=_no_strobe(),
             n_events_total=len(ev["t"]),
             t_now=float(ev["t"][-1]),
         )
