@@ -12,7 +12,6 @@ process), and the cost of each effect.
 
 from __future__ import annotations
 
-import contextlib
 import json
 import math
 import os
@@ -242,50 +241,13 @@ def _rate(cfg: EngineConfig, repeat: int = 2) -> tuple[float, int]:
     return best, n
 
 
-def _vm_hwm_mb() -> float:
-    """This process's own peak resident memory (MB): ``VmHWM`` from ``/proc/self/status``.
-
-    Where there is no ``/proc`` (not Linux), ``ru_maxrss``, which may include the high-water
-    mark a parent passed on across fork and exec.
-    """
-    with contextlib.suppress(OSError), open("/proc/self/status") as status:
-        for line in status:
-            if line.startswith("VmHWM:"):
-                return int(line.split()[1]) / 1024.0
-    import resource
-
-    kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    return kb / (1024.0 * 1024.0 if sys.platform == "darwin" else 1024.0)
-
-
-def stream_events_peak_mb(n_events: int, e: float, omega_s: float, out: str | Path) -> float:
-    """Stream an events-only run of ``n_events`` to ``out``; this process's peak memory (MB).
-
-    The body of :func:`peak_memory_mb`'s child process (``python -m bouncedisk.studies``): in a
-    fresh process, the peak is that of the imports and of this one run alone.
-    """
-    from .runner import run_scene
-    from .scene import scene_from_mapping
-
-    scene = scene_from_mapping(
-        {
-            "name": "mem",
-            "parameters": {"e": e, "omega_s": omega_s},
-            "effects": ["impacts", "contact"],
-            "stop": {"impacts": n_events},
-        }
-    )
-    run_scene(scene, out, progress=False)
-    return _vm_hwm_mb()
-
-
 def peak_memory_mb(n_events: int, e: float = 0.6, omega_s: float = 1.5) -> float:
     """Peak RSS (MB) of a fresh process streaming an events-only run of ``n_events`` to netCDF.
 
-    The child (``python -m bouncedisk.studies``, the same interpreter and the same package as
-    this process) runs :func:`stream_events_peak_mb` and reports its own ``VmHWM``
-    (``ru_maxrss`` would include this process's high-water mark, which Linux keeps across fork
-    and exec). Its file goes to a temporary folder, removed whatever happens.
+    The child (``python -m bouncedisk.memprobe``, the same interpreter and the same package as
+    this process) runs :func:`bouncedisk.memprobe.stream_events_peak_mb` and reports its own
+    ``VmHWM`` (``ru_maxrss`` would include this process's high-water mark, which Linux keeps
+    across fork and exec). Its file goes to a temporary folder, removed whatever happens.
 
     Raises
     ------
@@ -301,7 +263,7 @@ def peak_memory_mb(n_events: int, e: float = 0.6, omega_s: float = 1.5) -> float
     with tempfile.TemporaryDirectory(prefix="bouncedisk-memory-") as folder:
         request["out"] = os.path.join(folder, "mem.nc")
         proc = subprocess.run(
-            [sys.executable, "-m", __name__],
+            [sys.executable, "-m", f"{__package__}.memprobe"],
             input=json.dumps(request),
             capture_output=True,
             text=True,
@@ -317,13 +279,6 @@ def peak_memory_mb(n_events: int, e: float = 0.6, omega_s: float = 1.5) -> float
             f"the child process failed with status {proc.returncode}: {why}"
         )
     return float(json.loads(proc.stdout.strip().splitlines()[-1])["peak_mb"])
-
-
-def _child_main() -> None:
-    """``python -m bouncedisk.studies``: one JSON request on stdin, ``{"peak_mb": ...}`` out."""
-    request = json.loads(sys.stdin.read())
-    peak = stream_events_peak_mb(**request)
-    sys.stdout.write(json.dumps({"peak_mb": peak}) + "\n")
 
 
 def scaling(
@@ -388,7 +343,3 @@ def scaling(
         if progress:
             progress(f"{label}: {1e9 * sec / n:.0f} ns per impact")
     return pd.DataFrame(rows)
-
-
-if __name__ == "__main__":
-    _child_main()
