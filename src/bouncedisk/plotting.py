@@ -559,15 +559,13 @@ def _curve(path: str) -> dict[str, np.ndarray]:
     return {"time_s": curve.time, "omega_rad_s": curve.omega}
 
 
-def _open_simulation(path: str) -> xr.Dataset:
-    return open_simulation(path)
-
-
 def _fig5_with_fit(curve: dict[str, np.ndarray], fit: xr.Dataset) -> Figure:
+    """Fig. 5 from the curve and its fit file (:func:`fig5_motor`)."""
     return fig5_motor(curve, fitted=fit)
 
 
 def _poincare_labelled(maps: Sequence[xr.Dataset], labels: Sequence[str]) -> Figure:
+    """The Poincaré maps, each under its label (:func:`fig_poincare`)."""
     return fig_poincare(dict(zip(labels, maps, strict=True)))
 
 
@@ -600,7 +598,7 @@ FIGURES: dict[str, FigureSpec] = {
     "trajectory": FigureSpec(
         fig_trajectory,
         {
-            "sim": _open_simulation,
+            "sim": open_simulation,
             "band": _netcdf("omega_mean", "omega_ci_low", what="band"),
         },
     ),
