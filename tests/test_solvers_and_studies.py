@@ -8,10 +8,11 @@ import pytest
 
 from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
 from bouncedisk.errors import InputError
+from bouncedisk.memprobe import _vm_hwm_mb
 from bouncedisk.runner import run_scene_arrays
 from bouncedisk.scene import scene_from_mapping
 from bouncedisk.solvers import ivp_events, moreau_events
-from bouncedisk.studies import CASES, _errors, work_precision_summary
+from bouncedisk.studies import CASES, _errors, peak_memory_mb, work_precision_summary
 
 REF = simulate_arrays(EngineConfig(e=0.3, omega_s=1.5, max_events=40, tol=1e-14)).events
 
@@ -104,3 +105,21 @@ def test_summary_targets_logic():
     assert math.isnan(
         work_precision_summary(table[table.solver != "exact"])["speedup_vs_fastest_ivp_at_1e-8"]
     )
+
+
+def test_peak_memory_is_the_childs_own_and_grows_with_the_run():
+    peak_memory_mb(1_000)  # the engine's compiled cache is warm for the runs compared below
+    ballast = np.ones(80_000_000)  # 640 MB resident in this process, not in the child
+    assert _vm_hwm_mb() > 640
+    small = peak_memory_mb(1_000)
+    large = peak_memory_mb(200_000)
+    del ballast
+    assert 20 < small < 600
+    assert large >= small
+
+
+def test_peak_memory_child_failure_is_a_clear_error_and_leaves_no_file(tmp_path, monkeypatch):
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
+    with pytest.raises(RuntimeError, match=r"child process failed .*parameters\.e: must be in"):
+        peak_memory_mb(1_000, e=2.0)
+    assert list(tmp_path.iterdir()) == []

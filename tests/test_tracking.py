@@ -331,7 +331,12 @@ def test_first_run_keeps_its_metrics_artifacts_and_every_job_record(two_runs):
     kids = client.search_runs([exp], filter_string=f"tags.mlflow.parentRunId = '{a.info.run_id}'")
     kinds = {k.data.tags["bouncedisk.kind"] for k in kids}
     assert {"simulation", "figure", "check", "build"} <= kinds
-    fig = next(k for k in kids if k.data.tags["bouncedisk.rule"] == "fig4_trajectory")
+    fig = next(
+        k
+        for k in kids
+        if k.data.tags["bouncedisk.rule"] == "figure"
+        and k.data.params.get("wildcards.fig") == "fig4_trajectory_e06"
+    )
     names = [f.path for f in client.list_artifacts(fig.info.run_id, "outputs")]
     assert "outputs/fig4_trajectory_e06.png" in names
     png = Path(client.download_artifacts(fig.info.run_id, "outputs/fig4_trajectory_e06.png"))

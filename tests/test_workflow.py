@@ -9,6 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+import yaml
+
+from bouncedisk import plotting
 
 ROOT = Path(__file__).resolve().parents[1]
 SMALL = ROOT / "tests" / "data" / "config_small.yaml"
@@ -103,7 +106,78 @@ def test_bad_config_fails_before_any_job(tmp_path):
     bad.write_text(SMALL.read_text().replace("shards: 3", "shards: -1"))
     p = dry_run(bad, tmp_path / "r")
     assert p.returncode != 0 and "shards" in p.stdout + p.stderr
+    bad.write_text(SMALL.read_text().replace("per_omega: 50000", "per_omega: -1"))
+    p = dry_run(bad, tmp_path / "r")
+    assert p.returncode != 0 and "per_omega" in p.stdout + p.stderr
     assert not (tmp_path / "r").exists()
+
+
+# results/figures/<name>.pdf and .png: what README, `bouncedisk check` and the report point at
+FIGURE_NAMES = {
+    "fig2_schematic",
+    "fig3_trajectory_e03",
+    "fig4_trajectory_e06",
+    "fig5_prototype_fit",
+    "poincare_maps",
+    "bifurcation_e",
+    "regime_map",
+    "speed_vs_psi",
+    "clipped_vs_bouncing",
+    "work_precision",
+    "scaling",
+    "stats_cost",
+    "fit_profiles",
+}
+
+
+def test_figure_table_names_every_figure_and_uses_every_registered_plot():
+    table = yaml.safe_load((ROOT / "workflow" / "config" / "figures.yaml").read_text())
+    assert set(table) == FIGURE_NAMES
+    assert {row["plot"] for row in table.values()} == set(plotting.FIGURES)
+    for name, row in table.items():
+        spec = plotting.FIGURES[row["plot"]]
+        assert set(row.get("inputs", {})) == set(spec.inputs), name
+        assert set(row.get("params", {})) == set(spec.params), name
+        assert (ROOT / "workflow" / "report" / f"{row['caption']}.rst").is_file(), name
+
+
+def planned_jobs(out: str) -> list[tuple[str, list[str]]]:
+    """(rule, outputs) of every job a dry run printed."""
+    jobs = []
+    for block in out.split("\nrule ")[1:]:
+        rule = block.split(":", 1)[0]
+        outputs = next(
+            (ln.split(":", 1)[1] for ln in block.splitlines() if ln.strip().startswith("output:")),
+            "",
+        )
+        jobs.append((rule, [o.strip() for o in outputs.split(",") if o.strip()]))
+    return jobs
+
+
+def test_one_figure_rule_draws_exactly_what_rule_all_wants(tmp_path):
+    res = tmp_path / "r"
+    p = dry_run(SMALL, res)
+    assert p.returncode == 0, p.stdout[-3000:] + p.stderr[-3000:]
+    figures = {
+        str(Path(o).relative_to(res))
+        for rule, outs in planned_jobs(p.stdout)
+        for o in outs
+        if o.startswith(str(res / "figures"))
+    }
+    assert figures == {f"figures/{n}.{ext}" for n in FIGURE_NAMES for ext in ("pdf", "png")}
+    rules = {rule for rule, outs in planned_jobs(p.stdout) if any("/figures/" in o for o in outs)}
+    assert rules == {"figure"}
+    assert sum(rule == "figure" for rule, _ in planned_jobs(p.stdout)) == len(FIGURE_NAMES)
+
+
+def test_figure_registry_refuses_an_unknown_figure_or_wrong_inputs(tmp_path):
+    with pytest.raises(ValueError, match=r"unknown figure 'nope'; known figures: .*trajectory"):
+        plotting.draw_figure("nope", {})
+    with pytest.raises(ValueError, match=r"takes the inputs \['table'\], given \['tabel'\]"):
+        plotting.draw_figure("scaling", {"tabel": "x.csv"})
+    with pytest.raises(ValueError, match=r"takes the parameters \['labels'\], given \[\]"):
+        plotting.draw_figure("poincare", {"maps": []})
+    assert plotting.draw_figure("fig2", {}).axes
 
 
 @pytest.mark.slow

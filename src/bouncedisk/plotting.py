@@ -7,7 +7,10 @@ backend; :func:`save_figure` writes PDF and PNG atomically.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -18,6 +21,7 @@ from matplotlib.patches import Ellipse, FancyArrowPatch, Rectangle
 from matplotlib.ticker import NullFormatter
 
 from .atomic import atomic_path
+from .datasets import open_checked, open_simulation
 
 TWO_PI = 2 * math.pi
 COLORS = {"rotor": "#1f77b4", "stator": "#7f7f7f", "fit": "#d62728", "data": "#2ca02c"}
@@ -532,3 +536,124 @@ def fig_stats_cost(table: pd.DataFrame, singles: pd.DataFrame) -> Figure:
     ax2.set_title("single runs jump; the ensemble statistic does not", fontsize=10)
     ax2.legend(fontsize=7)
     return fig
+
+
+# ----------------------------------------------------------------------------- the registry
+Opener = Callable[[str], Any]
+
+
+def _netcdf(*required: str, what: str = "netCDF") -> Opener:
+    """An opener of a netCDF file that must hold the variables ``required``."""
+
+    def open_(path: str) -> xr.Dataset:
+        return open_checked(path, required=required, what=what)
+
+    return open_
+
+
+def _curve(path: str) -> dict[str, np.ndarray]:
+    """A motor curve (CSV and sidecar) as the columns :func:`fig5_motor` draws."""
+    from .curves import read_curve
+
+    curve = read_curve(path)
+    return {"time_s": curve.time, "omega_rad_s": curve.omega}
+
+
+def _fig5_with_fit(curve: dict[str, np.ndarray], fit: xr.Dataset) -> Figure:
+    """Fig. 5 from the curve and its fit file (:func:`fig5_motor`)."""
+    return fig5_motor(curve, fitted=fit)
+
+
+def _poincare_labelled(maps: Sequence[xr.Dataset], labels: Sequence[str]) -> Figure:
+    """The Poincaré maps, each under its label (:func:`fig_poincare`)."""
+    return fig_poincare(dict(zip(labels, maps, strict=True)))
+
+
+@dataclass(frozen=True)
+class FigureSpec:
+    """How one kind of figure is drawn from files.
+
+    Attributes
+    ----------
+    draw : callable
+        Called as ``draw(*opened, **params)``: the opened inputs in the order of ``inputs``,
+        then the figure's parameters (e.g. ``labels``); returns the Figure.
+    inputs : mapping
+        Input name -> the function that opens one path of it (a list of paths opens each).
+    params : tuple of str
+        The names of the parameters ``draw`` takes besides the inputs.
+    """
+
+    draw: Callable[..., Figure]
+    inputs: Mapping[str, Opener] = field(default_factory=dict)
+    params: tuple[str, ...] = ()
+
+
+_FIT = _netcdf("omega_measured", "omega_fitted", what="fit")
+_BRANCH = _netcdf("phase", "is_chatter", "lyapunov")
+
+#: Every figure the package draws, by name (the pipeline's figure table names one per figure).
+FIGURES: dict[str, FigureSpec] = {
+    "fig2": FigureSpec(fig2_schematic),
+    "trajectory": FigureSpec(
+        fig_trajectory,
+        {
+            "sim": open_simulation,
+            "band": _netcdf("omega_mean", "omega_ci_low", what="band"),
+        },
+    ),
+    "fig5": FigureSpec(_fig5_with_fit, {"curve": _curve, "fit": _FIT}),
+    "fit_profiles": FigureSpec(fig_fit_profiles, {"fit": _FIT}),
+    "poincare": FigureSpec(
+        _poincare_labelled, {"maps": _netcdf("phase", "v_rel")}, params=("labels",)
+    ),
+    "bifurcation": FigureSpec(fig_bifurcation, {"up": _BRANCH, "down": _BRANCH}),
+    "regime_map": FigureSpec(fig_regime_map, {"sweep": _netcdf("regime", "lyapunov")}),
+    "speed_vs_psi": FigureSpec(
+        fig_speed_vs_psi, {"sweep": _netcdf("mean_omega", "mean_omega_ci_low")}
+    ),
+    "clipped": FigureSpec(fig_clipped_vs_bouncing, {"study": _netcdf("omega_rotor")}),
+    "work_precision": FigureSpec(fig_work_precision, {"table": pd.read_csv}),
+    "scaling": FigureSpec(fig_scaling, {"table": pd.read_csv}),
+    "stats_cost": FigureSpec(fig_stats_cost, {"table": pd.read_csv, "singles": pd.read_csv}),
+}
+
+
+def draw_figure(
+    name: str, paths: Mapping[str, str | Sequence[str]], params: Mapping[str, Any] | None = None
+) -> Figure:
+    """Open the inputs of figure ``name`` (a key of :data:`FIGURES`) and draw it.
+
+    Parameters
+    ----------
+    name : str
+        The figure's kind, a key of :data:`FIGURES`.
+    paths : mapping
+        Input name -> a path, or a list of paths; exactly the inputs the figure takes.
+    params : mapping, optional
+        Exactly the parameters the figure takes (``FigureSpec.params``).
+
+    Raises
+    ------
+    ValueError
+        An unknown figure, or inputs or parameters other than the figure's.
+    """
+    spec = FIGURES.get(name)
+    if spec is None:
+        raise ValueError(f"unknown figure {name!r}; known figures: {', '.join(sorted(FIGURES))}")
+    params = dict(params or {})
+    for what, given, wanted in (
+        ("inputs", set(paths), set(spec.inputs)),
+        ("parameters", set(params), set(spec.params)),
+    ):
+        if given != wanted:
+            raise ValueError(
+                f"figure {name!r} takes the {what} {sorted(wanted)}, given {sorted(given)}"
+            )
+    opened = [
+        [opener(str(p)) for p in paths[key]]
+        if isinstance(paths[key], Sequence) and not isinstance(paths[key], str)
+        else opener(str(paths[key]))
+        for key, opener in spec.inputs.items()
+    ]
+    return spec.draw(*opened, **params)

@@ -21,6 +21,7 @@ import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -240,37 +241,44 @@ def _rate(cfg: EngineConfig, repeat: int = 2) -> tuple[float, int]:
     return best, n
 
 
-def _vm_hwm_mb() -> str:
-    return (
-        "def _hwm():\n"
-        "    for line in open('/proc/self/status'):\n"
-        "        if line.startswith('VmHWM:'):\n"
-        "            return int(line.split()[1]) / 1024.0\n"
-        "    import resource\n"
-        "    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0\n"
-    )
-
-
 def peak_memory_mb(n_events: int, e: float = 0.6, omega_s: float = 1.5) -> float:
     """Peak RSS (MB) of a fresh process streaming an events-only run of ``n_events`` to netCDF.
 
-    Read from the child's own ``VmHWM`` (``ru_maxrss`` would include the parent's high-water
-    mark, which Linux keeps across fork and exec).
+    The child (``python -m bouncedisk.memprobe``, the same interpreter and the same package as
+    this process) runs :func:`bouncedisk.memprobe.stream_events_peak_mb` and reports its own
+    ``VmHWM`` (``ru_maxrss`` would include this process's high-water mark, which Linux keeps
+    across fork and exec). Its file goes to a temporary folder, removed whatever happens.
+
+    Raises
+    ------
+    RuntimeError
+        The child failed (its last line of error output is in the message) or was killed.
     """
-    code = (
-        "import json,sys\n" + _vm_hwm_mb() + "from bouncedisk.scene import scene_from_mapping\n"
-        "from bouncedisk.runner import run_scene\n"
-        f"s=scene_from_mapping({{'name':'mem','parameters':{{'e':{e},'omega_s':{omega_s}}},"
-        f"'effects':['impacts','contact'],'stop':{{'impacts':{n_events}}}}})\n"
-        "run_scene(s, sys.argv[1], progress=False)\n"
-        "print(json.dumps(_hwm()))\n"
-    )
-    with tempfile.TemporaryDirectory() as d:
-        out = os.path.join(d, "mem.nc")
+    request = {"n_events": n_events, "e": e, "omega_s": omega_s}
+    src = str(Path(__file__).resolve().parents[1])
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join(filter(None, [src, os.environ.get("PYTHONPATH")])),
+    }
+    with tempfile.TemporaryDirectory(prefix="bouncedisk-memory-") as folder:
+        request["out"] = os.path.join(folder, "mem.nc")
         proc = subprocess.run(
-            [sys.executable, "-c", code, out], capture_output=True, text=True, check=True
+            [sys.executable, "-m", f"{__package__}.memprobe"],
+            input=json.dumps(request),
+            capture_output=True,
+            text=True,
+            env=env,
         )
-    return float(json.loads(proc.stdout.strip().splitlines()[-1]))
+    if proc.returncode != 0:
+        lines = proc.stderr.strip().splitlines()
+        why = lines[-1] if lines else "no error output"
+        if proc.returncode < 0:
+            why = f"killed by signal {-proc.returncode} (out of memory?); {why}"
+        raise RuntimeError(
+            f"peak memory of {n_events} impacts (e = {e}, omega_s = {omega_s}): "
+            f"the child process failed with status {proc.returncode}: {why}"
+        )
+    return float(json.loads(proc.stdout.strip().splitlines()[-1])["peak_mb"])
 
 
 def scaling(

@@ -35,6 +35,6 @@ rule scaling:
     benchmark:
         f"{RES}/benchmarks/scaling.tsv"
     params:
-        quick=config["accuracy"]["quick"],
+        sizes=config["accuracy"]["scaling"],
     script:
         "../scripts/scaling.py"

@@ -71,22 +71,6 @@ def _check_config():
 CHECKED_STATS = ["stats_e03", "stats_e06", "stats_locked"]
 _check_config()
 
-FIGURES = [
-    "fig2_schematic",
-    "fig3_trajectory_e03",
-    "fig4_trajectory_e06",
-    "fig5_prototype_fit",
-    "poincare_maps",
-    "bifurcation_e",
-    "regime_map",
-    "speed_vs_psi",
-    "clipped_vs_bouncing",
-    "work_precision",
-    "scaling",
-    "stats_cost",
-    "fit_profiles",
-]
-
 
 def sweep_shards(wildcards):
     n = config["sweeps"][wildcards.sweep]["shards"]
@@ -94,6 +78,7 @@ def sweep_shards(wildcards):
 
 
 def all_targets():
+    # FIGURES: the figure table's names (figures.smk, workflow/config/figures.yaml)
     figs = expand(f"{RES}/figures/{{fig}}.{{ext}}", fig=FIGURES, ext=["pdf", "png"])
     return figs + [
         f"{RES}/reproduction.md",
@@ -105,10 +90,6 @@ def all_targets():
     ] + expand(f"{RES}/poincare/{{s}}.nc", s=list(config["poincare"])) + expand(
         f"{RES}/stats/{{s}}.nc", s=config["statistics"]
     )
-
-
-FIGCAT = "Figures of the paper"
-STUDY = "Studies beyond the paper"
 
 
 def fig_out(name, caption, category):
