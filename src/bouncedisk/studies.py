@@ -27,8 +27,8 @@ import numpy as np
 import pandas as pd
 
 from .engine import EngineConfig, InitialState, iterate, simulate_arrays
-from .engine.kernel import KIND_CHATTER, KIND_IMPACT
 from .observables import circular_distance
+from .records import EventKind
 from .solvers import ivp_events, moreau_events
 
 
@@ -85,13 +85,13 @@ def _rest_time(ev: dict) -> float:
     """When the rotor comes to rest: the accumulation point (engine) or the last impact."""
     if len(ev["t"]) == 0:
         return math.nan
-    chat = np.nonzero(ev["kind"] == KIND_CHATTER)[0]
+    chat = np.nonzero(ev["kind"] == EventKind.CHATTER)[0]
     return float(ev["t"][chat[0]]) if len(chat) else float(ev["t"][-1])
 
 
 def _errors(case: Case, ev: dict, ref: dict) -> dict[str, float]:
-    imp = ev["kind"] == KIND_IMPACT
-    rimp = ref["kind"] == KIND_IMPACT
+    imp = ev["kind"] == EventKind.IMPACT
+    rimp = ref["kind"] == EventKind.IMPACT
     t, rt = ev["t"][imp], ref["t"][rimp]
     n = min(case.first, len(rt))
     if len(t) < n:
@@ -174,7 +174,7 @@ def work_precision(
                     "knob": knob,
                     "value": value,
                     "cpu_s": cpu,
-                    "n_impacts": int(np.sum(ev["kind"] == KIND_IMPACT)),
+                    "n_impacts": int(np.sum(ev["kind"] == EventKind.IMPACT)),
                     **err,
                 }
             )
