@@ -91,7 +91,7 @@ def test_clipped_model_rides_the_stator_and_coasts_when_unloaded():
     unloaded = stator.normal_load(1.5 * tr[:, C.T], 1.5) < -0.05
     runs = np.flatnonzero(np.diff(unloaded.astype(int)))
     seg = slice(runs[0] + 2, runs[1] - 1)
-    assert unloaded[seg].all() and np.ptp(tr[seg, 4]) < 1e-12
+    assert unloaded[seg].all() and np.ptp(tr[seg, C.OMEGA]) < 1e-12
     with pytest.raises(Exception, match="stop"):
         scene_from_mapping({**BASE, "model": "clipped", "stop": {"impacts": 600}, "stats": {}})
 

@@ -77,3 +77,18 @@ def test_stator_derivatives_and_load_follow_eq_1():
     np.testing.assert_array_equal(
         stator.normal_load(w * t, w), 1.0 - w * w * np.sin(w * t)
     )  # N = 1 + a_s (eq. 17)
+
+
+def test_stator_functions_take_any_array_like_phase():
+    # ArrayLike as documented: a list or tuple of phases is read as a float array, as before
+    w, psi, theta = 1.7, 0.4, [0.0, 0.3, 2.0]
+    arr = np.array(theta)
+    for f, args in (
+        (stator.position, ()),
+        (stator.velocity, (w,)),
+        (stator.normal_load, (w,)),
+        (stator.twist, (psi,)),
+        (stator.twist_rate, (w, psi)),
+    ):
+        np.testing.assert_array_equal(f(theta, *args), f(arr, *args), err_msg=f.__name__)
+        np.testing.assert_array_equal(f(tuple(theta), *args), f(arr, *args), err_msg=f.__name__)

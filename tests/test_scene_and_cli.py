@@ -220,6 +220,18 @@ def test_simulate_writes_interfaces_names_and_is_deterministic(scene_file, tmp_p
     np.testing.assert_allclose(np.sin(1.5 * da.strobe_t.values), 0.0, atol=1e-9)
 
 
+def test_info_lists_the_provenance_in_one_aligned_column(scene_file, tmp_path, capsys):
+    out = tmp_path / "a.nc"
+    assert main(["simulate", str(scene_file(GOOD)), "-o", str(out), "-q"]) == 0
+    capsys.readouterr()
+    assert main(["info", str(out)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    names = [ln.partition(": ")[0].strip() for ln in lines]
+    assert {"scene_sha256", "bouncedisk_version", "n_impacts", "status", "variables"} <= set(names)
+    # every name right-aligned to the same column, the longest (bouncedisk_version) included
+    assert len({ln.index(": ") for ln in lines}) == 1, lines
+
+
 def test_info_rejects_corrupt_netcdf(tmp_path, capsys):
     bad = tmp_path / "bad.nc"
     bad.write_bytes(b"CDF\x01garbage" * 10)

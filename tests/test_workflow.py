@@ -77,7 +77,7 @@ def test_lint_is_clean():
     assert p.returncode == 0 and "Congratulations" in p.stdout + p.stderr
 
 
-def dry_run(config: Path, res: Path) -> subprocess.CompletedProcess:
+def dry_run(config: Path, res: Path, cwd: Path = ROOT) -> subprocess.CompletedProcess:
     return subprocess.run(
         [
             "snakemake",
@@ -89,7 +89,7 @@ def dry_run(config: Path, res: Path) -> subprocess.CompletedProcess:
             f"results={res}",
             "-n",
         ],
-        cwd=ROOT,
+        cwd=cwd,
         capture_output=True,
         text=True,
     )
@@ -139,6 +139,29 @@ def test_figure_table_names_every_figure_and_uses_every_registered_plot():
         assert set(row.get("inputs", {})) == set(spec.inputs), name
         assert set(row.get("params", {})) == set(spec.params), name
         assert (ROOT / "workflow" / "report" / f"{row['caption']}.rst").is_file(), name
+
+
+def test_a_bad_figure_table_names_the_table_and_the_entry(tmp_path):
+    # a scratch copy of the pipeline, whose figure table is broken one way at a time
+    copy = tmp_path / "copy"
+    shutil.copytree(ROOT / "workflow", copy / "workflow")
+    shutil.copytree(ROOT / "data", copy / "data")
+    shutil.copy(ROOT / "Snakefile", copy / "Snakefile")
+    table = copy / "workflow" / "config" / "figures.yaml"
+    good = table.read_text()
+    entry = "  caption: regime_map\n  category: Studies beyond the paper\n"
+    assert entry in good
+    for broken, message in (
+        (good.replace(entry, "  caption: regime_map\n"), "regime_map: 'category' is a required"),
+        (good + "bad:\n  plot: [fig2\n", 'in "'),  # malformed YAML: the position in the file
+        ("- fig2\n", "must be a mapping"),
+    ):
+        table.write_text(broken)
+        p = dry_run(SMALL, tmp_path / "r", cwd=copy)
+        out = p.stdout + p.stderr
+        assert p.returncode != 0 and "figures.yaml" in out and message in out, out[-2000:]
+        assert "config file" not in out and "<unicode string>" not in out
+    assert not (tmp_path / "r").exists()
 
 
 def planned_jobs(out: str) -> list[tuple[str, list[str]]]:

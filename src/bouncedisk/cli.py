@@ -59,10 +59,12 @@ def _cmd_info(args: argparse.Namespace) -> int:
     ds = open_simulation(args.file, lazy=True)  # the header only: memory stays flat
     from .provenance import RUN_ATTRS, SCENE_ATTRS
 
-    for k in dict.fromkeys(("scene_name", "run_id", *SCENE_ATTRS, *RUN_ATTRS, "n_chatter")):
-        if k in ds.attrs:
-            print(f"{k:>14}: {ds.attrs[k]}")
-    print(f"{'variables':>14}: {', '.join(sorted(ds.data_vars))}")
+    keys = dict.fromkeys(("scene_name", "run_id", *SCENE_ATTRS, *RUN_ATTRS, "n_chatter"))
+    rows = [(k, ds.attrs[k]) for k in keys if k in ds.attrs]
+    rows.append(("variables", ", ".join(sorted(ds.data_vars))))
+    width = max(len(k) for k, _ in rows)  # one column of names, however long the longest
+    for k, v in rows:
+        print(f"{k:>{width}}: {v}")
     ds.close()
     return 0
 

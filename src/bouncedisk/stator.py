@@ -29,6 +29,11 @@ __all__ = [
 ]
 
 
+def _phase(x):
+    """A Python scalar as it is; anything else (list, tuple, array) as a float array."""
+    return x if type(x) is float or type(x) is int else np.asarray(x, dtype=float)
+
+
 def _sin(x):
     return math.sin(x) if type(x) is float or type(x) is int else np.sin(x)
 
@@ -59,9 +64,9 @@ def normal_load(theta: ArrayLike, w: float) -> float | np.ndarray:
 
 def twist(theta: ArrayLike, psi: float) -> float | np.ndarray:
     """Stator twist ``φ_s = sin(θ + ψ)`` (eq. 1), in units of ``Φ0``."""
-    return _sin(theta + psi)
+    return _sin(_phase(theta) + psi)
 
 
 def twist_rate(theta: ArrayLike, w: float, psi: float) -> float | np.ndarray:
     """Stator angular velocity ``Ω_s = w cos(θ + ψ)`` (eq. 1, differentiated)."""
-    return w * _cos(theta + psi)
+    return w * _cos(_phase(theta) + psi)

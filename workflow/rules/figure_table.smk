@@ -4,12 +4,31 @@
 import re
 
 import yaml
+from snakemake.exceptions import WorkflowError
 
 from bouncedisk.plotting import FIGURES as PLOTS
 
 FIGURE_TABLE_FILE = "workflow/config/figures.yaml"
-FIGURE_TABLE = yaml.safe_load(Path(workflow.basedir, FIGURE_TABLE_FILE).read_text())
-validate(FIGURE_TABLE, "../schemas/figures.schema.yaml")
+
+
+def _read_figure_table():
+    """The table, schema-checked; a malformed file or entry is named (not "config file")."""
+    with open(Path(workflow.basedir, FIGURE_TABLE_FILE)) as stream:
+        table = yaml.safe_load(stream)  # a YAML error's position names the file
+    if not isinstance(table, dict):  # validate() checks mappings only
+        raise ValueError(f"{FIGURE_TABLE_FILE}: must be a mapping, figure name -> entry")
+    try:
+        validate(table, "../schemas/figures.schema.yaml")
+    except WorkflowError as ex:
+        cause = ex.__cause__ or ex.__context__  # the jsonschema ValidationError
+        if not hasattr(cause, "absolute_path"):
+            raise
+        where = ".".join(str(p) for p in cause.absolute_path) or "(top level)"
+        raise ValueError(f"{FIGURE_TABLE_FILE}: {where}: {cause.message}") from None
+    return table
+
+
+FIGURE_TABLE = _read_figure_table()
 # what rule `all` draws (results/figures/<name>.pdf and .png), in the table's order
 FIGURES = list(FIGURE_TABLE)
 # the fields of the table's path templates; those in _LIST_FIELDS give one file per value
