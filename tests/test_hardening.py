@@ -20,6 +20,7 @@ from hypothesis import strategies as st
 from bouncedisk.cli import main
 from bouncedisk.engine import EngineConfig, InitialState, iterate, simulate_arrays
 from bouncedisk.errors import InputError
+from bouncedisk.memprobe import vm_hwm_mb
 from bouncedisk.records import EventKind
 from bouncedisk.scene import load_scene, scene_from_mapping
 
@@ -383,14 +384,6 @@ def test_item10_joined_shards_report_the_whole_sweep(tmp_path):
 
 
 # ------------------------------------------------------------------ fuzz of the command line
-def _vm_hwm_mb() -> float:
-    with open("/proc/self/status") as fh:
-        for line in fh:
-            if line.startswith("VmHWM:"):
-                return int(line.split()[1]) / 1024.0
-    return 0.0  # pragma: no cover
-
-
 def _reset_hwm() -> None:
     """Reset this process's peak RSS, so that VmHWM measures the next case only (Linux)."""
     try:
@@ -571,7 +564,7 @@ def test_fuzz_command_line(tmp_path_factory, sets, options, target, command, map
     event(f"{command} exit {code}")
     assert code in (0, 2), (argv, code)
     assert elapsed < 10.0, (argv, elapsed)  # CPU seconds per case, not wall-clock
-    assert _vm_hwm_mb() < 1024.0, argv
+    assert vm_hwm_mb() < 1024.0, argv
     assert scene.read_text() == text
     if code == 2 and target in ("file", "nested"):
         assert not out.exists(), argv

@@ -8,7 +8,7 @@ import pytest
 
 from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
 from bouncedisk.errors import InputError
-from bouncedisk.memprobe import _vm_hwm_mb
+from bouncedisk.memprobe import vm_hwm_mb
 from bouncedisk.runner import run_scene_arrays
 from bouncedisk.scene import scene_from_mapping
 from bouncedisk.solvers import ivp_events, moreau_events
@@ -110,7 +110,7 @@ def test_summary_targets_logic():
 def test_peak_memory_is_the_childs_own_and_grows_with_the_run():
     peak_memory_mb(1_000)  # the engine's compiled cache is warm for the runs compared below
     ballast = np.ones(80_000_000)  # 640 MB resident in this process, not in the child
-    assert _vm_hwm_mb() > 640
+    assert vm_hwm_mb() > 640
     small = peak_memory_mb(1_000)
     large = peak_memory_mb(200_000)
     del ballast

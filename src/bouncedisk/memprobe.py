@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 
 
-def _vm_hwm_mb() -> float:
+def vm_hwm_mb() -> float:
     """This process's own peak resident memory (MB): ``VmHWM`` from ``/proc/self/status``.
 
     Where there is no ``/proc`` (not Linux), ``ru_maxrss``, which may include the high-water
@@ -47,7 +47,7 @@ def stream_events_peak_mb(n_events: int, e: float, omega_s: float, out: str | Pa
         }
     )
     run_scene(scene, out, progress=False)
-    return _vm_hwm_mb()
+    return vm_hwm_mb()
 
 
 def _child_main() -> None:
