@@ -29,7 +29,7 @@ cases = {
         e=0.6, omega_s=1.5, torsion=True, r_phi=0.01, e_sigma=1e-9, stats_from=0.0
     ),
     "e=0 contact+torsion, omega_s=1.5": dict(e=0.0, omega_s=1.5, torsion=True, r_phi=0.01),
-    "axial-only + trajectory dt=1": dict(e=0.3, omega_s=1.5, traj_dt=1.0),
+    "axial-only + trajectory dt=5": dict(e=0.3, omega_s=1.5, traj_dt=5.0),
 }
 out = {}
 for name, kw in cases.items():

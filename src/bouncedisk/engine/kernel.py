@@ -1,13 +1,31 @@
 """The compiled event loop: flights, impacts, chattering, contact with stick–slip, separation.
 
-One call advances the simulation until its output buffers are full or the run ends; the whole
-state lives in two small arrays so that a run can be resumed chunk after chunk (streaming output,
-progress reporting, interruption). Time is carried as an integer stator-period count ``n`` and a
-phase ``θ ∈ [0, 2π)``: ``t = (2πn + θ)/w``. Every event phase is therefore exact to the
-rounding of one period, however long the run (MODEL.md "Things that are easy to get wrong").
+One call of :func:`run_chunk` advances the simulation until its output buffers are full or the
+run ends; the whole state lives in two small arrays so that a run can be resumed chunk after
+chunk (streaming output, progress reporting, interruption). Time is carried as an integer
+stator-period count ``n`` and a phase ``θ ∈ [0, 2π)``: ``t = (2πn + θ)/w``. Every event phase is
+therefore exact to the rounding of one period, however long the run (MODEL.md "Things that are
+easy to get wrong").
+
+One compiled function per mode of motion (MODEL.md "Phases of motion", "Events"):
+
+- flight → impact: :func:`flight_next_impact` (first root of the gap, eq. 20) and
+  :func:`_impact` (restitution and angular impulse, eqs. 4, 8, 19; flight, contact or chatter
+  after it), the row written by :func:`_record_event`;
+- chattering: :func:`_enter_contact` (the jump to the accumulation point) and
+  :func:`_chatter_tail` (its event);
+- contact: :func:`_contact_step`, one segment ending at the first of the horizons of
+  :func:`_contact_horizon` or a stick–slip transition (:func:`_slip_root`, :func:`_stick_root`,
+  eqs. 22–23, §2.5), then :func:`_contact_advance` and :func:`_contact_end` (separation);
+- the clipped model's unloaded ride: :func:`_clipped_ride`.
+
+Samples and ``∫Ω dt`` of every segment go through :func:`_segment_output` (:func:`_sample`).
 
 Array layouts (indices below) are private to the engine; :mod:`bouncedisk.engine.driver` fills
-and reads them.
+and reads them. Helpers that take these arrays are compiled with ``_nrt=False``
+(:data:`_on_arrays`): they allocate nothing, and numba's reference counting would otherwise add
+an atomic increment and decrement of every array argument to every call, which cost 10–25 % of
+the throughput when the loop was first split into these functions.
 """
 
 from math import cos, floor, inf, pi, sin, sqrt
@@ -27,6 +45,10 @@ from .laws import (
 )
 from .noise import member_key, noisy_restitution
 from .roots import TWO_PI, first_root
+
+#: Decorator of the compiled helpers that read and write the caller's arrays and allocate nothing:
+#: no reference counting of their array arguments (module docstring).
+_on_arrays = njit(cache=True, _nrt=False)
 
 # --- parameter vector (float64) ---------------------------------------------------------------
 P_E = 0  # restitution e
@@ -117,7 +139,9 @@ def _advance(n, th, dphi):
 
 
 @njit(cache=True)
-def flight_next_impact(u0, v0, th0, ta, ga, w, xtol):
+def flight_next_impact(
+    u0: float, v0: float, th0: float, ta: float, ga: float, w: float, xtol: float
+) -> tuple[float, int, float, float]:
     """Next impact of a flight (first root of the gap, paper eq. 20).
 
     The flight starts at the origin ``(u0, v0)`` at stator phase ``th0``; the search starts at
@@ -183,7 +207,7 @@ def _seg_state(kind, u0, v0, om0, sig, w, r, psi, th0, tau):
     return sin(ph), w * cos(ph), om0
 
 
-@njit(cache=True, _nrt=False)
+@_on_arrays
 def _sample_range(n_a, th_a, length, inclusive, prm, flg, ist):
     """Trajectory rows ``[j0, j1)`` and stroboscopic periods ``[k0, k1)`` that fall in a segment.
 
@@ -219,7 +243,7 @@ def _sample_range(n_a, th_a, length, inclusive, prm, flg, ist):
     return j0, j1, k0, k1
 
 
-@njit(cache=True, _nrt=False)
+@_on_arrays
 def _write_samples(kind, n_a, th_a, u0, v0, om0, sig, prm, traj, n_tr, j, strobe, n_sb, k):
     """Write trajectory rows ``j = (j0, j1)`` and stroboscopic rows ``k = (k0, k1)`` of a segment.
 
@@ -254,7 +278,7 @@ def _write_samples(kind, n_a, th_a, u0, v0, om0, sig, prm, traj, n_tr, j, strobe
     return n_tr, n_sb
 
 
-@njit(cache=True, _nrt=False)
+@_on_arrays
 def _sample(
     kind, n_a, th_a, length, inclusive, u0, v0, om0, sig, prm, flg, ist, traj, strobe, info
 ):
@@ -312,7 +336,7 @@ def _omega_integral(kind, om0, sig, w, r, psi, th0, tau):
     return om0 * tau
 
 
-@njit(cache=True, _nrt=False)
+@_on_arrays
 def _accumulate_omega(st, prm, kind, n_a, th_a, length, om0, sig):
     """Add ``∫Ω dt`` over the part of a segment after ``prm[P_TSTAT]`` to ``st[S_OMEGA_INTEGRAL]``."""
     w = prm[P_W]
@@ -327,7 +351,7 @@ def _accumulate_omega(st, prm, kind, n_a, th_a, length, om0, sig):
     st[S_OMEGA_INTEGRAL] += total
 
 
-@njit(cache=True, _nrt=False)
+@_on_arrays
 def _segment_output(kind, n_a, th_a, length, inclusive, prm, flg, st, ist, traj, strobe, info):
     """Outputs of a segment that starts at the current state: its samples and ``∫Ω dt``.
 
@@ -353,7 +377,7 @@ def _segment_output(kind, n_a, th_a, length, inclusive, prm, flg, st, ist, traj,
     return ST_CONTINUE
 
 
-@njit(cache=True, _nrt=False)
+@_on_arrays
 def _finish(ist, info, status):
     """End the run with ``status`` (kept in the state: a later call returns it again)."""
     if ist[I_MODE] != MODE_DONE:
@@ -389,7 +413,7 @@ def _enter_flight(st, ist, u, v, anchor_tau, anchor_gap):
     st[S_ANCHOR_GAP] = anchor_gap
 
 
-@njit(cache=True, _nrt=False)
+@_on_arrays
 def _flight_output(prm, flg, st, ist, traj, strobe, info, n, th, t_now, t_hit, tau):
     """Outputs of a flight up to its impact; or up to the run's end, if that comes first.
 
@@ -443,7 +467,7 @@ def _impact(e_k, e, w, r, psi, phase, v_minus, omega, torsion, cap, inertia, tol
     return v_rel, v_plus, omega_plus, go_contact, t_acc
 
 
-@njit(cache=True, _nrt=False)
+@_on_arrays
 def _enter_contact(st, ist, prm, torsion, n_hit, phase, t_acc):
     """Contact after the impact at ``(n_hit, phase)``, or a chattering sequence (``t_acc > 0``).
 
@@ -466,7 +490,7 @@ def _enter_contact(st, ist, prm, torsion, n_hit, phase, t_acc):
         _enter_contact_torsion(st, ist, prm[P_R], w, prm[P_PSI], prm[P_MU_RATIO], phase)
 
 
-@njit(cache=True, _nrt=False)
+@_on_arrays
 def _chatter_tail(st, ist, ev, evk, info, w, n1, th1):
     """The accumulation point of a chattering sequence: one event of kind ``KIND_CHATTER``.
 
@@ -496,7 +520,7 @@ def _separation_constants(w):
     return never_sep, th_sep, t_win, g_win
 
 
-@njit(cache=True, _nrt=False)
+@_on_arrays
 def _clipped_ride(prm, flg, st, ist, traj, strobe, info, n, th, t_now, th_sep):
     """Clipped spring-contact model, unloaded (paper refs. [2, 3]): ride to the window's end.
 
@@ -527,7 +551,7 @@ def _clipped_ride(prm, flg, st, ist, traj, strobe, info, n, th, t_now, th_sep):
     return ST_CONTINUE
 
 
-@njit(cache=True, _nrt=False)
+@_on_arrays
 def _contact_horizon(n, th, t_now, st, ist, prm, never_sep, th_sep):
     """Times from now to the separation, the run's end and a chattering accumulation point.
 
@@ -609,7 +633,7 @@ def _stick_root(th, tau_end, w, r, psi, rho, xtol):
     return tau_end, 0, False
 
 
-@njit(cache=True, _nrt=False)
+@_on_arrays
 def _contact_segment(st, ist, prm, torsion, th, tau_end):
     """The next contact segment: its kind (``SEG_*``), length, and whether it ends at a
     stick–slip transition (``hit``), with the slip direction after it (``new_sig``)."""
@@ -627,7 +651,7 @@ def _contact_segment(st, ist, prm, torsion, th, tau_end):
     return SEG_STICK, seg, hit, new_sig
 
 
-@njit(cache=True, _nrt=False)
+@_on_arrays
 def _contact_advance(st, ist, prm, kind, hit, new_sig, th, seg, n1, th1):
     """Move the contact state to the segment's end ``(n1, th1)``: ``Ω`` and the stick–slip state.
 
@@ -658,7 +682,7 @@ def _contact_advance(st, ist, prm, kind, hit, new_sig, th, seg, n1, th1):
         ist[I_SLIP_GUARD] = 1
 
 
-@njit(cache=True, _nrt=False)
+@_on_arrays
 def _contact_end(st, ist, ev, evk, info, prm, clipped, taus, tau_end, n1, th1, sep):
     """What ends a contact segment at the first of its horizons ``taus = (sep, end, chatter)``.
 
@@ -687,7 +711,7 @@ def _contact_end(st, ist, ev, evk, info, prm, clipped, taus, tau_end, n1, th1, s
     return ST_CONTINUE
 
 
-@njit(cache=True, _nrt=False)
+@_on_arrays
 def _contact_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, sep):
     """One contact segment (MODEL.md "Contact", "Stick–slip transitions", "Separation").
 
@@ -731,7 +755,17 @@ def _contact_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, 
 
 
 @njit(cache=True, nogil=True)
-def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
+def run_chunk(
+    prm: np.ndarray,
+    flg: np.ndarray,
+    st: np.ndarray,
+    ist: np.ndarray,
+    ev: np.ndarray,
+    evk: np.ndarray,
+    traj: np.ndarray,
+    strobe: np.ndarray,
+    info: np.ndarray,
+) -> None:
     """Advance the simulation; see the module docstring.
 
     The event loop: a flight ends at its impact (:func:`flight_next_impact`, :func:`_impact`,
@@ -837,7 +871,7 @@ def _contact_sigma(r, w, psi, rho, omega, phase):
     return 1 if alpha < 0.0 else -1
 
 
-@njit(cache=True, _nrt=False)
+@_on_arrays
 def _enter_contact_torsion(st, ist, r, w, psi, rho, phase):
     """Torsional state on entering contact at ``phase`` with the rotor's current ``Ω``.
 
