@@ -47,15 +47,20 @@ class _EngineStamp:
         return super().from_function(py_func, py_file)
 
 
-class EngineUserProvidedLocator(_EngineStamp, caching.UserProvidedCacheLocator):
+def _numba_locator(name: str) -> type:
+    """numba's locator class ``name`` (spelled with a leading underscore before numba 0.61)."""
+    return getattr(caching, name, None) or getattr(caching, "_" + name)
+
+
+class EngineUserProvidedLocator(_EngineStamp, _numba_locator("UserProvidedCacheLocator")):
     """``NUMBA_CACHE_DIR`` set: cache there."""
 
 
-class EngineInTreeLocator(_EngineStamp, caching.InTreeCacheLocator):
+class EngineInTreeLocator(_EngineStamp, _numba_locator("InTreeCacheLocator")):
     """The package's ``__pycache__`` (numba's default)."""
 
 
-class EngineUserWideLocator(_EngineStamp, caching.UserWideCacheLocator):
+class EngineUserWideLocator(_EngineStamp, _numba_locator("UserWideCacheLocator")):
     """The user's cache folder, when ``__pycache__`` is not writable."""
 
 

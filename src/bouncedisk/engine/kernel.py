@@ -9,9 +9,9 @@ easy to get wrong").
 
 One compiled function per mode of motion (MODEL.md "Phases of motion", "Events"):
 
-- flight → impact: :func:`flight_next_impact` (first root of the gap, eq. 20) and
-  :func:`_impact` (restitution and angular impulse, eqs. 4, 8, 19; flight, contact or chatter
-  after it), the row written by :func:`_record_event`;
+- flight → impact: :func:`_flight_step`, i.e. :func:`flight_next_impact` (first root of the
+  gap, eq. 20) and :func:`_impact` (restitution and angular impulse, eqs. 4, 8, 19; flight,
+  contact or chatter after it), the row written by :func:`_record_event`;
 - chattering: :func:`_enter_contact` (the jump to the accumulation point) and
   :func:`_chatter_tail` (its event);
 - contact: :func:`_contact_step`, one segment ending at the first of the horizons of
@@ -22,10 +22,11 @@ One compiled function per mode of motion (MODEL.md "Phases of motion", "Events")
 Samples and ``∫Ω dt`` of every segment go through :func:`_segment_output` (:func:`_sample`).
 
 Array layouts (indices below) are private to the engine; :mod:`bouncedisk.engine.driver` fills
-and reads them. Helpers that take these arrays are compiled with ``_nrt=False``
-(:data:`_on_arrays`): they allocate nothing, and numba's reference counting would otherwise add
-an atomic increment and decrement of every array argument to every call, which cost 10–25 % of
-the throughput when the loop was first split into these functions.
+and reads them. :func:`run_chunk` and the helpers that take these arrays are compiled with
+``_nrt=False`` (:data:`_on_arrays`): they allocate nothing, and numba's reference counting
+would otherwise add an atomic increment and decrement of every array argument to every call,
+which cost up to 27 % of the throughput when the loop was first split into these functions
+(``benchmarks/compare_engine.py``, the contact-heavy case).
 """
 
 from math import cos, floor, inf, pi, sin, sqrt
@@ -100,7 +101,7 @@ ST_TIME = 2  # the requested end time was reached
 ST_REST = 3  # the rotor stays in contact for ever: no further impact can occur
 ST_NEED_CONTACT = 4  # the dynamics need the `contact` effect, which the scene left out
 ST_NUMERICAL = 5  # a root search failed or made no progress
-ST_NEED_TRAJ = 6  # trajectory buffer full inside a segment; rows written: info[5], info[6]
+ST_NEED_TRAJ = 6  # trajectory buffer full inside a segment (info[O_NEED], info[O_*_PARTIAL])
 ST_NEED_STROBE = 7  # stroboscopic buffer full inside a segment (as ST_NEED_TRAJ)
 # --- event kinds ------------------------------------------------------------------------------
 KIND_IMPACT, KIND_CHATTER = 0, 1
@@ -712,6 +713,60 @@ def _contact_end(st, ist, ev, evk, info, prm, clipped, taus, tau_end, n1, th1, s
 
 
 @_on_arrays
+def _flight_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, noise_key):
+    """A flight and the impact that ends it (MODEL.md "Flight", "Impact").
+
+    The first root of the gap (:func:`flight_next_impact`, eq. 20); the flight's outputs
+    (:func:`_flight_output`, which ends the run if its end comes first); the impact law with
+    this impact's restitution (``restitution_noise``: ``e_k``, :mod:`.noise`) and what follows
+    (:func:`_impact`); its event row; then a new flight, contact or a chattering sequence
+    (:func:`_enter_contact`). Returns ``ST_CONTINUE`` or the status that ends this call.
+    """
+    e = prm[P_E]
+    w = prm[P_W]
+    xtol = prm[P_TOL]
+    torsion = flg[F_TORSION] != 0
+    om = st[S_OMEGA]
+    tau, dk, ph, v_minus = flight_next_impact(
+        st[S_U], st[S_V], th, st[S_ANCHOR_TAU], st[S_ANCHOR_GAP], w, xtol
+    )
+    if tau < 0.0:
+        return _finish(ist, info, ST_NUMERICAL)
+    n_hit = n + dk
+    t_hit = (n_hit * TWO_PI + ph) / w
+    if flg[F_TRAJ] or flg[F_STROBE] or flg[F_STATS] or t_hit > prm[P_TEND]:
+        status = _flight_output(prm, flg, st, ist, traj, strobe, info, n, th, t_now, t_hit, tau)
+        if status != ST_CONTINUE:
+            return status
+    e_k = noisy_restitution(e, prm[P_ESIG], noise_key, ist[I_EVENTS]) if flg[F_NOISE] else e
+    v_rel, v_plus, om_plus, go_contact, t_acc = _impact(
+        e_k,
+        e,
+        w,
+        prm[P_R],
+        prm[P_PSI],
+        ph,
+        v_minus,
+        om,
+        torsion,
+        flg[F_CAP] != 0,
+        prm[P_INERTIA],
+        xtol,
+    )
+    _record_event(ev, evk, ist, info, t_hit, ph, v_rel, om_plus, om, KIND_IMPACT)
+    ist[I_PERIOD] = n_hit
+    st[S_PHASE] = ph
+    st[S_OMEGA] = om_plus
+    if not go_contact:
+        _enter_flight(st, ist, sin(ph), v_plus, 0.0, 0.0)
+    elif flg[F_CONTACT]:
+        _enter_contact(st, ist, prm, torsion, n_hit, ph, t_acc)
+    else:
+        return _finish(ist, info, ST_NEED_CONTACT)
+    return ST_CONTINUE
+
+
+@_on_arrays
 def _contact_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, sep):
     """One contact segment (MODEL.md "Contact", "Stick–slip transitions", "Separation").
 
@@ -754,7 +809,7 @@ def _contact_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, 
     return _contact_end(st, ist, ev, evk, info, prm, clipped, taus, tau_end, n1, th1, sep)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)  # as _on_arrays, and releases the GIL
 def run_chunk(
     prm: np.ndarray,
     flg: np.ndarray,
@@ -786,15 +841,8 @@ def run_chunk(
     info : ndarray
         Output (``O_*``): status, events, trajectory and stroboscopic rows written, rows needed.
     """
-    e = prm[P_E]
     w = prm[P_W]
-    xtol = prm[P_TOL]
-    t_end = prm[P_TEND]
-    torsion = flg[F_TORSION] != 0
-    cap = flg[F_CAP] != 0
-    noise = flg[F_NOISE] != 0
     noise_key = member_key(flg[F_SEED], flg[F_MEMBER])
-    outputs = flg[F_TRAJ] != 0 or flg[F_STROBE] != 0 or flg[F_STATS] != 0
     sep = _separation_constants(w)
     info[O_EVENTS:N_OUT] = 0
     if ist[I_MODE] == MODE_DONE:
@@ -810,45 +858,17 @@ def run_chunk(
         n = ist[I_PERIOD]
         th = st[S_PHASE]
         t_now = (n * TWO_PI + th) / w
-        if ist[I_MODE] != MODE_FLIGHT:
-            if ist[I_UNLOADED]:
-                status = _clipped_ride(prm, flg, st, ist, traj, strobe, info, n, th, t_now, sep[1])
-            else:
-                status = _contact_step(
-                    prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, sep
-                )
-            if status != ST_CONTINUE:
-                return
-            continue
-        om = st[S_OMEGA]
-        tau, dk, ph, v_minus = flight_next_impact(
-            st[S_U], st[S_V], th, st[S_ANCHOR_TAU], st[S_ANCHOR_GAP], w, xtol
-        )
-        if tau < 0.0:
-            _finish(ist, info, ST_NUMERICAL)
-            return
-        n_hit = n + dk
-        t_hit = (n_hit * TWO_PI + ph) / w
-        if outputs or t_hit > t_end:
-            if (
-                _flight_output(prm, flg, st, ist, traj, strobe, info, n, th, t_now, t_hit, tau)
-                != ST_CONTINUE
-            ):
-                return
-        e_k = noisy_restitution(e, prm[P_ESIG], noise_key, ist[I_EVENTS]) if noise else e
-        v_rel, v_plus, om_plus, go_contact, t_acc = _impact(
-            e_k, e, w, prm[P_R], prm[P_PSI], ph, v_minus, om, torsion, cap, prm[P_INERTIA], xtol
-        )
-        _record_event(ev, evk, ist, info, t_hit, ph, v_rel, om_plus, om, KIND_IMPACT)
-        ist[I_PERIOD] = n_hit
-        st[S_PHASE] = ph
-        st[S_OMEGA] = om_plus
-        if not go_contact:
-            _enter_flight(st, ist, sin(ph), v_plus, 0.0, 0.0)
-        elif flg[F_CONTACT]:
-            _enter_contact(st, ist, prm, torsion, n_hit, ph, t_acc)
+        if ist[I_MODE] == MODE_FLIGHT:
+            status = _flight_step(
+                prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, noise_key
+            )
+        elif ist[I_UNLOADED]:
+            status = _clipped_ride(prm, flg, st, ist, traj, strobe, info, n, th, t_now, sep[1])
         else:
-            _finish(ist, info, ST_NEED_CONTACT)
+            status = _contact_step(
+                prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, sep
+            )
+        if status != ST_CONTINUE:
             return
 
 
