@@ -38,8 +38,10 @@ from .laws import (
     GRAZE_GAP,
     chatter_time,
     impact_law,
+    normal_load,
     separation_phase,
     separation_window,
+    slip,
     slip_omega,
     slip_omega_integral,
     stick_omega_integral,
@@ -454,7 +456,7 @@ def _impact(e_k, e, w, r, psi, phase, v_minus, omega, torsion, cap, inertia, tol
     v_rel, v_plus, omega_plus = impact_law(
         e_k, w, r, psi, phase, v_minus, omega, torsion, cap, inertia
     )
-    n_load = 1.0 - w * w * sin(phase)
+    n_load = normal_load(w, phase)
     w_rel = e_k * v_rel
     go_contact = False
     t_acc = -1.0
@@ -588,14 +590,14 @@ def _slip_root(sig, guard, om, th, tau_end, w, r, psi, xtol):
     """
     if guard:
         s0 = sin(th + psi)
-        q0 = -r * (1.0 - w * w * sin(th)) + sig * w * w * s0
+        q0 = -r * normal_load(w, th) + sig * w * w * s0
         if q0 < 0.0:
             q0 = 0.0
         a = sig * w * w * sin(psi)
         b = r * w * w + sig * w * w * cos(psi)
         tq = first_root(q0, 0.0, 0.0, a, b, th, w, tau_end, xtol)
         return (tq, False) if tq >= 0.0 else (tau_end, False)
-    f0 = sig * (r * om - w * cos(th + psi))
+    f0 = sig * slip(r, w, psi, om, th)
     if f0 < 0.0:
         f0 = 0.0
     a = -r * w - sig * w * cos(psi)
@@ -620,7 +622,7 @@ def _stick_root(th, tau_end, w, r, psi, rho, xtol):
     best = -1.0
     new_sig = 0
     for sgn in (1.0, -1.0):
-        m0 = rr * (1.0 - w * w * sin(th)) - sgn * w * w * sin(th + psi)
+        m0 = rr * normal_load(w, th) - sgn * w * w * sin(th + psi)
         if m0 < 0.0:
             m0 = 0.0
         a = -sgn * w * w * sin(psi)
@@ -875,7 +877,7 @@ def run_chunk(
 @njit(cache=True, inline="always")
 def _slip_is_zero(r, w, psi, omega, phase):
     """``s = RΩ − Ω_s`` is zero to rounding."""
-    return abs(r * omega - w * cos(phase + psi)) <= 1e-14 * (abs(r * omega) + w)
+    return abs(slip(r, w, psi, omega, phase)) <= 1e-14 * (abs(r * omega) + w)
 
 
 @njit(cache=True)
@@ -883,8 +885,8 @@ def _contact_sigma(r, w, psi, rho, omega, phase):
     """Slip direction in contact: ``sgn(s)``, or at ``s = 0`` stick (0) when ``|α_s| <= ρRN``,
     else the direction set by the stator's acceleration (paper §2.5, corrected)."""
     if not _slip_is_zero(r, w, psi, omega, phase):
-        return 1 if r * omega - w * cos(phase + psi) > 0.0 else -1
-    n_load = 1.0 - w * w * sin(phase)
+        return 1 if slip(r, w, psi, omega, phase) > 0.0 else -1
+    n_load = normal_load(w, phase)
     alpha = -w * w * sin(phase + psi)
     if abs(alpha) <= rho * r * n_load:
         return 0
