@@ -728,6 +728,7 @@ def _flight_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, n
     w = prm[P_W]
     xtol = prm[P_TOL]
     torsion = flg[F_TORSION] != 0
+    cap = flg[F_CAP] != 0
     om = st[S_OMEGA]
     tau, dk, ph, v_minus = flight_next_impact(
         st[S_U], st[S_V], th, st[S_ANCHOR_TAU], st[S_ANCHOR_GAP], w, xtol
@@ -741,19 +742,10 @@ def _flight_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, n
         if status != ST_CONTINUE:
             return status
     e_k = noisy_restitution(e, prm[P_ESIG], noise_key, ist[I_EVENTS]) if flg[F_NOISE] else e
+    r = prm[P_R]
+    psi = prm[P_PSI]
     v_rel, v_plus, om_plus, go_contact, t_acc = _impact(
-        e_k,
-        e,
-        w,
-        prm[P_R],
-        prm[P_PSI],
-        ph,
-        v_minus,
-        om,
-        torsion,
-        flg[F_CAP] != 0,
-        prm[P_INERTIA],
-        xtol,
+        e_k, e, w, r, psi, ph, v_minus, om, torsion, cap, prm[P_INERTIA], xtol
     )
     _record_event(ev, evk, ist, info, t_hit, ph, v_rel, om_plus, om, KIND_IMPACT)
     ist[I_PERIOD] = n_hit
