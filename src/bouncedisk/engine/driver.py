@@ -234,25 +234,25 @@ def iterate(
     evk = np.empty(chunk_events, dtype=np.int8)
     traj = np.empty((chunk_samples if cfg.traj_dt > 0 else 0, K.TRAJ_COLS))
     strobe = np.empty((chunk_samples if cfg.stroboscopic else 0, K.STROBE_COLS))
-    # status, events, trajectory rows, stroboscopic rows, rows still needed, and the row counts
-    # of a call that stopped inside a segment because a sample buffer was full
-    info = np.zeros(7, dtype=np.int64)
+    # status, rows written, rows still needed (kernel's O_* slots)
+    info = np.zeros(K.N_OUT, dtype=np.int64)
     w = cfg.omega_s
     while True:
         K.run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info)
-        status, n_ev, n_tr, n_sb = (int(x) for x in info[:4])
+        status, n_ev = int(info[K.O_STATUS]), int(info[K.O_EVENTS])
+        n_tr, n_sb = int(info[K.O_TRAJ]), int(info[K.O_STROBE])
         if status in (K.ST_NEED_TRAJ, K.ST_NEED_STROBE):
             # the buffers are full: stream them out; the next call resumes the same segment
-            n_tr, n_sb = int(info[5]), int(info[6])
+            n_tr, n_sb = int(info[K.O_TRAJ_PARTIAL]), int(info[K.O_STROBE_PARTIAL])
         t_now = (ist[K.I_PERIOD] * K.TWO_PI + st[K.S_PHASE]) / w
         if n_ev or n_tr or n_sb:
             yield Chunk(
-                t=ev[:n_ev, 0].copy(),
-                phase=ev[:n_ev, 1].copy(),
-                v_rel=ev[:n_ev, 2].copy(),
-                omega_after=ev[:n_ev, 3].copy(),
-                u=ev[:n_ev, 4].copy(),
-                omega_before=ev[:n_ev, 5].copy(),
+                t=ev[:n_ev, K.EV_T].copy(),
+                phase=ev[:n_ev, K.EV_PHASE].copy(),
+                v_rel=ev[:n_ev, K.EV_V_REL].copy(),
+                omega_after=ev[:n_ev, K.EV_OMEGA_AFTER].copy(),
+                u=ev[:n_ev, K.EV_U].copy(),
+                omega_before=ev[:n_ev, K.EV_OMEGA_BEFORE].copy(),
                 kind=evk[:n_ev].copy(),
                 traj=traj[:n_tr].copy(),
                 strobe=strobe[:n_sb].copy(),

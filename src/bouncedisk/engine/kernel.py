@@ -1,13 +1,32 @@
 """The compiled event loop: flights, impacts, chattering, contact with stick–slip, separation.
 
-One call advances the simulation until its output buffers are full or the run ends; the whole
-state lives in two small arrays so that a run can be resumed chunk after chunk (streaming output,
-progress reporting, interruption). Time is carried as an integer stator-period count ``n`` and a
-phase ``θ ∈ [0, 2π)``: ``t = (2πn + θ)/w``. Every event phase is therefore exact to the
-rounding of one period, however long the run (MODEL.md "Things that are easy to get wrong").
+One call of :func:`run_chunk` advances the simulation until its output buffers are full or the
+run ends; the whole state lives in two small arrays so that a run can be resumed chunk after
+chunk (streaming output, progress reporting, interruption). Time is carried as an integer
+stator-period count ``n`` and a phase ``θ ∈ [0, 2π)``: ``t = (2πn + θ)/w``. Every event phase is
+therefore exact to the rounding of one period, however long the run (MODEL.md "Things that are
+easy to get wrong").
+
+One compiled function per mode of motion (MODEL.md "Phases of motion", "Events"):
+
+- flight → impact: :func:`_flight_step`, i.e. :func:`flight_next_impact` (first root of the
+  gap, eq. 20) and :func:`_impact` (restitution and angular impulse, eqs. 4, 8, 19; flight,
+  contact or chatter after it), the row written by :func:`_record_event`;
+- chattering: :func:`_enter_contact` (the jump to the accumulation point) and
+  :func:`_chatter_tail` (its event);
+- contact: :func:`_contact_step`, one segment ending at the first of the horizons of
+  :func:`_contact_horizon` or a stick–slip transition (:func:`_slip_root`, :func:`_stick_root`,
+  eqs. 22–23, §2.5), then :func:`_contact_advance` and :func:`_contact_end` (separation);
+- the clipped model's unloaded ride: :func:`_clipped_ride`.
+
+Samples and ``∫Ω dt`` of every segment go through :func:`_segment_output` (:func:`_sample`).
 
 Array layouts (indices below) are private to the engine; :mod:`bouncedisk.engine.driver` fills
-and reads them.
+and reads them. :func:`run_chunk` and the helpers that take these arrays are compiled with
+``_nrt=False`` (:data:`_on_arrays`): they allocate nothing, and numba's reference counting
+would otherwise add an atomic increment and decrement of every array argument to every call,
+which cost up to 27 % of the throughput when the loop was first split into these functions
+(``benchmarks/compare_engine.py``, the contact-heavy case).
 """
 
 from math import cos, floor, inf, pi, sin, sqrt
@@ -19,14 +38,20 @@ from .laws import (
     GRAZE_GAP,
     chatter_time,
     impact_law,
+    normal_load,
     separation_phase,
     separation_window,
+    slip,
     slip_omega,
     slip_omega_integral,
     stick_omega_integral,
 )
 from .noise import member_key, noisy_restitution
 from .roots import TWO_PI, first_root
+
+#: Decorator of the compiled helpers that read and write the caller's arrays and allocate nothing:
+#: no reference counting of their array arguments (module docstring).
+_on_arrays = njit(cache=True, _nrt=False)
 
 # --- parameter vector (float64) ---------------------------------------------------------------
 P_E = 0  # restitution e
@@ -78,17 +103,27 @@ ST_TIME = 2  # the requested end time was reached
 ST_REST = 3  # the rotor stays in contact for ever: no further impact can occur
 ST_NEED_CONTACT = 4  # the dynamics need the `contact` effect, which the scene left out
 ST_NUMERICAL = 5  # a root search failed or made no progress
-ST_NEED_TRAJ = 6  # trajectory buffer full inside a segment; rows written: info[5], info[6]
+ST_NEED_TRAJ = 6  # trajectory buffer full inside a segment (info[O_NEED], info[O_*_PARTIAL])
 ST_NEED_STROBE = 7  # stroboscopic buffer full inside a segment (as ST_NEED_TRAJ)
 # --- event kinds ------------------------------------------------------------------------------
 KIND_IMPACT, KIND_CHATTER = 0, 1
 # --- segment kinds for sampling ---------------------------------------------------------------
 SEG_FLIGHT, SEG_CONTACT, SEG_SLIP, SEG_STICK = 0, 1, 2, 3
 
-# GRAZE_GAP (laws): separations whose whole flight stays below it are grazing (stay in contact)
-EV_COLS = 6  # t, phase, v_rel, omega_after, u, omega_before
-TRAJ_COLS = 5  # t, u, v, u_stator, omega
-STROBE_COLS = 5  # period, t, u, v, omega
+# --- output counters of one call (int64 ``info``) ---------------------------------------------
+O_STATUS = 0  # status of the call (ST_*)
+O_EVENTS, O_TRAJ, O_STROBE = 1, 2, 3  # rows of ev, traj and strobe written by the call
+O_NEED = 4  # ST_NEED_*: rows the segment still needs
+O_TRAJ_PARTIAL, O_STROBE_PARTIAL = 5, 6  # ST_NEED_*: rows written, with the segment's first ones
+N_OUT = 7
+ST_CONTINUE = -1  # a mode function's return value when the event loop goes on
+# --- columns of the output buffers ------------------------------------------------------------
+EV_T, EV_PHASE, EV_V_REL, EV_OMEGA_AFTER, EV_U, EV_OMEGA_BEFORE = range(6)
+EV_COLS = 6
+TR_T, TR_U, TR_V, TR_U_STATOR, TR_OMEGA = range(5)
+TRAJ_COLS = 5
+SB_PERIOD, SB_T, SB_U, SB_V, SB_OMEGA = range(5)
+STROBE_COLS = 5
 
 
 @njit(cache=True, inline="always")
@@ -107,7 +142,9 @@ def _advance(n, th, dphi):
 
 
 @njit(cache=True)
-def flight_next_impact(u0, v0, th0, ta, ga, w, xtol):
+def flight_next_impact(
+    u0: float, v0: float, th0: float, ta: float, ga: float, w: float, xtol: float
+) -> tuple[float, int, float, float]:
     """Next impact of a flight (first root of the gap, paper eq. 20).
 
     The flight starts at the origin ``(u0, v0)`` at stator phase ``th0``; the search starts at
@@ -173,41 +210,15 @@ def _seg_state(kind, u0, v0, om0, sig, w, r, psi, th0, tau):
     return sin(ph), w * cos(ph), om0
 
 
-@njit(cache=True)
-def _sample(
-    kind,
-    n_a,
-    th_a,
-    length,
-    inclusive,
-    u0,
-    v0,
-    om0,
-    sig,
-    prm,
-    flg,
-    ist,
-    traj,
-    n_tr,
-    strobe,
-    n_sb,
-    info,
-):
-    """Write the trajectory and stroboscopic samples falling in a segment.
+@_on_arrays
+def _sample_range(n_a, th_a, length, inclusive, prm, flg, ist):
+    """Trajectory rows ``[j0, j1)`` and stroboscopic periods ``[k0, k1)`` that fall in a segment.
 
-    Returns the new row counts. When a buffer fills up inside the segment, the samples that fit
-    are written, the sample counters ``I_NEXT_SAMPLE`` / ``I_NEXT_STROBE`` record how far the segment got,
-    ``info`` gets the status ``ST_NEED_TRAJ`` (or ``ST_NEED_STROBE``), the rows still to write
-    (``info[4]``) and the row counts written in this call (``info[5]``, ``info[6]``), and
-    ``(-1, -1)`` is returned: the caller returns without advancing the state, the driver takes
-    the full buffers, and the next call resumes the same segment where the samples stopped. The
-    buffers are therefore bounded whatever one segment's length (a flight of 1e10 time units).
+    The segment starts at period ``n_a``, phase ``th_a`` and lasts ``length``; ``inclusive``
+    takes a sample at its very end too (the end of the run).
     """
     w = prm[P_W]
-    r = prm[P_R]
-    psi = prm[P_PSI]
-    t_a = (n_a * TWO_PI + th_a) / w
-    t_b = t_a + length
+    t_b = (n_a * TWO_PI + th_a) / w + length
     j0 = ist[I_NEXT_SAMPLE]
     j1 = j0
     if flg[F_TRAJ]:
@@ -232,50 +243,90 @@ def _sample(
             k1 -= 1
         if k1 < k0:
             k1 = k0
+    return j0, j1, k0, k1
+
+
+@_on_arrays
+def _write_samples(kind, n_a, th_a, u0, v0, om0, sig, prm, traj, n_tr, j, strobe, n_sb, k):
+    """Write trajectory rows ``j = (j0, j1)`` and stroboscopic rows ``k = (k0, k1)`` of a segment.
+
+    The rotor's state comes from the segment's closed form (:func:`_seg_state`). Returns the new
+    row counts.
+    """
+    w = prm[P_W]
+    r = prm[P_R]
+    psi = prm[P_PSI]
+    t_a = (n_a * TWO_PI + th_a) / w
+    dt = prm[P_DT]
+    t0 = prm[P_T0]
+    for i in range(j[0], j[1]):
+        tj = t0 + i * dt
+        tau = tj - t_a
+        u, v, om = _seg_state(kind, u0, v0, om0, sig, w, r, psi, th_a, tau)
+        traj[n_tr, TR_T] = tj
+        traj[n_tr, TR_U] = u
+        traj[n_tr, TR_V] = v
+        traj[n_tr, TR_U_STATOR] = sin(th_a + w * tau)
+        traj[n_tr, TR_OMEGA] = om
+        n_tr += 1
+    for i in range(k[0], k[1]):
+        tau = ((i - n_a) * TWO_PI - th_a) / w
+        u, v, om = _seg_state(kind, u0, v0, om0, sig, w, r, psi, th_a, tau)
+        strobe[n_sb, SB_PERIOD] = i
+        strobe[n_sb, SB_T] = i * TWO_PI / w
+        strobe[n_sb, SB_U] = u
+        strobe[n_sb, SB_V] = v
+        strobe[n_sb, SB_OMEGA] = om
+        n_sb += 1
+    return n_tr, n_sb
+
+
+@_on_arrays
+def _sample(
+    kind, n_a, th_a, length, inclusive, u0, v0, om0, sig, prm, flg, ist, traj, strobe, info
+):
+    """Write the trajectory and stroboscopic samples falling in a segment.
+
+    Returns ``ST_CONTINUE``, the row counts in ``info`` updated. When a buffer fills up inside
+    the segment, the samples that fit are written, the sample counters ``I_NEXT_SAMPLE`` /
+    ``I_NEXT_STROBE`` record how far the segment got, ``info`` gets the status ``ST_NEED_TRAJ``
+    (or ``ST_NEED_STROBE``), the rows still to write (``O_NEED``) and the row counts including
+    the rows just written (``O_TRAJ_PARTIAL``, ``O_STROBE_PARTIAL``), and that status is
+    returned: the caller returns without advancing the state, the driver takes the full buffers,
+    and the next call resumes the same segment where the samples stopped. The buffers are
+    therefore bounded whatever one segment's length (a flight of 1e10 time units).
+    """
+    j0, j1, k0, k1 = _sample_range(n_a, th_a, length, inclusive, prm, flg, ist)
+    n_tr = info[O_TRAJ]
+    n_sb = info[O_STROBE]
     # rows that do not fit in this call are left for the next one (see the docstring)
-    full = 0
+    full = ST_CONTINUE
     need = 0
     if n_tr + (j1 - j0) > traj.shape[0]:
         need = j1 - j0
         j1 = j0 + (traj.shape[0] - n_tr)
         full = ST_NEED_TRAJ
     if n_sb + (k1 - k0) > strobe.shape[0]:
-        if full == 0:
+        if full == ST_CONTINUE:
             need = k1 - k0
             full = ST_NEED_STROBE
         k1 = k0 + (strobe.shape[0] - n_sb)
+    n_tr, n_sb = _write_samples(
+        kind, n_a, th_a, u0, v0, om0, sig, prm, traj, n_tr, (j0, j1), strobe, n_sb, (k0, k1)
+    )
     if flg[F_TRAJ]:
-        dt = prm[P_DT]
-        t0 = prm[P_T0]
-        for j in range(j0, j1):
-            tj = t0 + j * dt
-            tau = tj - t_a
-            u, v, om = _seg_state(kind, u0, v0, om0, sig, w, r, psi, th_a, tau)
-            traj[n_tr, 0] = tj
-            traj[n_tr, 1] = u
-            traj[n_tr, 2] = v
-            traj[n_tr, 3] = sin(th_a + w * tau)
-            traj[n_tr, 4] = om
-            n_tr += 1
         ist[I_NEXT_SAMPLE] = j1
     if flg[F_STROBE]:
-        for k in range(k0, k1):
-            tau = ((k - n_a) * TWO_PI - th_a) / w
-            u, v, om = _seg_state(kind, u0, v0, om0, sig, w, r, psi, th_a, tau)
-            strobe[n_sb, 0] = k
-            strobe[n_sb, 1] = k * TWO_PI / w
-            strobe[n_sb, 2] = u
-            strobe[n_sb, 3] = v
-            strobe[n_sb, 4] = om
-            n_sb += 1
         ist[I_NEXT_STROBE] = k1
-    if full != 0:
-        info[0] = full
-        info[4] = need
-        info[5] = n_tr
-        info[6] = n_sb
-        return -1, -1
-    return n_tr, n_sb
+    if full != ST_CONTINUE:
+        info[O_STATUS] = full
+        info[O_NEED] = need
+        info[O_TRAJ_PARTIAL] = n_tr
+        info[O_STROBE_PARTIAL] = n_sb
+        return full
+    info[O_TRAJ] = n_tr
+    info[O_STROBE] = n_sb
+    return ST_CONTINUE
 
 
 @njit(cache=True, inline="always")
@@ -288,7 +339,7 @@ def _omega_integral(kind, om0, sig, w, r, psi, th0, tau):
     return om0 * tau
 
 
-@njit(cache=True)
+@_on_arrays
 def _accumulate_omega(st, prm, kind, n_a, th_a, length, om0, sig):
     """Add ``∫Ω dt`` over the part of a segment after ``prm[P_TSTAT]`` to ``st[S_OMEGA_INTEGRAL]``."""
     w = prm[P_W]
@@ -303,27 +354,473 @@ def _accumulate_omega(st, prm, kind, n_a, th_a, length, om0, sig):
     st[S_OMEGA_INTEGRAL] += total
 
 
-@njit(cache=True, inline="always")
-def _report(info, n_ev, n_tr, n_sb):
-    """Record how many rows of each buffer this call wrote."""
-    info[1] = n_ev
-    info[2] = n_tr
-    info[3] = n_sb
+@_on_arrays
+def _segment_output(kind, n_a, th_a, length, inclusive, prm, flg, st, ist, traj, strobe, info):
+    """Outputs of a segment that starts at the current state: its samples and ``∫Ω dt``.
+
+    Called before the state moves past the segment (``kind`` ``SEG_*``, from period ``n_a`` and
+    phase ``th_a``, ``length`` long, ``inclusive`` of its end). Returns ``ST_CONTINUE``, or the
+    status of a sample buffer that filled up inside the segment (:func:`_sample`).
+    """
+    u0 = 0.0
+    v0 = 0.0
+    if kind == SEG_FLIGHT:
+        u0 = st[S_U]
+        v0 = st[S_V]
+    om0 = st[S_OMEGA]
+    sig = float(ist[I_SLIP_SIGN]) if kind == SEG_SLIP else 0.0
+    if flg[F_TRAJ] or flg[F_STROBE]:
+        status = _sample(
+            kind, n_a, th_a, length, inclusive, u0, v0, om0, sig, prm, flg, ist, traj, strobe, info
+        )
+        if status != ST_CONTINUE:
+            return status
+    if flg[F_STATS]:
+        _accumulate_omega(st, prm, kind, n_a, th_a, length, om0, sig)
+    return ST_CONTINUE
 
 
-@njit(cache=True)
-def _finish(ist, info, status, n_ev, n_tr, n_sb):
+@_on_arrays
+def _finish(ist, info, status):
+    """End the run with ``status`` (kept in the state: a later call returns it again)."""
     if ist[I_MODE] != MODE_DONE:
         ist[I_LASTMODE] = ist[I_MODE]
     ist[I_MODE] = MODE_DONE
     ist[I_STATUS] = status
-    info[0] = status
-    _report(info, n_ev, n_tr, n_sb)
+    info[O_STATUS] = status
+    return status
 
 
-@njit(cache=True, nogil=True)
-def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
+@njit(cache=True, inline="always")
+def _record_event(ev, evk, ist, info, t, phase, v_rel, omega_after, omega_before, kind):
+    """Write one event row (columns ``EV_*``; the rotor at the stator, ``u = sin φ``)."""
+    i = info[O_EVENTS]
+    ev[i, EV_T] = t
+    ev[i, EV_PHASE] = phase
+    ev[i, EV_V_REL] = v_rel
+    ev[i, EV_OMEGA_AFTER] = omega_after
+    ev[i, EV_U] = sin(phase)
+    ev[i, EV_OMEGA_BEFORE] = omega_before
+    evk[i] = kind
+    info[O_EVENTS] = i + 1
+    ist[I_EVENTS] += 1
+
+
+@njit(cache=True, inline="always")
+def _enter_flight(st, ist, u, v, anchor_tau, anchor_gap):
+    """Start a flight from ``(u, v)`` at the current phase; the impact search starts at the anchor."""
+    ist[I_MODE] = MODE_FLIGHT
+    st[S_U] = u
+    st[S_V] = v
+    st[S_ANCHOR_TAU] = anchor_tau
+    st[S_ANCHOR_GAP] = anchor_gap
+
+
+@_on_arrays
+def _flight_output(prm, flg, st, ist, traj, strobe, info, n, th, t_now, t_hit, tau):
+    """Outputs of a flight up to its impact; or up to the run's end, if that comes first.
+
+    The flight is the parabola of MODEL.md "Phases of motion" (``u'' = −1``, ``Ω`` constant).
+    When the run's end ``t_end < t_hit`` comes first, the state is moved to ``t_end`` and the run
+    ends with ``ST_TIME``. Returns ``ST_CONTINUE`` or the status that ends this call.
+    """
+    t_end = prm[P_TEND]
+    ends = t_hit > t_end
+    length = t_end - t_now if ends else tau
+    status = _segment_output(SEG_FLIGHT, n, th, length, ends, prm, flg, st, ist, traj, strobe, info)
+    if status != ST_CONTINUE or not ends:
+        return status
+    u0 = st[S_U]
+    v0 = st[S_V]
+    st[S_U] = u0 + v0 * length - 0.5 * length * length
+    st[S_V] = v0 - length
+    ist[I_PERIOD], st[S_PHASE] = _advance(n, th, prm[P_W] * length)
+    return _finish(ist, info, ST_TIME)
+
+
+@njit(cache=True)
+def _impact(e_k, e, w, r, psi, phase, v_minus, omega, torsion, cap, inertia, tol):
+    """An impact and what follows it: flight, contact, or a chattering sequence.
+
+    The impact law (MODEL.md "Events"; paper eqs. 4, 8, 19, or 11 with ``stator_inertia``) with
+    this impact's restitution ``e_k``; then, if ``N >= 0``, contact when the rebound is below
+    the grazing gap, or the accumulation time of a complete chattering sequence
+    (MODEL.md "Chattering", :func:`~bouncedisk.engine.laws.chatter_time`, with the mean ``e``).
+
+    Returns
+    -------
+    v_rel, v_plus, omega_plus, go_contact, t_acc
+        Relative impact velocity, rotor velocities after the impact, whether the rotor enters
+        contact, and the time from the impact to the accumulation point (-1: none).
+    """
+    v_rel, v_plus, omega_plus = impact_law(
+        e_k, w, r, psi, phase, v_minus, omega, torsion, cap, inertia
+    )
+    n_load = normal_load(w, phase)
+    w_rel = e_k * v_rel
+    go_contact = False
+    t_acc = -1.0
+    if n_load >= 0.0:
+        if w_rel <= GRAZE_GAP * (1.0 + w):
+            go_contact = True
+        else:
+            t_acc = chatter_time(e, w, phase, w_rel, tol)
+            if t_acc > 0.0:
+                go_contact = True
+    return v_rel, v_plus, omega_plus, go_contact, t_acc
+
+
+@_on_arrays
+def _enter_contact(st, ist, prm, torsion, n_hit, phase, t_acc):
+    """Contact after the impact at ``(n_hit, phase)``, or a chattering sequence (``t_acc > 0``).
+
+    A chattering sequence (MODEL.md "Chattering") accumulates ``t_acc`` after the impact: the
+    rotor rides the stator until then, and the accumulation point is an event of its own
+    (:func:`_chatter_tail`). With torsion, the slip state on entering contact
+    (:func:`_enter_contact_torsion`).
+    """
+    w = prm[P_W]
+    ist[I_MODE] = MODE_CONTACT
+    ist[I_SLIP_GUARD] = 0
+    ist[I_ZERO_STEPS] = 0
+    if t_acc > 0.0:
+        ist[I_CHATTERING] = 1
+        ist[I_CHATTER_PERIOD], st[S_CHATTER_PHASE] = _advance(n_hit, phase, w * t_acc)
+    else:
+        ist[I_CHATTERING] = 0
+    ist[I_SLIP_SIGN] = 0
+    if torsion:
+        _enter_contact_torsion(st, ist, prm[P_R], w, prm[P_PSI], prm[P_MU_RATIO], phase)
+
+
+@_on_arrays
+def _chatter_tail(st, ist, ev, evk, info, w, n1, th1):
+    """The accumulation point of a chattering sequence: one event of kind ``KIND_CHATTER``.
+
+    MODEL.md "Counting impacts": the infinitely many impacts of a complete chattering sequence
+    count as one event, at the accumulation time, with zero relative velocity.
+    """
+    ist[I_CHATTERING] = 0
+    om = st[S_OMEGA]
+    _record_event(ev, evk, ist, info, (n1 * TWO_PI + th1) / w, th1, 0.0, om, om, KIND_CHATTER)
+
+
+@njit(cache=True)
+def _separation_constants(w):
+    """``(never, θ_sep, T, g)``: whether contact never ends (``w <= 1`` or a grazing window),
+    the separation phase and the flight through the window ``N < 0`` (MODEL.md "Contact";
+    :func:`~bouncedisk.engine.laws.separation_window`)."""
+    never_sep = w <= 1.0
+    th_sep = -1.0
+    t_win = 0.0
+    g_win = 0.0
+    if not never_sep:
+        t_win, g_win, _v_win = separation_window(w)
+        if g_win < GRAZE_GAP:
+            never_sep = True
+        else:
+            th_sep = separation_phase(w)
+    return never_sep, th_sep, t_win, g_win
+
+
+@_on_arrays
+def _clipped_ride(prm, flg, st, ist, traj, strobe, info, n, th, t_now, th_sep):
+    """Clipped spring-contact model, unloaded (paper refs. [2, 3]): ride to the window's end.
+
+    ``N = max(0, 1 + a_s)`` is clipped to 0 while ``1 + a_s < 0`` (phases ``(θ_sep, π − θ_sep)``):
+    no torque, the rotor keeps ``Ω`` and rides the stator. Returns ``ST_CONTINUE`` or the status
+    that ends this call.
+    """
+    w = prm[P_W]
+    th_back = pi - th_sep
+    d = th_back - th
+    if d < 0.0:
+        d += TWO_PI
+    seg = min(d / w, prm[P_TEND] - t_now)
+    ends = seg < d / w
+    status = _segment_output(SEG_CONTACT, n, th, seg, ends, prm, flg, st, ist, traj, strobe, info)
+    if status != ST_CONTINUE:
+        return status
+    if ends:
+        ist[I_PERIOD], st[S_PHASE] = _advance(n, th, w * seg)
+        st[S_U] = sin(st[S_PHASE])
+        st[S_V] = w * cos(st[S_PHASE])
+        return _finish(ist, info, ST_TIME)
+    ist[I_PERIOD] = n + (1 if th > th_back else 0)
+    st[S_PHASE] = th_back
+    ist[I_UNLOADED] = 0
+    if flg[F_TORSION]:
+        _enter_contact_torsion(st, ist, prm[P_R], w, prm[P_PSI], prm[P_MU_RATIO], th_back)
+    return ST_CONTINUE
+
+
+@_on_arrays
+def _contact_horizon(n, th, t_now, st, ist, prm, never_sep, th_sep):
+    """Times from now to the separation, the run's end and a chattering accumulation point.
+
+    Separation at ``θ_sep`` (``N = 0`` decreasing, MODEL.md "Contact"); ``inf`` for none.
+    """
+    w = prm[P_W]
+    tau_sep = inf
+    if not never_sep:
+        d = th_sep - th
+        if d < 0.0:
+            if th < pi - th_sep:
+                d = 0.0  # N < 0 by rounding: separate now
+            else:
+                d += TWO_PI
+        tau_sep = d / w
+    tau_t = prm[P_TEND] - t_now
+    tau_c = inf
+    if ist[I_CHATTERING]:
+        tau_c = ((ist[I_CHATTER_PERIOD] - n) * TWO_PI + (st[S_CHATTER_PHASE] - th)) / w
+        if tau_c < 0.0:
+            tau_c = 0.0
+    return tau_sep, tau_t, tau_c
+
+
+@njit(cache=True)
+def _slip_root(sig, guard, om, th, tau_end, w, r, psi, xtol):
+    """End of a slipping segment (MODEL.md "Stick–slip transitions"; paper eqs. 22–23).
+
+    Slipping with ``σ = sgn(s)``, ``Ω' = −σN``. Just after leaving ``s = 0`` (``guard``) the
+    segment ends where the slip has grown, ``RN + σα_s`` back to ``>= 0``; otherwise it ends
+    where ``s`` reaches zero (eq. 23 corrected). Returns ``(seg, slip_zero)``: the segment's
+    length (``tau_end`` if neither comes first) and whether it ends at ``s = 0``.
+    """
+    if guard:
+        s0 = sin(th + psi)
+        q0 = -r * normal_load(w, th) + sig * w * w * s0
+        if q0 < 0.0:
+            q0 = 0.0
+        a = sig * w * w * sin(psi)
+        b = r * w * w + sig * w * w * cos(psi)
+        tq = first_root(q0, 0.0, 0.0, a, b, th, w, tau_end, xtol)
+        return (tq, False) if tq >= 0.0 else (tau_end, False)
+    f0 = sig * slip(r, w, psi, om, th)
+    if f0 < 0.0:
+        f0 = 0.0
+    a = -r * w - sig * w * cos(psi)
+    tz = first_root(f0, -r, 0.0, a, sig * w * sin(psi), th, w, tau_end, xtol)
+    return (tz, True) if tz >= 0.0 else (tau_end, False)
+
+
+@njit(cache=True)
+def _stick_root(th, tau_end, w, r, psi, rho, xtol):
+    """End of a sticking segment (MODEL.md "Stick–slip transitions"; paper §2.5 corrected).
+
+    While ``RΩ = Ω_s`` the rotor sticks until ``|α_s| = ρRN`` (``ρ`` the static/kinetic
+    ratio); with ``α_s < −ρRN`` the slip becomes positive, with ``α_s > ρRN`` negative. Searched
+    over at most one stator period. Returns ``(seg, new_sig, slips)``: the segment's length
+    (``tau_end`` if it sticks throughout), the new ``sgn(s)`` and whether it starts slipping.
+    """
+    win = tau_end
+    per = TWO_PI / w
+    if win > per:
+        win = per
+    rr = rho * r
+    best = -1.0
+    new_sig = 0
+    for sgn in (1.0, -1.0):
+        m0 = rr * normal_load(w, th) - sgn * w * w * sin(th + psi)
+        if m0 < 0.0:
+            m0 = 0.0
+        a = -sgn * w * w * sin(psi)
+        b = -rr * w * w - sgn * w * w * cos(psi)
+        rt = first_root(m0, 0.0, 0.0, a, b, th, w, win, xtol)
+        if rt >= 0.0 and (best < 0.0 or rt < best):
+            best = rt
+            new_sig = np.int64(sgn)
+    if best >= 0.0:
+        return best, new_sig, True
+    return tau_end, 0, False
+
+
+@_on_arrays
+def _contact_segment(st, ist, prm, torsion, th, tau_end):
+    """The next contact segment: its kind (``SEG_*``), length, and whether it ends at a
+    stick–slip transition (``hit``), with the slip direction after it (``new_sig``)."""
+    sig = ist[I_SLIP_SIGN]
+    if not torsion:
+        return SEG_CONTACT, tau_end, False, sig
+    w = prm[P_W]
+    r = prm[P_R]
+    psi = prm[P_PSI]
+    xtol = prm[P_TOL]
+    if sig != 0:
+        seg, hit = _slip_root(sig, ist[I_SLIP_GUARD], st[S_OMEGA], th, tau_end, w, r, psi, xtol)
+        return SEG_SLIP, seg, hit, sig
+    seg, new_sig, hit = _stick_root(th, tau_end, w, r, psi, prm[P_MU_RATIO], xtol)
+    return SEG_STICK, seg, hit, new_sig
+
+
+@_on_arrays
+def _contact_advance(st, ist, prm, kind, hit, new_sig, th, seg, n1, th1):
+    """Move the contact state to the segment's end ``(n1, th1)``: ``Ω`` and the stick–slip state.
+
+    ``Ω`` from eq. 23 corrected (slip) or ``RΩ = Ω_s`` (stick). A slip that reaches zero sticks
+    or slips on in the stator's direction (§2.5, :func:`_enter_contact_torsion`); a stick that
+    ends starts slipping with the guard set.
+    """
+    w = prm[P_W]
+    r = prm[P_R]
+    psi = prm[P_PSI]
+    om = st[S_OMEGA]
+    if kind == SEG_SLIP:
+        om = slip_omega(om, float(ist[I_SLIP_SIGN]), w, th, seg)
+    elif kind == SEG_STICK:
+        om = w * cos(th1 + psi) / r
+    ist[I_PERIOD] = n1
+    st[S_PHASE] = th1
+    st[S_OMEGA] = om
+    if kind == SEG_SLIP:
+        if ist[I_SLIP_GUARD]:
+            ist[I_SLIP_GUARD] = 0
+        elif hit:
+            # the slip reached zero: stick, or slip on in the stator's direction (§2.5)
+            st[S_OMEGA] = w * cos(th1 + psi) / r
+            _enter_contact_torsion(st, ist, r, w, psi, prm[P_MU_RATIO], th1)
+    elif kind == SEG_STICK and hit:
+        ist[I_SLIP_SIGN] = new_sig
+        ist[I_SLIP_GUARD] = 1
+
+
+@_on_arrays
+def _contact_end(st, ist, ev, evk, info, prm, clipped, taus, tau_end, n1, th1, sep):
+    """What ends a contact segment at the first of its horizons ``taus = (sep, end, chatter)``.
+
+    The run's end (``ST_TIME``); a chattering sequence's accumulation point (an event,
+    :func:`_chatter_tail`), after which contact goes on; separation (MODEL.md "Separation"):
+    the rotor flies through the window where ``N < 0`` and the impact search starts at its end
+    (or, in the clipped model, rides unloaded, :func:`_clipped_ride`).
+    """
+    tau_sep, tau_t, tau_c = taus
+    w = prm[P_W]
+    if tau_end == tau_t:
+        st[S_U] = sin(th1)
+        st[S_V] = w * cos(th1)
+        return _finish(ist, info, ST_TIME)
+    if tau_end == tau_c and ist[I_CHATTERING]:
+        _chatter_tail(st, ist, ev, evk, info, w, n1, th1)
+        if tau_c < tau_sep:
+            return ST_CONTINUE
+    if tau_end == tau_sep and clipped:
+        ist[I_UNLOADED] = 1
+    elif tau_end == tau_sep:
+        # separation: fly through the window where N < 0, then search from its end
+        _never, th_sep, t_win, g_win = sep
+        _enter_flight(st, ist, 1.0 / (w * w), w * cos(th_sep), t_win, g_win)
+        ist[I_CHATTERING] = 0
+    return ST_CONTINUE
+
+
+@_on_arrays
+def _flight_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, noise_key):
+    """A flight and the impact that ends it (MODEL.md "Flight", "Impact").
+
+    The first root of the gap (:func:`flight_next_impact`, eq. 20); the flight's outputs
+    (:func:`_flight_output`, which ends the run if its end comes first); the impact law with
+    this impact's restitution (``restitution_noise``: ``e_k``, :mod:`.noise`) and what follows
+    (:func:`_impact`); its event row; then a new flight, contact or a chattering sequence
+    (:func:`_enter_contact`). Returns ``ST_CONTINUE`` or the status that ends this call.
+    """
+    e = prm[P_E]
+    w = prm[P_W]
+    xtol = prm[P_TOL]
+    torsion = flg[F_TORSION] != 0
+    cap = flg[F_CAP] != 0
+    om = st[S_OMEGA]
+    tau, dk, ph, v_minus = flight_next_impact(
+        st[S_U], st[S_V], th, st[S_ANCHOR_TAU], st[S_ANCHOR_GAP], w, xtol
+    )
+    if tau < 0.0:
+        return _finish(ist, info, ST_NUMERICAL)
+    n_hit = n + dk
+    t_hit = (n_hit * TWO_PI + ph) / w
+    if flg[F_TRAJ] or flg[F_STROBE] or flg[F_STATS] or t_hit > prm[P_TEND]:
+        status = _flight_output(prm, flg, st, ist, traj, strobe, info, n, th, t_now, t_hit, tau)
+        if status != ST_CONTINUE:
+            return status
+    e_k = noisy_restitution(e, prm[P_ESIG], noise_key, ist[I_EVENTS]) if flg[F_NOISE] else e
+    r = prm[P_R]
+    psi = prm[P_PSI]
+    v_rel, v_plus, om_plus, go_contact, t_acc = _impact(
+        e_k, e, w, r, psi, ph, v_minus, om, torsion, cap, prm[P_INERTIA], xtol
+    )
+    _record_event(ev, evk, ist, info, t_hit, ph, v_rel, om_plus, om, KIND_IMPACT)
+    ist[I_PERIOD] = n_hit
+    st[S_PHASE] = ph
+    st[S_OMEGA] = om_plus
+    if not go_contact:
+        _enter_flight(st, ist, sin(ph), v_plus, 0.0, 0.0)
+    elif flg[F_CONTACT]:
+        _enter_contact(st, ist, prm, torsion, n_hit, ph, t_acc)
+    else:
+        return _finish(ist, info, ST_NEED_CONTACT)
+    return ST_CONTINUE
+
+
+@_on_arrays
+def _contact_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, sep):
+    """One contact segment (MODEL.md "Contact", "Stick–slip transitions", "Separation").
+
+    The rotor rides the stator (``u = u_s``, ``v = v_s``) until the first of: separation, the
+    run's end, a chattering accumulation point (:func:`_contact_horizon`), or a stick–slip
+    transition (:func:`_contact_segment`). Returns ``ST_CONTINUE`` or the status that ends this
+    call (the rotor at rest, a stall, a full buffer, the run's end).
+    """
+    never_sep, th_sep = sep[0], sep[1]
+    taus = _contact_horizon(n, th, t_now, st, ist, prm, never_sep, th_sep)
+    tau_sep, tau_t, tau_c = taus
+    tau_end = min(tau_sep, tau_t, tau_c)
+    clipped = flg[F_CLIPPED] != 0
+    if tau_end == inf or (clipped and prm[P_TEND] == inf):
+        return _finish(ist, info, ST_REST)
+    kind, seg, hit, new_sig = _contact_segment(st, ist, prm, flg[F_TORSION] != 0, th, tau_end)
+    if seg > 0.0:
+        ist[I_ZERO_STEPS] = 0
+    else:
+        ist[I_ZERO_STEPS] += 1
+        if ist[I_ZERO_STEPS] > 32:
+            return _finish(ist, info, ST_NUMERICAL)
+    at_end = (not hit) and seg == tau_end
+    inclusive = at_end and tau_end == tau_t
+    status = _segment_output(kind, n, th, seg, inclusive, prm, flg, st, ist, traj, strobe, info)
+    if status != ST_CONTINUE:
+        return status
+    # the segment's end point: exact at a separation or an accumulation point
+    if at_end and tau_end == tau_sep and tau_sep < tau_t and tau_sep <= tau_c:
+        n1 = n + (1 if th > th_sep else 0)
+        th1 = th_sep
+    elif at_end and tau_end == tau_c and tau_c < tau_t:
+        n1 = ist[I_CHATTER_PERIOD]
+        th1 = st[S_CHATTER_PHASE]
+    else:
+        n1, th1 = _advance(n, th, prm[P_W] * seg)
+    _contact_advance(st, ist, prm, kind, hit, new_sig, th, seg, n1, th1)
+    if not at_end:
+        return ST_CONTINUE
+    return _contact_end(st, ist, ev, evk, info, prm, clipped, taus, tau_end, n1, th1, sep)
+
+
+@njit(cache=True, nogil=True, _nrt=False)  # as _on_arrays, and releases the GIL
+def run_chunk(
+    prm: np.ndarray,
+    flg: np.ndarray,
+    st: np.ndarray,
+    ist: np.ndarray,
+    ev: np.ndarray,
+    evk: np.ndarray,
+    traj: np.ndarray,
+    strobe: np.ndarray,
+    info: np.ndarray,
+) -> None:
     """Advance the simulation; see the module docstring.
+
+    The event loop: a flight ends at its impact (:func:`flight_next_impact`, :func:`_impact`,
+    one event row, :func:`_record_event`), which leads to a flight, contact or a chattering
+    sequence (:func:`_enter_contact`); contact goes on segment by segment
+    (:func:`_contact_step`, or :func:`_clipped_ride` in the clipped model).
 
     Parameters
     ----------
@@ -332,403 +829,47 @@ def run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info):
     st, ist : ndarray
         Float and integer state (``S_*``, ``I_*``), updated in place.
     ev, evk : ndarray
-        Event buffer ``(cap, 6)`` — t, phase, v_rel, omega_after, u, omega_before — and kinds ``(cap,)``.
+        Event buffer ``(cap, EV_COLS)`` (columns ``EV_*``) and kinds ``(cap,)``.
     traj, strobe : ndarray
-        Sample buffers ``(cap, 5)``.
+        Sample buffers ``(cap, TRAJ_COLS)`` and ``(cap, STROBE_COLS)`` (columns ``TR_*``, ``SB_*``).
     info : ndarray
-        Output: status, events, trajectory rows and stroboscopic rows written, rows needed.
+        Output (``O_*``): status, events, trajectory and stroboscopic rows written, rows needed.
     """
-    e = prm[P_E]
     w = prm[P_W]
-    r = prm[P_R]
-    psi = prm[P_PSI]
-    tol = prm[P_TOL]
-    inertia = prm[P_INERTIA]
-    rho = prm[P_MU_RATIO]
-    t_end = prm[P_TEND]
-    contact = flg[F_CONTACT] != 0
-    torsion = flg[F_TORSION] != 0
-    cap = flg[F_CAP] != 0
-    max_ev = flg[F_MAXEV]
-    clipped = flg[F_CLIPPED] != 0
-    noise = flg[F_NOISE] != 0
-    e_sigma = prm[P_ESIG]
     noise_key = member_key(flg[F_SEED], flg[F_MEMBER])
-    stats = flg[F_STATS] != 0
-    xtol = tol
-    per = TWO_PI / w
-    w_eps = GRAZE_GAP * (1.0 + w)
-    never_sep = w <= 1.0
-    th_sep = -1.0
-    t_win = 0.0
-    g_win = 0.0
-    v_win = 0.0
-    if not never_sep:
-        t_win, g_win, v_win = separation_window(w)
-        if g_win < GRAZE_GAP:
-            never_sep = True
-        else:
-            th_sep = separation_phase(w)
-    n_ev = 0
-    n_tr = 0
-    n_sb = 0
-    info[4] = 0
+    sep = _separation_constants(w)
+    info[O_EVENTS:N_OUT] = 0
     if ist[I_MODE] == MODE_DONE:
-        _finish(ist, info, ist[I_STATUS], n_ev, n_tr, n_sb)
+        _finish(ist, info, ist[I_STATUS])
         return
     while True:
-        if ist[I_EVENTS] >= max_ev:
-            _finish(ist, info, ST_EVENTS, n_ev, n_tr, n_sb)
+        if ist[I_EVENTS] >= flg[F_MAXEV]:
+            _finish(ist, info, ST_EVENTS)
             return
-        if n_ev >= ev.shape[0]:
-            info[0] = ST_CHUNK
-            _report(info, n_ev, n_tr, n_sb)
+        if info[O_EVENTS] >= ev.shape[0]:
+            info[O_STATUS] = ST_CHUNK
             return
         n = ist[I_PERIOD]
         th = st[S_PHASE]
         t_now = (n * TWO_PI + th) / w
         if ist[I_MODE] == MODE_FLIGHT:
-            u0 = st[S_U]
-            v0 = st[S_V]
-            om = st[S_OMEGA]
-            tau, dk, ph, v_minus = flight_next_impact(
-                u0, v0, th, st[S_ANCHOR_TAU], st[S_ANCHOR_GAP], w, xtol
+            status = _flight_step(
+                prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, noise_key
             )
-            if tau < 0.0:
-                _finish(ist, info, ST_NUMERICAL, n_ev, n_tr, n_sb)
-                return
-            n_hit = n + dk
-            t_hit = (n_hit * TWO_PI + ph) / w
-            ends = t_hit > t_end  # the run's end comes before the impact
-            length = t_end - t_now if ends else tau
-            a, b = _sample(
-                SEG_FLIGHT,
-                n,
-                th,
-                length,
-                ends,
-                u0,
-                v0,
-                om,
-                0.0,
-                prm,
-                flg,
-                ist,
-                traj,
-                n_tr,
-                strobe,
-                n_sb,
-                info,
-            )
-            if a < 0:
-                _report(info, n_ev, n_tr, n_sb)
-                return
-            n_tr = a
-            n_sb = b
-            if stats:
-                _accumulate_omega(st, prm, SEG_FLIGHT, n, th, length, om, 0.0)
-            if ends:
-                st[S_U] = u0 + v0 * length - 0.5 * length * length
-                st[S_V] = v0 - length
-                ist[I_PERIOD], st[S_PHASE] = _advance(n, th, w * length)
-                _finish(ist, info, ST_TIME, n_ev, n_tr, n_sb)
-                return
-            e_k = noisy_restitution(e, e_sigma, noise_key, ist[I_EVENTS]) if noise else e
-            v_rel, v_plus, om_plus = impact_law(
-                e_k, w, r, psi, ph, v_minus, om, torsion, cap, inertia
-            )
-            ev[n_ev, 0] = t_hit
-            ev[n_ev, 1] = ph
-            ev[n_ev, 2] = v_rel
-            ev[n_ev, 3] = om_plus
-            ev[n_ev, 4] = sin(ph)
-            ev[n_ev, 5] = om
-            evk[n_ev] = KIND_IMPACT
-            n_ev += 1
-            ist[I_EVENTS] += 1
-            ist[I_PERIOD] = n_hit
-            st[S_PHASE] = ph
-            st[S_OMEGA] = om_plus
-            n_load = 1.0 - w * w * sin(ph)
-            w_rel = e_k * v_rel
-            go_contact = False
-            t_acc = -1.0
-            if n_load >= 0.0:
-                if w_rel <= w_eps:
-                    go_contact = True
-                else:
-                    t_acc = chatter_time(e, w, ph, w_rel, tol)
-                    if t_acc > 0.0:
-                        go_contact = True
-            if go_contact:
-                if not contact:
-                    _finish(ist, info, ST_NEED_CONTACT, n_ev, n_tr, n_sb)
-                    return
-                ist[I_MODE] = MODE_CONTACT
-                ist[I_SLIP_GUARD] = 0
-                ist[I_ZERO_STEPS] = 0
-                if t_acc > 0.0:
-                    ist[I_CHATTERING] = 1
-                    ist[I_CHATTER_PERIOD], st[S_CHATTER_PHASE] = _advance(n_hit, ph, w * t_acc)
-                else:
-                    ist[I_CHATTERING] = 0
-                ist[I_SLIP_SIGN] = 0
-                if torsion:
-                    _enter_contact_torsion(st, ist, r, w, psi, rho, ph)
-            else:
-                ist[I_MODE] = MODE_FLIGHT
-                st[S_U] = sin(ph)
-                st[S_V] = v_plus
-                st[S_ANCHOR_TAU] = 0.0
-                st[S_ANCHOR_GAP] = 0.0
-            continue
-
-        # ---------------------------------------------------------------- contact
-        om = st[S_OMEGA]
-        sig = ist[I_SLIP_SIGN]
-        if ist[I_UNLOADED]:
-            # clipped spring-contact model: N is clipped to 0 while 1 + a_s < 0; no torque, the
-            # rotor keeps its angular velocity and rides the stator to the window's end
-            th_back = pi - th_sep
-            d = th_back - th
-            if d < 0.0:
-                d += TWO_PI
-            seg = min(d / w, t_end - t_now)
-            a, b = _sample(
-                SEG_CONTACT,
-                n,
-                th,
-                seg,
-                seg < d / w,
-                0.0,
-                0.0,
-                om,
-                0.0,
-                prm,
-                flg,
-                ist,
-                traj,
-                n_tr,
-                strobe,
-                n_sb,
-                info,
-            )
-            if a < 0:
-                _report(info, n_ev, n_tr, n_sb)
-                return
-            n_tr = a
-            n_sb = b
-            if stats:
-                _accumulate_omega(st, prm, SEG_CONTACT, n, th, seg, om, 0.0)
-            if seg < d / w:
-                ist[I_PERIOD], st[S_PHASE] = _advance(n, th, w * seg)
-                st[S_U] = sin(st[S_PHASE])
-                st[S_V] = w * cos(st[S_PHASE])
-                _finish(ist, info, ST_TIME, n_ev, n_tr, n_sb)
-                return
-            ist[I_PERIOD] = n + (1 if th > th_back else 0)
-            st[S_PHASE] = th_back
-            ist[I_UNLOADED] = 0
-            if torsion:
-                _enter_contact_torsion(st, ist, r, w, psi, rho, th_back)
-            continue
-        if never_sep:
-            tau_sep = inf
+        elif ist[I_UNLOADED]:
+            status = _clipped_ride(prm, flg, st, ist, traj, strobe, info, n, th, t_now, sep[1])
         else:
-            d = th_sep - th
-            if d < 0.0:
-                if th < pi - th_sep:
-                    d = 0.0  # N < 0 by rounding: separate now
-                else:
-                    d += TWO_PI
-            tau_sep = d / w
-        tau_t = t_end - t_now
-        tau_c = inf
-        if ist[I_CHATTERING]:
-            tau_c = ((ist[I_CHATTER_PERIOD] - n) * TWO_PI + (st[S_CHATTER_PHASE] - th)) / w
-            if tau_c < 0.0:
-                tau_c = 0.0
-        tau_end = min(tau_sep, tau_t, tau_c)
-        if tau_end == inf or (clipped and t_end == inf):
-            _finish(ist, info, ST_REST, n_ev, n_tr, n_sb)
+            status = _contact_step(
+                prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, sep
+            )
+        if status != ST_CONTINUE:
             return
-        seg = tau_end
-        kind = SEG_CONTACT
-        new_sig = sig
-        new_guard = 0
-        hit_event = False
-        if torsion:
-            if sig != 0:
-                kind = SEG_SLIP
-                if ist[I_SLIP_GUARD]:
-                    # leaving s = 0: the slip grows until RN + σα_s returns to >= 0
-                    s0 = sin(th + psi)
-                    q0 = -r * (1.0 - w * w * sin(th)) + sig * w * w * s0
-                    if q0 < 0.0:
-                        q0 = 0.0
-                    tq = first_root(
-                        q0,
-                        0.0,
-                        0.0,
-                        sig * w * w * sin(psi),
-                        r * w * w + sig * w * w * cos(psi),
-                        th,
-                        w,
-                        tau_end,
-                        xtol,
-                    )
-                    if tq >= 0.0:
-                        seg = tq
-                else:
-                    f0 = sig * (r * om - w * cos(th + psi))
-                    if f0 < 0.0:
-                        f0 = 0.0
-                    tz = first_root(
-                        f0,
-                        -r,
-                        0.0,
-                        -r * w - sig * w * cos(psi),
-                        sig * w * sin(psi),
-                        th,
-                        w,
-                        tau_end,
-                        xtol,
-                    )
-                    if tz >= 0.0:
-                        seg = tz
-                        hit_event = True
-            else:
-                kind = SEG_STICK
-                win = tau_end
-                if win > per:
-                    win = per
-                rr = rho * r
-                best = -1.0
-                for sgn in (1.0, -1.0):
-                    m0 = rr * (1.0 - w * w * sin(th)) - sgn * w * w * sin(th + psi)
-                    if m0 < 0.0:
-                        m0 = 0.0
-                    rt = first_root(
-                        m0,
-                        0.0,
-                        0.0,
-                        -sgn * w * w * sin(psi),
-                        -rr * w * w - sgn * w * w * cos(psi),
-                        th,
-                        w,
-                        win,
-                        xtol,
-                    )
-                    if rt >= 0.0 and (best < 0.0 or rt < best):
-                        best = rt
-                        new_sig = np.int64(sgn)
-                if best >= 0.0:
-                    seg = best
-                    new_guard = 1
-                    hit_event = True
-                else:
-                    new_sig = 0
-        if seg <= 0.0:
-            ist[I_ZERO_STEPS] += 1
-            if ist[I_ZERO_STEPS] > 32:
-                _finish(ist, info, ST_NUMERICAL, n_ev, n_tr, n_sb)
-                return
-        else:
-            ist[I_ZERO_STEPS] = 0
-        at_end = (not hit_event) and seg == tau_end
-        inclusive = at_end and tau_end == tau_t
-        a, b = _sample(
-            kind,
-            n,
-            th,
-            seg,
-            inclusive,
-            0.0,
-            0.0,
-            om,
-            float(sig),
-            prm,
-            flg,
-            ist,
-            traj,
-            n_tr,
-            strobe,
-            n_sb,
-            info,
-        )
-        if a < 0:
-            _report(info, n_ev, n_tr, n_sb)
-            return
-        n_tr = a
-        n_sb = b
-        if stats:
-            _accumulate_omega(st, prm, kind, n, th, seg, om, float(sig))
-        # advance the state to the end of the segment
-        if at_end and tau_end == tau_sep and tau_sep < tau_t and tau_sep <= tau_c:
-            n1 = n + (1 if th > th_sep else 0)
-            th1 = th_sep
-        elif at_end and tau_end == tau_c and tau_c < tau_t:
-            n1 = ist[I_CHATTER_PERIOD]
-            th1 = st[S_CHATTER_PHASE]
-        else:
-            n1, th1 = _advance(n, th, w * seg)
-        if kind == SEG_SLIP:
-            om1 = slip_omega(om, float(sig), w, th, seg)
-        elif kind == SEG_STICK:
-            om1 = w * cos(th1 + psi) / r
-        else:
-            om1 = om
-        ist[I_PERIOD] = n1
-        st[S_PHASE] = th1
-        st[S_OMEGA] = om1
-        if torsion:
-            if kind == SEG_SLIP:
-                if ist[I_SLIP_GUARD]:
-                    ist[I_SLIP_GUARD] = 0
-                elif hit_event:
-                    # the slip reached zero: stick, or slip on in the stator's direction (§2.5)
-                    st[S_OMEGA] = w * cos(th1 + psi) / r
-                    _enter_contact_torsion(st, ist, r, w, psi, rho, th1)
-            elif hit_event:
-                ist[I_SLIP_SIGN] = new_sig
-                ist[I_SLIP_GUARD] = new_guard
-        if at_end:
-            if tau_end == tau_t:
-                if kind == SEG_CONTACT or kind == SEG_SLIP or kind == SEG_STICK:
-                    st[S_U] = sin(th1)
-                    st[S_V] = w * cos(th1)
-                _finish(ist, info, ST_TIME, n_ev, n_tr, n_sb)
-                return
-            if tau_end == tau_c and ist[I_CHATTERING]:
-                ist[I_CHATTERING] = 0
-                ev[n_ev, 0] = (n1 * TWO_PI + th1) / w
-                ev[n_ev, 1] = th1
-                ev[n_ev, 2] = 0.0
-                ev[n_ev, 3] = st[S_OMEGA]
-                ev[n_ev, 4] = sin(th1)
-                ev[n_ev, 5] = st[S_OMEGA]
-                evk[n_ev] = KIND_CHATTER
-                n_ev += 1
-                ist[I_EVENTS] += 1
-                if tau_c < tau_sep:
-                    continue
-            if tau_end == tau_sep and clipped:
-                ist[I_UNLOADED] = 1
-                continue
-            if tau_end == tau_sep:
-                # separation: fly through the window where N < 0, then search from its end
-                ist[I_MODE] = MODE_FLIGHT
-                st[S_U] = 1.0 / (w * w)
-                st[S_V] = w * cos(th_sep)
-                st[S_ANCHOR_TAU] = t_win
-                st[S_ANCHOR_GAP] = g_win
-                ist[I_CHATTERING] = 0
 
 
 @njit(cache=True, inline="always")
 def _slip_is_zero(r, w, psi, omega, phase):
     """``s = RΩ − Ω_s`` is zero to rounding."""
-    return abs(r * omega - w * cos(phase + psi)) <= 1e-14 * (abs(r * omega) + w)
+    return abs(slip(r, w, psi, omega, phase)) <= 1e-14 * (abs(r * omega) + w)
 
 
 @njit(cache=True)
@@ -736,15 +877,15 @@ def _contact_sigma(r, w, psi, rho, omega, phase):
     """Slip direction in contact: ``sgn(s)``, or at ``s = 0`` stick (0) when ``|α_s| <= ρRN``,
     else the direction set by the stator's acceleration (paper §2.5, corrected)."""
     if not _slip_is_zero(r, w, psi, omega, phase):
-        return 1 if r * omega - w * cos(phase + psi) > 0.0 else -1
-    n_load = 1.0 - w * w * sin(phase)
+        return 1 if slip(r, w, psi, omega, phase) > 0.0 else -1
+    n_load = normal_load(w, phase)
     alpha = -w * w * sin(phase + psi)
     if abs(alpha) <= rho * r * n_load:
         return 0
     return 1 if alpha < 0.0 else -1
 
 
-@njit(cache=True)
+@_on_arrays
 def _enter_contact_torsion(st, ist, r, w, psi, rho, phase):
     """Torsional state on entering contact at ``phase`` with the rotor's current ``Ω``.
 

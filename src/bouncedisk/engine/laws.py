@@ -52,7 +52,7 @@ def impact_law(e, w, r, psi, phase, v_minus, omega, torsion, cap, inertia_factor
     v_plus = vs + e * v_rel
     omega_plus = omega
     if torsion:
-        s = r * omega - w * cos(phase + psi)
+        s = slip(r, w, psi, omega, phase)
         if s != 0.0:
             h_a = (1.0 + e) * v_rel
             h_p = inertia_factor * abs(s) / r
@@ -100,7 +100,7 @@ def chatter_time(e, w, phase, w_rel, tol):
     """
     if e >= 1.0 or w_rel <= 0.0:
         return -1.0
-    n0 = 1.0 - w * w * sin(phase)
+    n0 = normal_load(w, phase)
     if n0 <= 0.0:
         return -1.0
     t = 2.0 * w_rel / (n0 * (1.0 - e))
