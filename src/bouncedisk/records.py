@@ -13,7 +13,7 @@ from __future__ import annotations
 from enum import IntEnum
 
 from .engine import kernel as _K
-from .engine.driver import STATUS_TEXT
+from .engine.driver import OK_STATUSES, STATUS_TEXT
 
 __all__ = [
     "KIND_NAMES",
@@ -41,7 +41,7 @@ class RunStatus(IntEnum):
     @property
     def ok(self) -> bool:
         """The run ended as asked: events or time reached, or the rotor at rest."""
-        return self in (RunStatus.EVENTS, RunStatus.TIME, RunStatus.REST)
+        return self.value in OK_STATUSES
 
 
 class EventKind(IntEnum):
@@ -58,21 +58,21 @@ KIND_NAMES = " ".join(k.name.lower() for k in EventKind)
 class TrajColumn(IntEnum):
     """Columns of a dense trajectory (``RunResult.traj``, ``Chunk.traj``)."""
 
-    T = 0  # time t
-    U = 1  # rotor axial position u
-    V = 2  # rotor axial velocity v
-    U_STATOR = 3  # stator axial position u_s (eq. 1)
-    OMEGA = 4  # rotor angular velocity Ω
+    T = _K.TR_T  # time t
+    U = _K.TR_U  # rotor axial position u
+    V = _K.TR_V  # rotor axial velocity v
+    U_STATOR = _K.TR_U_STATOR  # stator axial position u_s (eq. 1)
+    OMEGA = _K.TR_OMEGA  # rotor angular velocity Ω
 
 
 class StrobeColumn(IntEnum):
     """Columns of the stroboscopic section (``RunResult.strobe``, ``Chunk.strobe``)."""
 
-    PERIOD = 0  # stator period index
-    T = 1  # time of the sample (phase 0)
-    U = 2  # rotor axial position
-    V = 3  # rotor axial velocity
-    OMEGA = 4  # rotor angular velocity
+    PERIOD = _K.SB_PERIOD  # stator period index
+    T = _K.SB_T  # time of the sample (phase 0)
+    U = _K.SB_U  # rotor axial position
+    V = _K.SB_V  # rotor axial velocity
+    OMEGA = _K.SB_OMEGA  # rotor angular velocity
 
 
 if len(TrajColumn) != _K.TRAJ_COLS or len(StrobeColumn) != _K.STROBE_COLS:  # pragma: no cover

@@ -68,9 +68,14 @@ _LOCATORS = [EngineUserProvidedLocator, EngineInTreeLocator, EngineUserWideLocat
 
 
 def register() -> None:
-    """Put the engine's locators first in numba's list (once)."""
-    classes = caching.CacheImpl._locator_classes
-    if classes[: len(_LOCATORS)] != _LOCATORS:
+    """Put the engine's locators first in numba's list (once).
+
+    ``CacheImpl._locator_classes`` is numba's (private) list; were it ever gone, numba's own
+    per-file stamps stay in force and a change to ``laws.py`` alone needs ``engine/__pycache__``
+    deleted, as before these locators.
+    """
+    classes = getattr(caching.CacheImpl, "_locator_classes", None)
+    if isinstance(classes, list) and classes[: len(_LOCATORS)] != _LOCATORS:
         classes[:0] = _LOCATORS
 
 

@@ -25,6 +25,8 @@ STATUS_TEXT = {
     ),
     K.ST_NUMERICAL: "numerical failure: an event search failed or made no progress",
 }
+#: The statuses of a run that ended as asked: events or time reached, or the rotor at rest.
+OK_STATUSES = frozenset({K.ST_EVENTS, K.ST_TIME, K.ST_REST})
 
 
 @dataclass(frozen=True)
@@ -135,7 +137,7 @@ class RunResult:
     @property
     def ok(self) -> bool:
         """True when the run ended as asked (events or time reached, or the rotor at rest)."""
-        return self.status_code in (K.ST_EVENTS, K.ST_TIME, K.ST_REST)
+        return self.status_code in OK_STATUSES
 
 
 class EngineError(RuntimeError):

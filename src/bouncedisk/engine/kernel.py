@@ -49,9 +49,19 @@ from .laws import (
 from .noise import member_key, noisy_restitution
 from .roots import TWO_PI, first_root
 
+
+def _nrt_off() -> dict:
+    """``{"_nrt": False}`` where this numba has the (private) option, else ``{}`` (slower, same bits)."""
+    try:
+        from numba.core.cpu import CPUTargetOptions
+    except ImportError:  # pragma: no cover - numba moved it
+        return {}
+    return {"_nrt": False} if hasattr(CPUTargetOptions, "_nrt") else {}
+
+
 #: Decorator of the compiled helpers that read and write the caller's arrays and allocate nothing:
 #: no reference counting of their array arguments (module docstring).
-_on_arrays = njit(cache=True, _nrt=False)
+_on_arrays = njit(cache=True, **_nrt_off())
 
 # --- parameter vector (float64) ---------------------------------------------------------------
 P_E = 0  # restitution e
@@ -803,7 +813,7 @@ def _contact_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, 
     return _contact_end(st, ist, ev, evk, info, prm, clipped, taus, tau_end, n1, th1, sep)
 
 
-@njit(cache=True, nogil=True, _nrt=False)  # as _on_arrays, and releases the GIL
+@njit(cache=True, nogil=True, **_nrt_off())  # as _on_arrays, and releases the GIL
 def run_chunk(
     prm: np.ndarray,
     flg: np.ndarray,
