@@ -30,8 +30,9 @@ CASES = {
     # period-1 orbit (noise-free: one impact per stator period), Gamma = 1.88
     "periodic": {"e": 0.31, "r_phi": 0.0041, "psi": 0.25, "omega_s": 1.37},
     "chaotic_reinjection": {"e": 0.62, "r_phi": 0.0027, "psi": -0.35, "omega_s": 1.48},
-    # 1.5 % below the period-doubling of the period-1 orbit (Gamma 1.99 vs 2.02, MODEL.md)
-    "near_boundary": {"e": 0.33, "r_phi": 0.0052, "psi": 0.7, "omega_s": 1.41},
+    # 3 % below the period-doubling of the period-1 orbit (Gamma 1.96 vs 2.02, MODEL.md); at
+    # omega_s 1.41 restitution noise already kicks 9 of 64 members off the orbit
+    "near_boundary": {"e": 0.33, "r_phi": 0.0052, "psi": 0.7, "omega_s": 1.40},
 }
 #: Record length per case (s): a chaotic curve's statistics converge slowly (MODEL.md, ensembles).
 SPANS = {"periodic": SPAN, "chaotic_reinjection": SPAN, "near_boundary": SPAN}
@@ -283,10 +284,17 @@ def model_trend(curve: MotorCurve, true: dict, members: int = 16):
     return first_order_trend(uniform_grid(curve), np.mean(runs, axis=0))
 
 
-#: Issue 10 is open: one 0.06 s curve of the chaotic case differs from the generating model's
-#: ensemble trend by about -11 % (steady speed) and -56 % (time constant), more than (a) allows.
+#: Issue 10 stays open for this case. One curve of it is one member, and its own trend scatters
+#: between members far more than (a) allows: at e_sigma 0.03, 16 members' first-order time
+#: constants have a relative spread of 35 % (0.06 s records) and 29-36 % (0.3-1 s records); every
+#: one of 16 chaotic parameter sets tried had at least 18 %. Measured fits: 0.06 s curve, steady
+#: speed +9.8 % and tau -30 % against the generating ensemble (the curve's own steady speed was
+#: +13.5 % off it); 0.6 s curve (10 kHz sampling), +5.5 % and -27 %. Both fits were adequate and
+#: every interval contained the truth.
 CHAOTIC_OPEN = pytest.mark.xfail(
-    strict=True, reason="issue 10 open: the search misses the chaotic case's basin"
+    strict=True,
+    reason="issue 10 open: one chaotic curve's own trend scatters more than 3 % / 10 % between "
+    "realizations, so no fit of one curve reproduces the ensemble trend that closely",
 )
 
 
