@@ -48,7 +48,7 @@ class FitSettings:
     members: int = 12  # members per evaluation in the local search and the profiles
     pilot_members: int = 32  # members measuring the model's covariance; also the band
     global_members: int = 1
-    scan: int = 128  # a power of 2 (Sobol balance); the noisy ensemble is smooth in (e, omega_s)
+    scan: int = 192
     popsize: int = 10
     maxiter: int = 12
     local_nfev: int = 12
