@@ -3,6 +3,7 @@
 import math
 import os
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -23,12 +24,18 @@ from bouncedisk.fitting.model import EnsembleSpec, member_records, uniform_grid
 from bouncedisk.observables import first_order_trend
 
 F_HZ, PHI0, SPAN, DT, SIGMA = 15000.0, 3.0e-4, 0.06, 2.5e-5, 0.05
-# generating parameters used nowhere else in the repository
+# generating parameters used nowhere else in the repository; every curve is one ensemble member
+# with the model's stated restitution noise (MODEL_E_SIGMA), the fitted model uses the same
 CASES = {
-    "periodic": {"e": 0.32, "r_phi": 0.0041, "psi": 0.25, "omega_s": 1.52},
+    # period-1 orbit (noise-free: one impact per stator period), Gamma = 1.88
+    "periodic": {"e": 0.31, "r_phi": 0.0041, "psi": 0.25, "omega_s": 1.37},
     "chaotic_reinjection": {"e": 0.62, "r_phi": 0.0027, "psi": -0.35, "omega_s": 1.48},
-    "near_boundary": {"e": 0.28, "r_phi": 0.0052, "psi": 1.1, "omega_s": 1.51},
+    # 3 % below the period-doubling of the period-1 orbit (Gamma 1.96 vs 2.02, MODEL.md); at
+    # omega_s 1.41 restitution noise already kicks 9 of 64 members off the orbit
+    "near_boundary": {"e": 0.33, "r_phi": 0.0052, "psi": 0.7, "omega_s": 1.40},
 }
+#: Record length per case (s): a chaotic curve's statistics converge slowly (MODEL.md, ensembles).
+SPANS = {"periodic": SPAN, "chaotic_reinjection": SPAN, "near_boundary": SPAN}
 TINY = FitSettings(seed=5, scan=16, popsize=3, maxiter=1, members=4, pilot_members=8,
                    local_nfev=4, bootstrap=4, cores=2)  # fmt: skip
 
@@ -38,8 +45,8 @@ def sidecar(f=F_HZ, phi0=PHI0, **extra):
             "motor": {"drive_frequency_hz": f, "Phi0_rad": phi0}, **extra}  # fmt: skip
 
 
-def make_curve(path, true, seed, member=None):
-    df = synthesize_curve(true, F_HZ, PHI0, SPAN, DT, SIGMA, seed, member=member)
+def make_curve(path, true, seed, member=None, span=SPAN):
+    df = synthesize_curve(true, F_HZ, PHI0, span, DT, SIGMA, seed, member=member)
     write_curve(df, path, sidecar())
     return path
 
@@ -53,9 +60,8 @@ def periodic_csv(tmp_path_factory):
 
 
 def _run(args, capsys):
-    start = time.perf_counter()
     code = main(["fit", *args])
-    return code, capsys.readouterr().err.strip().splitlines(), time.perf_counter() - start
+    return code, capsys.readouterr().err.strip().splitlines(), None
 
 
 @pytest.mark.parametrize(
@@ -72,12 +78,40 @@ def _run(args, capsys):
         (["--sidecar", "/nonexistent/side.yaml"], "--sidecar"),
     ],
 )
-def test_bad_option_exits_2_before_work(periodic_csv, tmp_path, capsys, extra, field):
+def test_bad_option_exits_2_before_work(periodic_csv, tmp_path, capsys, monkeypatch, extra, field):
+    import bouncedisk.curves
+    import bouncedisk.fitting.core as core
+
+    calls = []
+
+    def refuse(*args, **kwargs):
+        calls.append(args)
+        raise AssertionError("work started before the options were checked")
+
+    # the curve is not even read, the fit never starts
+    monkeypatch.setattr(core, "fit_curve", refuse)
+    monkeypatch.setattr(bouncedisk.curves, "read_curve", refuse)
     out = tmp_path / "fit.nc"
-    code, err, wall = _run([str(periodic_csv), "-o", str(out), *extra], capsys)
+    code, err, _ = _run([str(periodic_csv), "-o", str(out), *extra], capsys)
     assert code == 2 and len(err) == 1 and field in err[0]
     assert err[0].startswith("bouncedisk: error: ") and not out.exists()
-    assert wall < 5.0  # nothing was fitted
+    assert calls == []
+
+
+def test_good_options_do_reach_the_fit(periodic_csv, tmp_path, capsys, monkeypatch):
+    """The counterpart: with valid options the (patched) fit is reached, so the test above can fail."""
+    import bouncedisk.fitting.core as core
+
+    calls = []
+
+    def refuse(*args, **kwargs):
+        calls.append(args)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(core, "fit_curve", refuse)
+    out = tmp_path / "fit.nc"
+    code, _, _ = _run([str(periodic_csv), "-o", str(out), "-q"], capsys)
+    assert len(calls) == 1 and code != 0 and not out.exists()
 
 
 def test_output_is_an_existing_folder(periodic_csv, tmp_path, capsys):
@@ -144,9 +178,13 @@ def test_long_record_is_cropped():
 # ---------------------------------------------------------------- the file and determinism
 
 
-def test_fit_file_has_the_interface(periodic_csv):
-    curve = read_curve(periodic_csv)
-    ds = fit_dataset(fit_curve(curve, TINY))
+@pytest.fixture(scope="module")
+def tiny_fit(periodic_csv):
+    return fit_curve(read_curve(periodic_csv), TINY)
+
+
+def test_fit_file_has_the_interface(tiny_fit):
+    ds = fit_dataset(tiny_fit)
     for name in ("omega_measured", "omega_fitted", "omega_fitted_low", "omega_fitted_high"):
         assert ds[name].attrs["units"] == "rad/s" and ds[name].dims == ("time",)
     assert ds["time"].attrs["units"] == "s"
@@ -163,10 +201,9 @@ def test_fit_file_has_the_interface(periodic_csv):
     assert {"steady_speed_rad_s", "time_constant_s"} <= set(ds.attrs)
 
 
-def test_fit_is_deterministic_and_never_worse_than_evaluated(periodic_csv):
-    curve = read_curve(periodic_csv)
-    a = fit_curve(curve, TINY)
-    b = fit_curve(curve, TINY)
+def test_fit_is_deterministic_and_never_worse_than_evaluated(periodic_csv, tiny_fit):
+    a = tiny_fit
+    b = fit_curve(read_curve(periodic_csv), TINY)
     assert np.array_equal(a.x, b.x) and a.chi2 == b.chi2
     # no profile point beats the reported estimate
     for p in a.profiles:
@@ -250,10 +287,17 @@ def model_trend(curve: MotorCurve, true: dict, members: int = 16):
     return first_order_trend(uniform_grid(curve), np.mean(runs, axis=0))
 
 
-#: Issue 10 is open: one 0.06 s curve of the chaotic case differs from the generating model's
-#: ensemble trend by about -11 % (steady speed) and -56 % (time constant), more than (a) allows.
+#: Issue 10 stays open for this case. One curve of it is one member, and its own trend scatters
+#: between members far more than (a) allows: at e_sigma 0.03, 16 members' first-order time
+#: constants have a relative spread of 35 % (0.06 s records) and 29-36 % (0.3-1 s records); every
+#: one of 16 chaotic parameter sets tried had at least 18 %. Measured fits: 0.06 s curve, steady
+#: speed +9.8 % and tau -30 % against the generating ensemble (the curve's own steady speed was
+#: +13.5 % off it); 0.6 s curve (10 kHz sampling), +5.5 % and -27 %. Both fits were adequate and
+#: every interval contained the truth.
 CHAOTIC_OPEN = pytest.mark.xfail(
-    strict=True, reason="issue 10 open: the search misses the chaotic case's basin"
+    strict=True,
+    reason="issue 10 open: one chaotic curve's own trend scatters more than 3 % / 10 % between "
+    "realizations, so no fit of one curve reproduces the ensemble trend that closely",
 )
 
 
@@ -264,7 +308,7 @@ CHAOTIC_OPEN = pytest.mark.xfail(
 )
 def test_recovery(tmp_path, case):
     true = CASES[case]
-    path = make_curve(tmp_path / f"{case}.csv", true, 3, member=0)
+    path = make_curve(tmp_path / f"{case}.csv", true, 3, member=0, span=SPANS[case])
     curve = read_curve(path)
     fit = fit_curve(curve, FitSettings(seed=1, cores=2))
     ds = fit_dataset(fit)
@@ -285,22 +329,96 @@ def test_recovery(tmp_path, case):
             assert a["ci_low"] <= true[name] <= a["ci_high"], (name, a)
 
 
-def test_simulate_curve_reproduces_the_shipped_generator():
-    """The shipped curve is the single deterministic run (regenerated byte for byte)."""
+def test_simulate_curve_reproduces_the_shipped_generator(tmp_path):
+    """The shipped curve and sidecar are regenerated byte for byte from the generator's spec."""
+    from bouncedisk.fitting.synthetic import read_spec, synthetic_from_spec
+
+    spec = read_spec("workflow/config/synthetic_motor.yaml")
+    assert spec["member"] is not None and spec["e_sigma"] > 0  # a member with restitution noise
+    df, side = synthetic_from_spec(spec)
+    write_curve(df, tmp_path / "synthetic_motor.csv", side)
+    for name in ("synthetic_motor.csv", "synthetic_motor.yaml"):
+        shipped = (Path("data/prototype") / name).read_bytes()
+        assert (tmp_path / name).read_bytes() == shipped, name
+    # and it is the model's member plus the stated noise, not the deterministic run
     curve = read_curve("data/prototype/synthetic_motor.csv")
-    theta = {"e": 0.55, "log10_r_phi": math.log10(0.002), "psi": 0.4, "omega_s": 1.7}
-    om = simulate_curve(theta, curve)
-    noise = np.random.default_rng(7).normal(0.0, 0.1, len(om))
+    true = spec["parameters"]
+    theta = {"e": true["e"], "log10_r_phi": math.log10(true["r_phi"]), "psi": true["psi"],
+             "omega_s": true["omega_s"]}  # fmt: skip
+    om = simulate_curve(theta, curve, spec["member"], spec["e_sigma"], 1_000_000 + spec["seed"])
+    noise = np.random.default_rng(spec["seed"]).normal(0.0, spec["noise_sigma_rad_s"], len(om))
     np.testing.assert_array_equal(om + noise, curve.omega)
+    assert not np.array_equal(simulate_curve(theta, curve) + noise, curve.omega)
+
+
+def _band_dataset(resid, band=1.0, tau=0.01, dt=1e-4):
+    n = len(resid)
+    t = dt * np.arange(n)
+    mean = np.full(n, 10.0)
+    return xr.Dataset(
+        {"omega_measured": ("time", mean + resid), "omega_fitted": ("time", mean),
+         "residual_band_low": ("time", np.full(n, -band)),
+         "residual_band_high": ("time", np.full(n, band))},
+        coords={"time": t}, attrs={"time_constant_s": tau},
+    )  # fmt: skip
+
+
+def test_residual_check_finds_a_systematic_excursion():
+    from bouncedisk.fitting.output import residual_check
+
+    rng = np.random.default_rng(0)
+    noise = rng.normal(0.0, 0.5, 2000)  # 2 sigma band: ~5 % outside, short runs
+    ok = residual_check(_band_dataset(noise))
+    assert ok["passed"] and 0.01 < ok["outside_fraction"] < 0.10 and ok["longest_run_s"] < 0.01
+    bump = noise.copy()
+    bump[500:700] += 1.5  # 20 ms (2 time constants) above the band
+    bad = residual_check(_band_dataset(bump))
+    assert not bad["passed"] and bad["longest_run_s"] > 0.01
+    wide = residual_check(_band_dataset(rng.normal(0.0, 1.0, 2000)))  # ~32 % outside
+    assert not wide["passed"] and wide["outside_fraction"] > 0.2
+
+
+@pytest.mark.slow
+def test_shipped_curve_fit_is_adequate_and_fig5_residual_in_band():
+    """The pipeline's fit of the shipped curve: adequate, truth in every identified interval,
+    and Fig. 5's residual without systematic excursion (fraction outside, longest run)."""
+    from bouncedisk.fitting.output import RESIDUAL_MAX_OUTSIDE, residual_check
+    from bouncedisk.fitting.synthetic import read_spec
+
+    true = read_spec("workflow/config/synthetic_motor.yaml")["parameters"]
+    curve = read_curve("data/prototype/synthetic_motor.csv")
+    ds = fit_dataset(fit_curve(curve, FitSettings(seed=20261121, bootstrap=40, cores=2)))
+    print(f"\nSHIPPED: {ds.attrs['chi2']:.4g} p {ds.attrs['chi2_p_value']:.3g}, "
+          f"{ds.attrs['wall_time_s']:.1f} s")  # fmt: skip
+    assert ds.attrs["fit_adequate"] == 1 and ds.attrs["chi2_p_value"] > 1e-3
+    identified = 0
+    for name in ("e", "r_phi", "psi", "omega_s"):
+        a = ds[name].attrs
+        print(f"  {name}: true {true[name]:.4g} fitted {float(ds[name]):.4g} "
+              f"[{a['ci_low']:.4g}, {a['ci_high']:.4g}] identified {a['identified']}")  # fmt: skip
+        if a["identified"]:
+            identified += 1
+            assert a["ci_low"] <= true[name] <= a["ci_high"], (name, a)
+    assert identified >= 1  # not vacuous: r_phi (the time constant) at least
+    check = residual_check(ds)
+    print(f"  residual: {check}")
+    assert check["passed"] and check["outside_fraction"] <= RESIDUAL_MAX_OUTSIDE
+    assert ds.attrs["residual_within_band"] == 1
+    assert ds.attrs["model_steady_speed_rad_s"] == pytest.approx(ds.attrs["steady_speed_rad_s"],
+                                                                 rel=0.03)  # fmt: skip
 
 
 @pytest.mark.slow
 def test_coverage_of_r_phi(tmp_path):
-    """Over 10 noise seeds (and realizations) of one case, the 95% interval of r_phi covers."""
+    """Over 10 noise seeds (and realizations) of one case, the 95% interval of r_phi covers.
+
+    0.03 s records (25 time constants of this case) keep the ten fits within the CI budget.
+    """
     true = CASES["periodic"]
     hits = 0
     for seed in range(10):
-        curve = read_curve(make_curve(tmp_path / f"c{seed}.csv", true, 100 + seed, member=seed))
+        path = make_curve(tmp_path / f"c{seed}.csv", true, 100 + seed, member=seed, span=0.03)
+        curve = read_curve(path)
         fit = fit_dataset(fit_curve(curve, FitSettings(seed=1, cores=2, profile=("log10_r_phi",))))
         a = fit["r_phi"].attrs
         hit = a["ci_low"] <= true["r_phi"] <= a["ci_high"]

@@ -198,12 +198,15 @@ def _fig5_fitted(ax, axr, fitted: xr.Dataset) -> None:
         if name in fitted:
             ax.plot(t, fitted[name].values, style, color="k", lw=1, label=label)
     resid = fitted["omega_measured"].values - mean
-    if "omega_fitted_p025" in fitted:
-        sigma = float(fitted.attrs.get("noise_sigma_rad_s", 0.0))
-        lo = fitted["omega_fitted_p025"].values - mean - 1.96 * sigma
-        hi = fitted["omega_fitted_p975"].values - mean + 1.96 * sigma
-        axr.fill_between(t, lo, hi, color=COLORS["fit"], alpha=0.3, lw=0,
-                         label="95% of the members + noise")  # fmt: skip
+    if "residual_band_low" in fitted:
+        axr.fill_between(t, fitted["residual_band_low"].values,
+                         fitted["residual_band_high"].values, color=COLORS["fit"], alpha=0.3,
+                         lw=0, label="95% of the members + noise")  # fmt: skip
+        if "residual_outside_fraction" in fitted.attrs:
+            a = fitted.attrs
+            axr.set_title(f"outside the band: {100 * a['residual_outside_fraction']:.1f} % of the "
+                          f"samples, longest run {1e3 * a['residual_longest_run_s']:.2g} ms",
+                          fontsize=7)  # fmt: skip
         axr.legend(loc="upper right", fontsize=7)
     axr.plot(t, resid, color="k", lw=0.4)
     axr.axhline(0, color=COLORS["fit"], lw=0.8)

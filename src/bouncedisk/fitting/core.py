@@ -18,7 +18,7 @@ from scipy import stats as _sps
 
 from ..curves import MotorCurve
 from ..observables import first_order_trend
-from .model import EnsembleSpec, member_records, param_names, physical, uniform_grid
+from .model import MODEL_E_SIGMA, EnsembleSpec, member_records, param_names, physical, uniform_grid
 from .objective import Objective
 from .search import SearchSettings, search
 from .statistics import Layout, record_stats, stat_floor
@@ -52,7 +52,7 @@ class FitSettings:
     popsize: int = 10
     maxiter: int = 12
     local_nfev: int = 12
-    e_sigma: float = 1e-9  # restitution noise of the members (MODEL.md)
+    e_sigma: float = MODEL_E_SIGMA  # restitution noise of the members (MODEL.md), stated
     cores: int = 1
     profile: tuple[str, ...] | None = None  # coordinates to profile (None: all)
 

@@ -48,7 +48,13 @@ def _curves(fit: FitResult, ds_time: np.ndarray) -> dict:
     def var(v, long_name):
         return ("time", v, {"units": "rad/s", "long_name": long_name})
 
+    lo, hi = residual_band(b, fit.curve.sigma)
     return {
+        "residual_band_low": var(on_time(lo), "lower end of the 95% band of data minus the "
+                                 "ensemble mean: members' 2.5th percentile and the measurement "
+                                 "noise in quadrature"),
+        "residual_band_high": var(on_time(hi), "upper end of the 95% band of data minus the "
+                                  "ensemble mean (see residual_band_low)"),
         "omega_measured": var(fit.curve.omega, "measured rotor angular velocity"),
         "omega_fitted": var(on_time(b["mean"]), "fitted model: ensemble mean of the rotor "
                             "angular velocity (noise-free members)"),
@@ -60,6 +66,54 @@ def _curves(fit: FitResult, ds_time: np.ndarray) -> dict:
         "trend_fitted": var(tm(ds_time), "first-order trend of the fitted model's ensemble mean"),
         "trend_measured": var(td(ds_time), "first-order trend of the data"),
     }  # fmt: skip
+
+
+def residual_band(band: dict, sigma: float) -> tuple[np.ndarray, np.ndarray]:
+    """95 % band of one realization minus the ensemble mean (Fig. 5's residual panel).
+
+    A measured curve is one member plus measurement noise (MODEL.md "Long-run statistics"), so
+    ``data − mean`` should stay within the members' central 95 % about the mean, widened in
+    quadrature by the measurement noise ``1.96 σ``.
+    """
+    mean = band["mean"]
+    noise = (1.96 * sigma) ** 2
+    lo = -np.sqrt((mean - band["p025"]) ** 2 + noise)
+    hi = np.sqrt((band["p975"] - mean) ** 2 + noise)
+    return lo, hi
+
+
+#: Fig. 5 check: a residual outside its 95 % band at more than this fraction of the samples, or
+#: outside for longer than :data:`RESIDUAL_MAX_RUN_TAU` time constants in a row, is a systematic
+#: excursion (the model does not reproduce the curve).
+RESIDUAL_MAX_OUTSIDE = 0.10
+RESIDUAL_MAX_RUN_TAU = 1.0
+
+
+def residual_check(ds: xr.Dataset) -> dict[str, float]:
+    """Where the data leave the fitted model's band: fraction outside and the longest run (s).
+
+    Returns ``outside_fraction`` (raw residual outside the band), ``longest_run_s`` (longest
+    stretch over which the residual, smoothed over a tenth of the data's time constant so that
+    the measurement noise does not break a run, stays outside the band), ``time_constant_s``
+    and ``passed`` (fraction at most :data:`RESIDUAL_MAX_OUTSIDE`, run at most
+    :data:`RESIDUAL_MAX_RUN_TAU` data time constants).
+    """
+    t = ds["time"].values
+    r = ds["omega_measured"].values - ds["omega_fitted"].values
+    lo, hi = ds["residual_band_low"].values, ds["residual_band_high"].values
+    out = (r < lo) | (r > hi)
+    dt = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    tau = float(ds.attrs["time_constant_s"])
+    w = int(max(1, min(len(r), round(0.1 * tau / dt)))) if dt > 0 else 1
+    smooth = np.convolve(r, np.ones(w) / w, mode="same")
+    longest, run = 0, 0
+    for o in (smooth < lo) | (smooth > hi):
+        run = run + 1 if o else 0
+        longest = max(longest, run)
+    frac = float(out.mean())
+    passed = frac <= RESIDUAL_MAX_OUTSIDE and longest * dt <= RESIDUAL_MAX_RUN_TAU * tau
+    return {"outside_fraction": frac, "longest_run_s": longest * dt, "time_constant_s": tau,
+            "passed": bool(passed)}  # fmt: skip
 
 
 def _parameters(fit: FitResult) -> tuple[dict, list[str]]:
@@ -146,6 +200,10 @@ def fit_dataset(fit: FitResult, source_path: str | None = None) -> xr.Dataset:
             "units": "rad/s", "long_name": "R_phi Phi0 / t_c (from the known Phi0)"})  # fmt: skip
     ds.attrs.update(base_attrs(f"bouncedisk fit to {path}"))
     ds.attrs.update(_global_attrs(fit, path, not_identified))
+    check = residual_check(ds)
+    ds.attrs.update(residual_outside_fraction=check["outside_fraction"],
+                    residual_longest_run_s=check["longest_run_s"],
+                    residual_within_band=int(check["passed"]))  # fmt: skip
     return ds
 
 
@@ -202,6 +260,18 @@ def summary_text(ds: xr.Dataset) -> str:
         lines.append(f"  WARNING: chi2 {a['chi2']:.4g} on {a['n_statistics']} statistics "
                      f"(p = {a['chi2_p_value']:.2g}): the best point found does not reproduce "
                      "the data's statistics; the intervals are not trustworthy")  # fmt: skip
+    if "combination_sd" in ds:
+        names = [str(n) for n in ds["parameter"].values]
+        for k in range(min(2, ds.sizes["combination"])):
+            v = ds["combination_vector"].values[k]
+            terms = " ".join(f"{c:+.2f}·{n}" for c, n in zip(v, names, strict=True)
+                             if abs(c) >= 0.1)  # fmt: skip
+            lines.append(f"  combination {k + 1} (coordinates scaled to their ranges): {terms}, "
+                         f"sd {float(ds['combination_sd'].values[k]):.3g} of the ranges")  # fmt: skip
+    if "residual_outside_fraction" in a:
+        lines.append(f"  residual outside the 95% band: {100 * a['residual_outside_fraction']:.1f} % "
+                     f"of the samples, longest run {a['residual_longest_run_s']:.3g} s"
+                     + ("" if a.get("residual_within_band", 1) else "  <- systematic excursion"))  # fmt: skip
     if a.get("work_note", "none") != "none":
         lines.append(f"  note: {a['work_note']}")
     return "\n".join(lines)

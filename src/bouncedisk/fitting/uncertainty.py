@@ -197,8 +197,8 @@ def all_profiles(
     return out, jac, corr, sd
 
 
-#: A parameter whose acceptable points span at least this fraction of its range is not identified.
-SPREAD_NOT_IDENTIFIED = 0.5
+#: An interval reaching within this fraction of the range of both search bounds covers the range.
+EDGE = 0.02
 
 
 def acceptable_points(obj: Objective, members: int, thr: float) -> np.ndarray:
@@ -212,8 +212,9 @@ def acceptable_points(obj: Objective, members: int, thr: float) -> np.ndarray:
 def widen(obj: Objective, p: Profile, members: int, extra: np.ndarray | None = None) -> Profile:
     """The interval of ``p`` widened to every acceptable evaluated point (union of basins).
 
-    A parameter is not identified when its profile is open on both sides or its acceptable
-    points span at least :data:`SPREAD_NOT_IDENTIFIED` of its search range.
+    A parameter is **not identified** only when its profile is flat over the search range:
+    open on both sides, or widened to within :data:`EDGE` of both search bounds. Otherwise the
+    (possibly one-sided) interval is reported as an identified interval.
     """
     j = obj.names.index(p.name)
     xs = acceptable_points(obj, members, p.threshold)
@@ -222,8 +223,9 @@ def widen(obj: Objective, p: Profile, members: int, extra: np.ndarray | None = N
     v = xs[:, j]
     lo, hi = min(p.ci_low, float(v.min())), max(p.ci_high, float(v.max()))
     multimodal = lo < p.ci_low or hi > p.ci_high
-    wide = (hi - lo) >= SPREAD_NOT_IDENTIFIED * obj.span[j]
-    identified = p.identified and not wide
+    edge = EDGE * obj.span[j]
+    covers = lo <= obj.lo[j] + edge and hi >= obj.hi[j] - edge
+    identified = p.identified and not covers
     return Profile(p.name, p.values, p.chi2, p.points, lo, hi, p.open_low, p.open_high,
                    identified, p.threshold, multimodal)  # fmt: skip
 
