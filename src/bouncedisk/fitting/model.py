@@ -24,6 +24,7 @@ import pandas as pd
 
 from ..curves import MotorCurve
 from ..engine import EngineConfig, InitialState, simulate_arrays
+from ..records import TrajColumn
 
 #: Search range of every search coordinate.
 BOUNDS: dict[str, tuple[float, float]] = {
@@ -122,7 +123,7 @@ def simulate_curve(
         member=member,
     )
     res = simulate_arrays(cfg, InitialState(t=0.0, omega=0.0))
-    om = res.traj[: len(grid), 4] * p["speed_scale"]
+    om = res.traj[: len(grid), TrajColumn.OMEGA] * p["speed_scale"]
     if len(om) < len(grid):
         om = np.concatenate([om, np.full(len(grid) - len(om), om[-1] if len(om) else 0.0)])
     return om
