@@ -20,7 +20,7 @@ from bouncedisk.fitting import (
     synthesize_curve,
 )
 from bouncedisk.fitting.core import MAX_SAMPLES
-from bouncedisk.fitting.model import EnsembleSpec, member_records, uniform_grid
+from bouncedisk.fitting.model import MODEL_E_SIGMA, EnsembleSpec, member_records, uniform_grid
 from bouncedisk.observables import first_order_trend
 
 F_HZ, PHI0, SPAN, DT, SIGMA = 15000.0, 3.0e-4, 0.06, 2.5e-5, 0.05
@@ -76,6 +76,11 @@ def _run(args, capsys):
         (["--members", "x"], "--members"),
         (["--cores", "0"], "--cores"),
         (["--sidecar", "/nonexistent/side.yaml"], "--sidecar"),
+        (["--e-sigma", "0"], "--e-sigma"),
+        (["--e-sigma", "-0.01"], "--e-sigma"),
+        (["--e-sigma", "0.6"], "--e-sigma"),
+        (["--e-sigma", "nan"], "--e-sigma"),
+        (["--e-sigma", "lots"], "--e-sigma"),
     ],
 )
 def test_bad_option_exits_2_before_work(periodic_csv, tmp_path, capsys, monkeypatch, extra, field):
@@ -112,6 +117,9 @@ def test_good_options_do_reach_the_fit(periodic_csv, tmp_path, capsys, monkeypat
     out = tmp_path / "fit.nc"
     code, _, _ = _run([str(periodic_csv), "-o", str(out), "-q"], capsys)
     assert len(calls) == 1 and code != 0 and not out.exists()
+    assert calls[0][1].e_sigma == MODEL_E_SIGMA  # the stated default
+    code, _, _ = _run([str(periodic_csv), "-o", str(out), "-q", "--e-sigma", "5e-2"], capsys)
+    assert len(calls) == 2 and calls[1][1].e_sigma == 0.05 and not out.exists()
 
 
 def test_output_is_an_existing_folder(periodic_csv, tmp_path, capsys):

@@ -319,6 +319,12 @@ def _add_fit(sub) -> None:
         "--members", default="12", help="model members per evaluation, >= 4 (default: %(default)s)"
     )
     p.add_argument("--cores", default=None, help="threads for the members (default: all)")
+    p.add_argument(
+        "--e-sigma",
+        default=None,
+        help="restitution noise of the model's members, in (0, 0.5] (default: 0.03; README, "
+        "'Fitting': a curve and the model fitted to it share it)",
+    )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress or summary")
     _add_track_options(p)
     p.set_defaults(func=_cmd_fit)

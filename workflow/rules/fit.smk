@@ -40,5 +40,6 @@ rule fit_prototype:
     params:
         seed=config["prototype"]["seed"],
         bootstrap=config["prototype"]["bootstrap"],
+        e_sigma=config["prototype"].get("e_sigma"),  # None: the fit's default
     script:
         "../scripts/fit_prototype.py"

@@ -10,6 +10,7 @@ with log_to(snakemake.log[0]) as log:
     settings = FitSettings(
         seed=snakemake.params.seed,
         bootstrap=snakemake.params.bootstrap,
+        **({} if snakemake.params.e_sigma is None else {"e_sigma": snakemake.params.e_sigma}),
         cores=snakemake.threads,
     )
     fit = fit_curve(curve, settings, progress=log.info)

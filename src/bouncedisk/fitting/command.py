@@ -55,12 +55,25 @@ def validate(args) -> dict:
     cores = _int_option(args.cores, "--cores", 1, 1024) if args.cores is not None else None
     if args.sidecar is not None and not Path(args.sidecar).is_file():
         raise InputError(str(args.sidecar), "--sidecar", "file not found")
+    opts = {"seed": seed, "bootstrap": boot, "members": members}
+    if getattr(args, "e_sigma", None) is not None:
+        opts["e_sigma"] = _e_sigma_option(args.e_sigma)
     check_output(args.output, args.curve, args.sidecar)
     if cores is None:
         from ..statscli import available_cores
 
         cores = available_cores()
-    return {"seed": seed, "bootstrap": boot, "members": members, "cores": cores}
+    return {**opts, "cores": cores}
+
+
+def _e_sigma_option(text) -> float:
+    """``--e-sigma``: the members' restitution noise ``σ_e`` (MODEL.md), in ``(0, 0.5]``."""
+    from ..params import number
+
+    value = number(ARG, "--e-sigma", text, positive=True)
+    if value > 0.5:
+        raise InputError(ARG, "--e-sigma", f"must be at most 0.5, got {value}")
+    return value
 
 
 def fit_command(args) -> None:
