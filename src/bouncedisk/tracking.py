@@ -686,28 +686,31 @@ def mark_stale_runs(client, exp_id: str) -> int:
     return n
 
 
+def _leaves(obj: Any, prefix: str = "") -> Iterator[tuple[str, Any]]:
+    """The non-mapping values of a nested mapping, each under its dotted key."""
+    if isinstance(obj, Mapping):
+        for k, v in obj.items():
+            yield from _leaves(v, f"{prefix}.{k}" if prefix else str(k))
+    else:
+        yield prefix, obj
+
+
 def numeric_leaves(obj: Any, prefix: str = "") -> dict[str, float]:
     """Flatten a JSON-like result (e.g. ``bouncedisk stats --json``) into metrics."""
     out: dict[str, float] = {}
-    if isinstance(obj, Mapping):
-        for k, v in obj.items():
-            out.update(numeric_leaves(v, f"{prefix}.{k}" if prefix else str(k)))
-    elif (seq := _seq(obj)) is not None and prefix:
-        out.update(dict(zip(_seq_keys(prefix, len(seq)), map(float, seq), strict=True)))
-    elif (n := _number(obj)) is not None and prefix:
-        out[prefix] = n
+    for key, leaf in _leaves(obj, prefix):
+        if not key:
+            continue
+        if (seq := _seq(leaf)) is not None:
+            out.update(dict(zip(_seq_keys(key, len(seq)), map(float, seq), strict=True)))
+        elif (n := _number(leaf)) is not None:
+            out[key] = n
     return out
 
 
 def flatten(obj: Any, prefix: str = "") -> dict[str, str]:
     """A nested mapping as dotted ``key: text`` params."""
-    out: dict[str, str] = {}
-    if isinstance(obj, Mapping):
-        for k, v in obj.items():
-            out.update(flatten(v, f"{prefix}.{k}" if prefix else str(k)))
-    else:
-        out[prefix] = _param_value(obj)
-    return out
+    return {key: _param_value(leaf) for key, leaf in _leaves(obj, prefix)}
 
 
 def config_sha256(config: Mapping) -> str:
