@@ -46,6 +46,10 @@ _NOISE_STREAM = 0x5EED
 #: its round-off-chosen orbit: a 1e-6 change of ``e`` moved its steady speed by 6 %).
 MODEL_E_SIGMA = 0.03
 
+#: A synthetic curve's restitution-noise seed is its measurement-noise seed plus this offset, so
+#: the two noise streams of one curve differ.
+RESTITUTION_SEED_OFFSET = 1_000_000
+
 
 def param_names(curve: MotorCurve) -> list[str]:
     """Search coordinates: ``e, log10 R_φ, ψ, omega_s`` (+ ``log10`` speed scale if Φ0 is unknown)."""
@@ -182,7 +186,7 @@ def synthesize_curve(
     sigma : float
         Measurement noise (rad/s), drawn from ``default_rng(seed)``.
     seed : int
-        Noise seed; the restitution-noise stream is ``(1_000_000 + seed, member)``.
+        Noise seed; the restitution-noise stream is ``(RESTITUTION_SEED_OFFSET + seed, member)``.
     member : int or None
         Ensemble member with restitution noise ``e_sigma`` (a realization of the model that a
         fit of ensemble statistics can reproduce); ``None``: the single deterministic run
@@ -203,7 +207,7 @@ def synthesize_curve(
     if member is None:
         om = simulate_curve(theta, dummy)
     else:
-        om = simulate_curve(theta, dummy, member, e_sigma, 1_000_000 + seed)
+        om = simulate_curve(theta, dummy, member, e_sigma, RESTITUTION_SEED_OFFSET + seed)
     rng = np.random.default_rng(seed)
     om_noisy = om + rng.normal(0.0, sigma, n)
     return pd.DataFrame({"time_s": t, "omega_rad_s": om_noisy, "sigma_rad_s": np.full(n, sigma)})

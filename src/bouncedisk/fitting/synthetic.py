@@ -14,7 +14,7 @@ from pathlib import Path
 import pandas as pd
 
 from ..scene import read_yaml
-from .model import synthesize_curve
+from .model import RESTITUTION_SEED_OFFSET, synthesize_curve
 
 #: Keys of the spec file.
 SPEC_KEYS = ("parameters", "drive_frequency_hz", "Phi0_rad", "span_s", "dt_s",
@@ -51,7 +51,7 @@ def synthetic_from_spec(spec: dict, spec_path: str = "") -> tuple[pd.DataFrame, 
             **spec["parameters"],
             "e_sigma": spec["e_sigma"],
             "member": spec["member"],
-            "restitution_noise_seed": 1_000_000 + spec["seed"],
+            "restitution_noise_seed": RESTITUTION_SEED_OFFSET + spec["seed"],
             "span_s": spec["span_s"],
             "dt_s": spec["dt_s"],
             "noise_seed": spec["seed"],
