@@ -36,7 +36,7 @@ CASES = {
 }
 #: Record length per case (s): a chaotic curve's statistics converge slowly (MODEL.md, ensembles).
 SPANS = {"periodic": SPAN, "chaotic_reinjection": SPAN, "near_boundary": SPAN}
-TINY = FitSettings(seed=5, scan=16, popsize=3, maxiter=1, members=4, pilot_members=8,
+TINY = FitSettings(seed=5, scan=16, popsize=3, maxiter=1, members=4, pilot_members=8, band_members=8,
                    local_nfev=4, bootstrap=4, cores=2)  # fmt: skip
 
 
@@ -284,8 +284,12 @@ def test_missing_sidecar(tmp_path, capsys):
 # ---------------------------------------------------------------- recovery (the model's trend)
 
 
-def model_trend(curve: MotorCurve, true: dict, members: int = 16):
-    """First-order trend of the generating model's ensemble mean (noise-free members)."""
+def model_trend(curve: MotorCurve, true: dict, members: int = 128):
+    """First-order trend of the generating model's ensemble mean (noise-free members).
+
+    128 members: the time constant of a 16-member mean of the chaotic case scatters by 8 % between
+    seeds (4.4 % at 32 members, 1.7 % at 128), too much for a 10 % criterion.
+    """
     theta = {"e": true["e"], "log10_r_phi": math.log10(true["r_phi"]), "psi": true["psi"],
              "omega_s": true["omega_s"]}  # fmt: skip
     import dataclasses
@@ -295,16 +299,16 @@ def model_trend(curve: MotorCurve, true: dict, members: int = 16):
     return first_order_trend(uniform_grid(curve), np.mean(runs, axis=0))
 
 
-#: Issue 10 stays open for this case. One curve of it is one member, and its own trend scatters
-#: between members far more than (a) allows: at e_sigma 0.03, 16 members' first-order time
-#: constants have a relative spread of 35 % (0.06 s records) and 29-36 % (0.3-1 s records); every
-#: one of 16 chaotic parameter sets tried had at least 18 %. Measured fits: 0.06 s curve, steady
-#: speed +9.8 % and tau -30 % against the generating ensemble (the curve's own steady speed was
-#: +13.5 % off it); 0.6 s curve (10 kHz sampling), +5.5 % and -27 %. Both fits were adequate and
-#: every interval contained the truth.
+#: Issue 10 stays open for this case: one curve of it is one member, and its own steady speed
+#: scatters between members more than (a) allows (7.6 % for the mean after the rise, 8.4 % for the
+#: first-order steady speed, 64 members of 0.06 s; 1.9 % at 1 s). The time constant is now carried
+#: by the increment statistic (R_phi to 1 % in one fit), but several basins of (e, omega_s, psi)
+#: reproduce one short chaotic curve, with model time constants from -24 % to +3 %. Measured fits
+#: of this curve (seed 3): steady speed +16.8 %/+10.0 % and tau +2.7 %/-23.7 % (before/after the
+#: re-ranking of scan points); the curve's own steady speed is +12 % off the generating ensemble.
 CHAOTIC_OPEN = pytest.mark.xfail(
     strict=True,
-    reason="issue 10 open: one chaotic curve's own trend scatters more than 3 % / 10 % between "
+    reason="issue 10 open: one chaotic curve's own steady speed scatters more than 3 % between "
     "realizations, so no fit of one curve reproduces the ensemble trend that closely",
 )
 

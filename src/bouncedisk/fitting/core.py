@@ -21,7 +21,7 @@ from ..observables import first_order_trend
 from .model import MODEL_E_SIGMA, EnsembleSpec, member_records, param_names, physical, uniform_grid
 from .objective import Objective
 from .search import SearchSettings, search
-from .statistics import Layout, record_stats, stat_floor
+from .statistics import Layout, provisional_sd, record_stats, stat_floor
 from .uncertainty import (
     ADEQUATE_P,
     THRESHOLD,
@@ -46,7 +46,8 @@ class FitSettings:
     seed: int = 12345
     bootstrap: int = 40  # block-bootstrap resamples of the data (provisional scales, trend CI)
     members: int = 12  # members per evaluation in the local search and the profiles
-    pilot_members: int = 32  # members measuring the model's covariance; also the band
+    pilot_members: int = 32  # members measuring the model's covariance
+    band_members: int = 128  # noise-free members of the fitted model's band and trend
     global_members: int = 1
     scan: int = 192
     popsize: int = 10
@@ -114,8 +115,7 @@ def bootstrap_stats(layout: Layout, data: np.ndarray, n: int, seed: int) -> np.n
 
 def provisional_cov(target: np.ndarray, boot: np.ndarray) -> np.ndarray:
     """Diagonal scales of the global search: the data's bootstrap spread, at least a few %."""
-    s = abs(target[0])
-    wide = np.array([0.02 * s, 0.05, 0.02 * s, 0.02 * s, 0.02 * s, 0.05, 0.03, 0.03, 0.03])
+    wide = provisional_sd(target)
     sd = np.maximum(np.maximum(boot.std(axis=0, ddof=1), 10 * stat_floor(target)), wide)
     return np.diag(sd**2)
 
@@ -203,7 +203,7 @@ def fit_curve(
     comb_sd, comb_vec = combinations(jac, obj.span)
     ens = obj.ensemble(final.x, s.pilot_members)
     theta = obj.theta(final.x)
-    band = fitted_band(theta, fitted, layout, s.pilot_members, spec)
+    band = fitted_band(theta, fitted, layout, s.band_members, spec)
     step = max(1, len(layout.t) // 300)
     tm = first_order_trend(layout.t[::step], band["mean"][::step])
     td = first_order_trend(layout.t[::step], data[::step])

@@ -225,7 +225,7 @@ def _global_attrs(fit: FitResult, path: str, not_identified: list[str]) -> dict:
         "chi2": fit.chi2, "n_statistics": len(STATS),
         "chi2_p_value": float(chi2_dist.sf(fit.chi2, len(STATS))),
         "fit_adequate": int(adequate(fit.chi2, len(STATS))), "evaluations": fit.evaluations,
-        "ensemble_members": fit.settings.members, "band_members": fit.settings.pilot_members,
+        "ensemble_members": fit.settings.members, "band_members": fit.settings.band_members,
         "e_sigma": fit.settings.e_sigma, "seed": fit.settings.seed,
         "n_bootstrap": fit.settings.bootstrap, "work_note": fit.note or "none",
         "curve_file": path, "curve_sha256": sha256_file(path),

@@ -3,12 +3,16 @@
 1. A Sobol scan of the ``(e, omega_s)`` plane (the axial motion depends on nothing else, and the
    landscape is rugged there: periodic windows); at every scan point ``ψ`` is chosen from a grid
    and ``R_φ`` matched to the trend, on cheap ensembles (``global_members``) and the robust loss
-   ``Σ log(1 + r²)`` with provisional scales (a block bootstrap of the data).
+   ``Σ log(1 + r²)`` with provisional scales (a block bootstrap of the data). A zoom then samples
+   the same way around the best distinct scan points (``zoom`` points each, one scan spacing
+   wide): a periodic window narrower than the scan's spacing is found from a neighbour.
 2. A pilot ensemble (``pilot_members``) at the best point measures the model's across-member
-   covariance ``C``; the objective switches to it.
+   covariance ``C``; the objective switches to it. The best ``candidates`` distinct scan points
+   are re-ranked on ``members`` members (one member is a noisy estimate where the model is
+   chaotic), ``C`` is measured again at the best of them.
 3. :func:`scipy.optimize.least_squares` on the whitened residuals, in coordinates scaled to the
-   search box, from each of the best few distinct global points (multi-start) re-evaluated with ``members``; then ``C`` is
-   measured again at the new best point and the search polished.
+   search box, from each of the best few re-ranked points (multi-start); then ``C`` is measured
+   again at the new best point and the search polished.
 
 Every evaluation is logged, and the result is the best logged point at the final ensemble size
 under the final metric: the search never returns a point worse than one it evaluated.
@@ -40,6 +44,9 @@ class SearchSettings:
     members: int = 12
     pilot_members: int = 32
     local_nfev: int = 40
+    zoom: int = 16
+    zoom_centres: int = 6
+    candidates: int = 24
     starts: int = 4
 
 
@@ -139,27 +146,54 @@ def global_stage(
     """
     names = obj.names
     axial = [names.index("e"), names.index("omega_s")]
-    with warnings.catch_warnings():
-        # any scan size is allowed (192 by default, measured against 128 in the README); the
-        # balance that scipy warns about is exact only at powers of two, the low discrepancy holds
-        warnings.filterwarnings("ignore", "The balance properties of Sobol", UserWarning)
-        sob = qmc.Sobol(2, seed=s.seed).random(s.scan)
     base = 0.5 * (obj.lo + obj.hi)
     if "log10_r_phi" in names:
         base[names.index("log10_r_phi")] = -2.5
-    pts = []
-    for u in sob:
-        x = base.copy()
-        x[axial] = obj.lo[axial] + u * obj.span[axial]
-        pts.append(x)
-    done = []
+
+    def at(units: np.ndarray) -> list[np.ndarray]:
+        pts = []
+        for u in units:
+            x = base.copy()
+            x[axial] = obj.lo[axial] + np.clip(u, 0.0, 1.0) * obj.span[axial]
+            pts.append(x)
+        return pts
+
+    ranked = _scan(obj, at(_sobol(s.scan, s.seed)), s.global_members, "scan", progress)
+    if s.zoom > 0 and s.zoom_centres > 0:
+        # narrow basins (periodic windows) fall between scan points: sample around the best
+        half = 1.0 / np.sqrt(s.scan)
+        patch = (2.0 * _sobol(s.zoom, s.seed + 1) - 1.0) * half
+        units = [(ev.x[axial] - obj.lo[axial]) / obj.span[axial] + patch
+                 for ev in _distinct(ranked, obj.span, s.zoom_centres)]  # fmt: skip
+        ranked = _scan(obj, at(np.concatenate(units)), s.global_members, "zoom", progress)
+    return ranked
+
+
+def _sobol(n: int, seed: int) -> np.ndarray:
+    """``n`` scrambled Sobol points of the unit square (seeded)."""
+    with warnings.catch_warnings():
+        # any size is allowed; the balance that scipy warns about is exact only at powers of
+        # two, the low discrepancy holds
+        warnings.filterwarnings("ignore", "The balance properties of Sobol", UserWarning)
+        return qmc.Sobol(2, seed=seed).random(n)
+
+
+def _scan(
+    obj: Objective,
+    pts: list[np.ndarray],
+    members: int,
+    label: str,
+    progress: Callable[[str], None] | None,
+) -> list[Evaluation]:
+    """:func:`_inner` at every point (in chunks, on the objective's threads); all cheap
+    evaluations logged so far, best first."""
     chunk = 32
     for i in range(0, len(pts), chunk):
-        done += obj.map(lambda x: _inner(obj, x, s.global_members), pts[i : i + chunk])
-        best = min(ev.chi2 for ev in obj.log if ev.members == s.global_members)
-        _say(progress, f"scan: {len(done)}/{s.scan} (e, omega_s) points, best chi2 {best:.4g}")
-    ranked = [ev for ev in obj.log if ev.members == s.global_members]
-    return sorted(ranked, key=lambda ev: ev.chi2)
+        obj.map(lambda x: _inner(obj, x, members), pts[i : i + chunk])
+        best = min(ev.chi2 for ev in obj.log if ev.members == members)
+        _say(progress, f"{label}: {min(i + chunk, len(pts))}/{len(pts)} (e, omega_s) points, "
+                       f"best chi2 {best:.4g}")  # fmt: skip
+    return sorted((ev for ev in obj.log if ev.members == members), key=lambda ev: ev.chi2)
 
 
 def measure_cov(obj: Objective, x: np.ndarray, members: int) -> np.ndarray:
@@ -171,28 +205,28 @@ def measure_cov(obj: Objective, x: np.ndarray, members: int) -> np.ndarray:
 def local_stage(
     obj: Objective,
     starts: list[np.ndarray],
-    s: SearchSettings,
+    members: int,
     nfev: int,
     progress: Callable[[str], None] | None = None,
 ) -> Evaluation:
     """Least squares on the whitened residuals from every one of ``starts`` (box-scaled).
 
     Multi-start: the landscape in ``(e, omega_s)`` is rugged (periodic windows), so each start is
-    refined on its own and the best logged point is kept.
+    refined on its own and the best logged point with ``members`` members is kept.
     """
     span = obj.span
 
     def logged(u):
         x = obj.lo + u * span
-        obj.chi2(x, s.members)
-        return obj.residuals(x, s.members)
+        obj.chi2(x, members)
+        return obj.residuals(x, members)
 
     for k, x0 in enumerate(starts):
         u0 = np.clip((x0 - obj.lo) / span, 0.0, 1.0)
         least_squares(logged, u0, bounds=(0.0, 1.0), diff_step=2e-3, max_nfev=nfev, x_scale=1.0)
-        _say(progress, f"local search: start {k + 1}/{len(starts)}, best chi2 "
-                       f"{obj.best(s.members).chi2:.4g}")  # fmt: skip
-    best = obj.best(s.members)
+        _say(progress, f"local search ({members} members): start {k + 1}/{len(starts)}, best "
+                       f"chi2 {obj.best(members).chi2:.4g}")  # fmt: skip
+    best = obj.best(members)
     _say(progress, f"local search: chi2 {best.chi2:.4g} ({len(obj.cache)} ensembles evaluated)")
     return best
 
@@ -203,15 +237,19 @@ def search(
     """The whole search (module docstring); returns the best logged point at ``s.members``."""
     ranked = global_stage(obj, s, progress)
     obj.set_cov(measure_cov(obj, ranked[0].x, s.pilot_members))
-    _say(progress, f"pilot: model covariance from {s.pilot_members} members")
-    # the pilot ensemble's first `members` members are the local stage's ensemble too
-    starts = [ev.x for ev in _distinct(ranked, obj.span, s.starts)]
-    for x in starts:
-        obj.chi2(x, s.members)
+    # one member per scan point is noisy where the model is chaotic: re-rank the best distinct
+    # scan points on `members` members under the model's covariance, measured at the best of them
+    cands = [ev.x for ev in _distinct(ranked, obj.span, s.candidates)]
+    scores = obj.map(lambda x: obj.chi2(x, s.members), cands)
+    obj.set_cov(measure_cov(obj, cands[int(np.argmin(scores))], s.pilot_members))
+    scores = [obj.chi2(x, s.members) for x in cands]
+    starts = [cands[i] for i in np.argsort(scores)[: s.starts]]
+    _say(progress, f"pilot: model covariance from {s.pilot_members} members; {len(cands)} scan "
+                   f"points re-ranked on {s.members} members, best chi2 {min(scores):.4g}")  # fmt: skip
     # the starts themselves, then each refined (never worse than the best start)
-    best = local_stage(obj, starts, s, s.local_nfev, progress)
+    best = local_stage(obj, starts, s.members, s.local_nfev, progress)
     obj.set_cov(measure_cov(obj, best.x, s.pilot_members))
-    best = local_stage(obj, [best.x], s, max(8, s.local_nfev // 3), progress)
+    best = local_stage(obj, [best.x], s.members, max(8, s.local_nfev // 3), progress)
     return best
 
 

@@ -11,7 +11,16 @@ A record ``y(t)`` (rad/s on a uniform grid) is reduced to:
 * the ripple, the residual about the trend once the rise is over (``t ≥ 3τ_ref``, or the last
   half): ``log`` RMS, the power-weighted mean frequency as a fraction of the drive frequency, and
   the fractions of its power in the low (``< f_N/8``) and middle (``f_N/8 … f_N/2``) bands of the
-  sampled spectrum (``f_N`` the Nyquist frequency).
+  sampled spectrum (``f_N`` the Nyquist frequency);
+* the kicks: ``log`` of the variance of the sample-to-sample increments over the ripple part.
+  Each impact changes ``x = R_φ Ω`` by ``R_φ H`` (MODEL.md "Events", ``H ≤ F``), so in rad/s the
+  kicks scale with ``R_φ`` at a fixed steady speed, while the measurement noise adds ``2σ²``.
+  Unlike the time constant, which one run-up realizes once (its spread across the members of a
+  chaotic ensemble is tens of percent), this averages over every sample of the steady part: it
+  is what carries ``R_φ`` in a chaotic curve;
+* the mean speed over the ripple part: linear in the record like the rise windows, so the
+  ensemble mean of it is the ensemble-mean curve's (the first-order steady speed of one chaotic
+  run-up is not: its members' mean differs from the mean curve's by percent).
 
 With the drive frequency and Φ0 known, MODEL.md's scaling (``x = R_φ Ω`` evolves at a rate
 ``∝ R_φ`` while the axial motion does not depend on ``R_φ``) makes ``S`` fix one combination of
@@ -27,30 +36,53 @@ from scipy.signal import welch
 
 from ..observables import first_order_trend
 
-#: Statistic names, in vector order, and the units of their values.
-STATS: tuple[str, ...] = (
-    "steady_speed",
-    "log_time_constant",
-    "rise_mean_1",
-    "rise_mean_2",
-    "rise_mean_3",
-    "log_ripple_rms",
-    "ripple_frequency",
-    "ripple_low_band",
-    "ripple_mid_band",
-)
-STAT_UNITS: tuple[str, ...] = ("rad/s", "1", "rad/s", "rad/s", "rad/s", "1", "1", "1", "1")
-STAT_LONG_NAMES: tuple[str, ...] = (
-    "steady speed S of the first-order trend",
-    "natural log of the time constant of the first-order trend (tau in s)",
-    "mean speed over [0, tau_ref/2]",
-    "mean speed over [tau_ref/2, tau_ref]",
-    "mean speed over [tau_ref, 2 tau_ref]",
-    "natural log of the RMS ripple about the trend (rms in rad/s)",
-    "power-weighted mean ripple frequency over the drive frequency",
-    "fraction of the ripple power below 1/8 of the Nyquist frequency",
-    "fraction of the ripple power between 1/8 and 1/2 of the Nyquist frequency",
-)
+
+@dataclass(frozen=True)
+class Statistic:
+    """One statistic of a record: its name, units and the scales the fit gives it.
+
+    ``floor`` is the smallest standard deviation the fit allows it (its own resolution) and
+    ``provisional`` its standard deviation in the global search's provisional metric; both are
+    fractions of the steady speed for statistics in rad/s (``per_speed``), absolute otherwise.
+    """
+
+    name: str
+    units: str
+    long_name: str
+    floor: float
+    provisional: float
+
+    @property
+    def per_speed(self) -> bool:
+        """Whether the scales are fractions of the steady speed (a statistic in rad/s)."""
+        return self.units == "rad/s"
+
+
+#: The statistics, in vector order (:func:`record_stats`).
+STATISTICS: tuple[Statistic, ...] = (
+    Statistic("steady_speed", "rad/s", "steady speed S of the first-order trend", 1e-3, 0.02),
+    Statistic("log_time_constant", "1",
+              "natural log of the time constant of the first-order trend (tau in s)", 2e-3, 0.05),
+    Statistic("rise_mean_1", "rad/s", "mean speed over [0, tau_ref/2]", 1e-3, 0.02),
+    Statistic("rise_mean_2", "rad/s", "mean speed over [tau_ref/2, tau_ref]", 1e-3, 0.02),
+    Statistic("rise_mean_3", "rad/s", "mean speed over [tau_ref, 2 tau_ref]", 1e-3, 0.02),
+    Statistic("log_ripple_rms", "1",
+              "natural log of the RMS ripple about the trend (rms in rad/s)", 5e-3, 0.05),
+    Statistic("ripple_frequency", "1",
+              "power-weighted mean ripple frequency over the drive frequency", 2e-3, 0.03),
+    Statistic("ripple_low_band", "1",
+              "fraction of the ripple power below 1/8 of the Nyquist frequency", 2e-3, 0.03),
+    Statistic("ripple_mid_band", "1",
+              "fraction of the ripple power between 1/8 and 1/2 of the Nyquist frequency",
+              2e-3, 0.03),
+    Statistic("log_increment_var", "1",
+              "natural log of the variance of sample-to-sample increments after the rise "
+              "(in (rad/s)^2)", 5e-3, 0.05),
+    Statistic("steady_mean", "rad/s", "mean speed after the rise (the ripple part)", 1e-3, 0.02),
+)  # fmt: skip
+STATS: tuple[str, ...] = tuple(st.name for st in STATISTICS)
+STAT_UNITS: tuple[str, ...] = tuple(st.units for st in STATISTICS)
+STAT_LONG_NAMES: tuple[str, ...] = tuple(st.long_name for st in STATISTICS)
 #: Trend points used by the first-order fit (the record is subsampled evenly to about this).
 TREND_POINTS = 300
 
@@ -116,9 +148,9 @@ def record_stats(y: np.ndarray, layout: Layout) -> np.ndarray:
     else:
         freq, low, mid = 0.0, 0.0, 0.0
     rms = max(float(np.std(r)), 1e-300)
-    return np.array(
-        [trend.steady, np.log(trend.tau), *rise, np.log(rms), freq, low, mid], dtype=float
-    )
+    kicks = max(float(np.var(np.diff(y[steady]))), 1e-300)
+    stats = [trend.steady, np.log(trend.tau), *rise, np.log(rms), freq, low, mid, np.log(kicks)]
+    return np.array([*stats, float(np.mean(y[steady]))], dtype=float)
 
 
 def dominant_frequency(y: np.ndarray, layout: Layout) -> float:
@@ -168,7 +200,16 @@ def regularized_cov(cov: np.ndarray, floor: np.ndarray, shrink: float = 0.2) -> 
     return corr * np.outer(new_sd, new_sd)
 
 
+def _scaled(measured: np.ndarray, field: str) -> np.ndarray:
+    speed = max(abs(float(measured[0])), 1e-12)
+    return np.array([getattr(st, field) * (speed if st.per_speed else 1.0) for st in STATISTICS])
+
+
 def stat_floor(measured: np.ndarray) -> np.ndarray:
     """Smallest standard deviation allowed per statistic (resolution of the statistic itself)."""
-    speed = 1e-3 * max(abs(measured[0]), 1e-12)
-    return np.array([speed, 2e-3, speed, speed, speed, 5e-3, 2e-3, 2e-3, 2e-3])
+    return _scaled(measured, "floor")
+
+
+def provisional_sd(measured: np.ndarray) -> np.ndarray:
+    """Standard deviations of the global search's provisional metric: a few % of each statistic."""
+    return _scaled(measured, "provisional")
