@@ -22,6 +22,8 @@ from matplotlib.ticker import NullFormatter
 
 from .atomic import atomic_path
 from .datasets import open_checked, open_simulation
+from .figure_registry import FIGURES as DECLARED
+from .figure_registry import FigureDecl
 
 TWO_PI = 2 * math.pi
 COLORS = {"rotor": "#1f77b4", "stator": "#7f7f7f", "fit": "#d62728", "data": "#2ca02c"}
@@ -574,7 +576,7 @@ def _poincare_labelled(maps: Sequence[xr.Dataset], labels: Sequence[str]) -> Fig
 
 @dataclass(frozen=True)
 class FigureSpec:
-    """How one kind of figure is drawn from files.
+    """How one kind of figure is drawn from files: a :class:`~.figure_registry.FigureDecl` resolved.
 
     Attributes
     ----------
@@ -592,34 +594,30 @@ class FigureSpec:
     params: tuple[str, ...] = ()
 
 
-_FIT = _netcdf("omega_measured", "omega_fitted", what="fit")
-_BRANCH = _netcdf("phase", "is_chatter", "lyapunov")
-
-#: Every figure the package draws, by name (the pipeline's figure table names one per figure).
-FIGURES: dict[str, FigureSpec] = {
-    "fig2": FigureSpec(fig2_schematic),
-    "trajectory": FigureSpec(
-        fig_trajectory,
-        {
-            "sim": open_simulation,
-            "band": _netcdf("omega_mean", "omega_ci_low", what="band"),
-        },
-    ),
-    "fig5": FigureSpec(_fig5_with_fit, {"curve": _curve, "fit": _FIT}),
-    "fit_profiles": FigureSpec(fig_fit_profiles, {"fit": _FIT}),
-    "poincare": FigureSpec(
-        _poincare_labelled, {"maps": _netcdf("phase", "v_rel")}, params=("labels",)
-    ),
-    "bifurcation": FigureSpec(fig_bifurcation, {"up": _BRANCH, "down": _BRANCH}),
-    "regime_map": FigureSpec(fig_regime_map, {"sweep": _netcdf("regime", "lyapunov")}),
-    "speed_vs_psi": FigureSpec(
-        fig_speed_vs_psi, {"sweep": _netcdf("mean_omega", "mean_omega_ci_low")}
-    ),
-    "clipped": FigureSpec(fig_clipped_vs_bouncing, {"study": _netcdf("omega_rotor")}),
-    "work_precision": FigureSpec(fig_work_precision, {"table": pd.read_csv}),
-    "scaling": FigureSpec(fig_scaling, {"table": pd.read_csv}),
-    "stats_cost": FigureSpec(fig_stats_cost, {"table": pd.read_csv, "singles": pd.read_csv}),
+#: The openers of the figures' inputs, by the names :mod:`bouncedisk.figure_registry` gives.
+OPENERS: dict[str, Opener] = {
+    "simulation": open_simulation,
+    "band": _netcdf("omega_mean", "omega_ci_low", what="band"),
+    "curve": _curve,
+    "fit": _netcdf("omega_measured", "omega_fitted", what="fit"),
+    "poincare_map": _netcdf("phase", "v_rel"),
+    "branch": _netcdf("phase", "is_chatter", "lyapunov"),
+    "regime_sweep": _netcdf("regime", "lyapunov"),
+    "psi_sweep": _netcdf("mean_omega", "mean_omega_ci_low"),
+    "clipped_study": _netcdf("omega_rotor"),
+    "csv": pd.read_csv,
 }
+
+
+def _resolve(decl: FigureDecl) -> FigureSpec:
+    """The drawing function and openers ``decl`` names, looked up in this module."""
+    return FigureSpec(
+        globals()[decl.draw], {key: OPENERS[o] for key, o in decl.inputs.items()}, decl.params
+    )
+
+
+#: Every figure the package draws, by name: :data:`bouncedisk.figure_registry.FIGURES` resolved.
+FIGURES: dict[str, FigureSpec] = {name: _resolve(d) for name, d in DECLARED.items()}
 
 
 def draw_figure(

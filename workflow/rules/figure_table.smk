@@ -1,12 +1,14 @@
 # The figure table workflow/config/figures.yaml (what each figure is drawn from, how, and where the
-# report shows it), checked against bouncedisk.plotting.FIGURES before any job runs, and the
-# functions rule `figure` (figures.smk) reads it with.
+# report shows it), checked against the figure registry before any job runs, and the functions
+# rule `figure` (figures.smk) reads it with. The registry is bouncedisk.figure_registry, the light
+# declaration bouncedisk.plotting.FIGURES is built from: every Snakemake invocation and every
+# job parses this file, and importing it loads no matplotlib, xarray or pandas.
 import re
 
 import yaml
 from snakemake.exceptions import WorkflowError
 
-from bouncedisk.plotting import FIGURES as PLOTS
+from bouncedisk.figure_registry import FIGURES as PLOTS
 
 FIGURE_TABLE_FILE = "workflow/config/figures.yaml"
 
@@ -55,7 +57,7 @@ def _figure_paths(name):
 
 
 def _check_figures():
-    """Fail before any job, naming the entry, when the table and plotting.FIGURES disagree."""
+    """Fail before any job, naming the entry, when the table and the figure registry disagree."""
     for name, row in FIGURE_TABLE.items():
         where = f"{FIGURE_TABLE_FILE}: {name}"
         spec = PLOTS.get(row["plot"])
