@@ -327,7 +327,9 @@ def _add_fit(sub) -> None:
         help="block-bootstrap resamples of the data, >= 2 (default: %(default)s)",
     )
     p.add_argument(
-        "--members", default="12", help="model members per evaluation, >= 4 (default: %(default)s)"
+        "--members",
+        default=None,
+        help="model members per evaluation, >= 4 (default: 12; 32 for several run-ups)",
     )
     p.add_argument("--cores", default=None, help="threads for the members (default: all)")
     p.add_argument(

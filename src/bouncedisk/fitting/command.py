@@ -53,7 +53,7 @@ def validate(args) -> dict:
     """Check every option (before any work); the fit's settings as a dictionary."""
     seed = _int_option(args.seed, "--seed", 0, 2**63 - 1)
     boot = _int_option(args.bootstrap, "--bootstrap", 2, 10_000)
-    members = _int_option(args.members, "--members", 4, 1024)
+    members = _int_option(args.members, "--members", 4, 1024) if args.members else None
     cores = _int_option(args.cores, "--cores", 1, 1024) if args.cores is not None else None
     if args.sidecar is not None and not Path(args.sidecar).is_file():
         raise InputError(str(args.sidecar), "--sidecar", "file not found")

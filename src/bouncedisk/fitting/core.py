@@ -38,7 +38,9 @@ from .uncertainty import (
 MAX_SAMPLES = 12_000
 #: At most this many drive periods are fitted (the record is cropped beyond it).
 MAX_PERIODS = 20_000
-#: Members per scan point when several run-ups are fitted together (:meth:`FitSettings.search_settings`).
+#: Members per evaluation for one run-up, and for several fitted together (:meth:`FitSettings.for_runs`).
+MEMBERS_ONE, MEMBERS_RUNS = 12, 32
+#: Members per scan point when several run-ups are fitted together.
 SCAN_MEMBERS_RUNS = 4
 
 
@@ -48,7 +50,7 @@ class FitSettings:
 
     seed: int = 12345
     bootstrap: int = 40  # block-bootstrap resamples of the data (provisional scales, trend CI)
-    members: int = 12  # members per evaluation in the local search and the profiles
+    members: int | None = None  # members per evaluation in the local search and the profiles
     pilot_members: int = 32  # members measuring the model's covariance
     band_members: int = 128  # noise-free members of the fitted model's band and trend
     global_members: int | None = None  # members per scan point (None: 1, or 4 for several runs)
@@ -60,16 +62,24 @@ class FitSettings:
     cores: int = 1
     profile: tuple[str, ...] | None = None  # coordinates to profile (None: all)
 
-    def search_settings(self, runs: int = 1) -> SearchSettings:
-        """The search's share of the settings, for a fit of ``runs`` run-ups.
+    def for_runs(self, runs: int) -> FitSettings:
+        """The settings with the ensemble sizes left open (``None``) set for ``runs`` run-ups.
 
-        The scan's cheap ensembles have one member for one run-up; the mean of several run-ups
-        is known ``√runs`` times better than one member's statistics, so the scan uses
-        :data:`SCAN_MEMBERS_RUNS` members there (unless ``global_members`` is set).
+        One run-up: 12 members per evaluation, one per scan point. The mean of several run-ups
+        is known ``√runs`` times better than one member's statistics, so the model's Monte-Carlo
+        error ``C/K`` must shrink with it: :data:`MEMBERS_RUNS` and :data:`SCAN_MEMBERS_RUNS`.
         """
-        scan_members = self.global_members or (1 if runs == 1 else SCAN_MEMBERS_RUNS)
+        one = runs == 1
+        return dataclasses.replace(
+            self,
+            members=self.members or (MEMBERS_ONE if one else MEMBERS_RUNS),
+            global_members=self.global_members or (1 if one else SCAN_MEMBERS_RUNS),
+        )
+
+    def search_settings(self) -> SearchSettings:
+        """The search's share of the settings (sizes resolved by :meth:`for_runs`)."""
         return SearchSettings(
-            seed=self.seed, scan=self.scan, global_members=scan_members,
+            seed=self.seed, scan=self.scan, global_members=self.global_members,
             popsize=self.popsize, maxiter=self.maxiter, members=self.members,
             pilot_members=self.pilot_members, local_nfev=self.local_nfev,
         )  # fmt: skip
@@ -200,9 +210,9 @@ def fit_curve(
 ) -> FitResult:
     """Fit the model to ``curve``, or jointly to several run-ups of one motor (module docstring,
     :mod:`.runs`). Deterministic for a given seed."""
-    s = settings or FitSettings()
     start = _time.perf_counter()
     runs, fitted, note = prepare_runs(curve)
+    s = (settings or FitSettings()).for_runs(len(runs))
     if note and progress:
         progress(f"work bounded: {note}")
     layout, records, target = data_layout(runs)
@@ -210,13 +220,12 @@ def fit_curve(
     spec = EnsembleSpec(e_sigma=s.e_sigma, seed=s.seed, cores=max(1, s.cores))
     obj = Objective(fitted, param_names(fitted), layout, target, spec, s.members,
                     cov=provisional_cov(target, boot), runs=len(runs))  # fmt: skip
-    search_settings = s.search_settings(len(runs))
-    best = search(obj, search_settings, progress)
+    best = search(obj, s.search_settings(), progress)
     thr = birge(best.chi2, len(target), len(obj.names))
     if progress is not None and thr > THRESHOLD:
         progress(f"chi2 {best.chi2:.4g} on {len(target)} statistics: intervals widened "
                  f"(delta chi2 {thr:.4g} instead of {THRESHOLD:.3f})")  # fmt: skip
-    extra = scan_acceptable(obj, search_settings.global_members)
+    extra = scan_acceptable(obj, s.global_members)
     if progress is not None:
         progress(f"scan: {len(extra)} points reproduce the data's statistics within its "
                  "bootstrap scales")  # fmt: skip
