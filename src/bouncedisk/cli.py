@@ -193,7 +193,13 @@ def _cmd_fit(args: argparse.Namespace) -> int:
 
     store = _tracking_store(args)
     fitting.fit_command(args)
-    _track(args, store, "fit", [args.output], params={"curve": args.curve, "seed": args.seed})
+    _track(
+        args,
+        store,
+        "fit",
+        [args.output],
+        params={"curve": ", ".join(args.curve), "seed": args.seed},
+    )
     return 0
 
 
@@ -304,11 +310,16 @@ def _add_check(sub) -> None:
 
 
 def _add_fit(sub) -> None:
-    """``bouncedisk fit CURVE.csv -o FIT.nc`` (INTERFACES.md)."""
+    """``bouncedisk fit CURVE.csv [CURVE.csv ...] -o FIT.nc`` (INTERFACES.md)."""
     p = sub.add_parser("fit", help="fit the model to a measured velocity-time curve")
-    p.add_argument("curve", help="CSV with time_s, omega_rad_s[, sigma_rad_s]")
+    p.add_argument(
+        "curve",
+        nargs="+",
+        help="CSV with time_s, omega_rad_s[, sigma_rad_s]; several: run-ups of one motor, "
+        "fitted together (README, 'Fitting')",
+    )
     p.add_argument("-o", "--output", required=True, help="fit netCDF file to write")
-    p.add_argument("--sidecar", help="YAML sidecar (default: CURVE with .yaml)")
+    p.add_argument("--sidecar", help="YAML sidecar of every curve (default: CURVE with .yaml)")
     p.add_argument("--seed", default="12345", help="random seed, >= 0 (default: %(default)s)")
     p.add_argument(
         "--bootstrap",
@@ -316,7 +327,9 @@ def _add_fit(sub) -> None:
         help="block-bootstrap resamples of the data, >= 2 (default: %(default)s)",
     )
     p.add_argument(
-        "--members", default="12", help="model members per evaluation, >= 4 (default: %(default)s)"
+        "--members",
+        default=None,
+        help="model members per evaluation, >= 4 (default: 12; 32 for several run-ups)",
     )
     p.add_argument("--cores", default=None, help="threads for the members (default: all)")
     p.add_argument(

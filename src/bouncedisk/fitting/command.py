@@ -1,4 +1,5 @@
-"""``bouncedisk fit CURVE.csv -o FIT.nc``: options checked before any work, progress, output.
+"""``bouncedisk fit CURVE.csv [CURVE.csv ...] -o FIT.nc``: options checked before any work,
+progress, output (several curves: run-ups of one motor fitted together, :mod:`.runs`).
 
 Every option a user can get wrong is checked before the curve is fitted (INTERFACES.md: exit 2,
 one line ``bouncedisk: error: FILE: FIELD: message``, no output file).
@@ -27,7 +28,7 @@ def _int_option(text, name: str, low: int, high: int) -> int:
     return value
 
 
-def check_output(output: str, curve: str, sidecar: str | None) -> Path:
+def check_output(output: str, curves: list[str], sidecar: str | None) -> Path:
     """The output path: a new or replaceable file in a writable folder, not an input."""
     out = Path(output)
     if out.is_dir():
@@ -37,7 +38,8 @@ def check_output(output: str, curve: str, sidecar: str | None) -> Path:
         raise InputError(str(out), "-o", f"folder {str(parent)!r} does not exist")
     if not os.access(parent, os.W_OK | os.X_OK):
         raise InputError(str(out), "-o", f"folder {str(parent)!r} is not writable")
-    inputs = [Path(curve), Path(sidecar) if sidecar else Path(curve).with_suffix(".yaml")]
+    inputs = [Path(c) for c in curves]
+    inputs += [Path(sidecar)] if sidecar else [Path(c).with_suffix(".yaml") for c in curves]
     for p in inputs:
         if out.resolve() == p.resolve():
             raise InputError(str(out), "-o", "is an input file; give another output name")
@@ -51,14 +53,14 @@ def validate(args) -> dict:
     """Check every option (before any work); the fit's settings as a dictionary."""
     seed = _int_option(args.seed, "--seed", 0, 2**63 - 1)
     boot = _int_option(args.bootstrap, "--bootstrap", 2, 10_000)
-    members = _int_option(args.members, "--members", 4, 1024)
+    members = _int_option(args.members, "--members", 4, 1024) if args.members else None
     cores = _int_option(args.cores, "--cores", 1, 1024) if args.cores is not None else None
     if args.sidecar is not None and not Path(args.sidecar).is_file():
         raise InputError(str(args.sidecar), "--sidecar", "file not found")
     opts = {"seed": seed, "bootstrap": boot, "members": members}
     if getattr(args, "e_sigma", None) is not None:
         opts["e_sigma"] = _e_sigma_option(args.e_sigma)
-    check_output(args.output, args.curve, args.sidecar)
+    check_output(args.output, list(args.curve), args.sidecar)
     if cores is None:
         from ..statscli import available_cores
 
@@ -82,6 +84,7 @@ def fit_command(args) -> None:
     from ..datasets import write_dataset
     from .core import FitSettings, fit_curve
     from .output import fit_dataset, summary_text
+    from .runs import check_runs
 
     opts = validate(args)
     start = time.perf_counter()
@@ -90,12 +93,17 @@ def fit_command(args) -> None:
         if not args.quiet:
             print(f"fit: [{time.perf_counter() - start:6.1f} s] {msg}", file=sys.stderr, flush=True)
 
-    progress(f"reading {args.curve}")
-    curve = read_curve(args.curve, args.sidecar)
-    progress(f"{len(curve.time)} samples over {curve.time[-1] - curve.time[0]:.6g} s")
+    curves = []
+    for path in args.curve:
+        progress(f"reading {path}")
+        curves.append(read_curve(path, args.sidecar))
+    check_runs(curves)
+    c = curves[0]
+    runs = f"{len(curves)} run-ups of " if len(curves) > 1 else ""
+    progress(f"{runs}{len(c.time)} samples over {c.time[-1] - c.time[0]:.6g} s")
     settings = FitSettings(**opts)
-    fit = fit_curve(curve, settings, progress)
-    ds = fit_dataset(fit, source_path=str(args.curve))
+    fit = fit_curve(curves, settings, progress)
+    ds = fit_dataset(fit)
     write_dataset(ds, args.output)
     if not args.quiet:
         print(summary_text(ds))

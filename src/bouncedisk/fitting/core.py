@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time as _time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -20,8 +20,9 @@ from ..curves import MotorCurve
 from ..observables import first_order_trend
 from .model import MODEL_E_SIGMA, EnsembleSpec, member_records, param_names, physical, uniform_grid
 from .objective import Objective
+from .runs import check_runs, mean_curve
 from .search import SearchSettings, search
-from .statistics import Layout, provisional_sd, record_stats, stat_floor
+from .statistics import STATS, Layout, provisional_sd, record_stats, stat_floor
 from .uncertainty import (
     ADEQUATE_P,
     THRESHOLD,
@@ -37,6 +38,10 @@ from .uncertainty import (
 MAX_SAMPLES = 12_000
 #: At most this many drive periods are fitted (the record is cropped beyond it).
 MAX_PERIODS = 20_000
+#: Members per evaluation for one run-up, and for several fitted together (:meth:`FitSettings.for_runs`).
+MEMBERS_ONE, MEMBERS_RUNS = 12, 32
+#: Members per scan point when several run-ups are fitted together.
+SCAN_MEMBERS_RUNS = 4
 
 
 @dataclass(frozen=True)
@@ -45,10 +50,10 @@ class FitSettings:
 
     seed: int = 12345
     bootstrap: int = 40  # block-bootstrap resamples of the data (provisional scales, trend CI)
-    members: int = 12  # members per evaluation in the local search and the profiles
+    members: int | None = None  # members per evaluation in the local search and the profiles
     pilot_members: int = 32  # members measuring the model's covariance
     band_members: int = 128  # noise-free members of the fitted model's band and trend
-    global_members: int = 1
+    global_members: int | None = None  # members per scan point (None: 1, or 4 for several runs)
     scan: int = 192
     popsize: int = 10
     maxiter: int = 12
@@ -57,8 +62,22 @@ class FitSettings:
     cores: int = 1
     profile: tuple[str, ...] | None = None  # coordinates to profile (None: all)
 
+    def for_runs(self, runs: int) -> FitSettings:
+        """The settings with the ensemble sizes left open (``None``) set for ``runs`` run-ups.
+
+        One run-up: 12 members per evaluation, one per scan point. The mean of several run-ups
+        is known ``√runs`` times better than one member's statistics, so the model's Monte-Carlo
+        error ``C/K`` must shrink with it: :data:`MEMBERS_RUNS` and :data:`SCAN_MEMBERS_RUNS`.
+        """
+        one = runs == 1
+        return dataclasses.replace(
+            self,
+            members=self.members or (MEMBERS_ONE if one else MEMBERS_RUNS),
+            global_members=self.global_members or (1 if one else SCAN_MEMBERS_RUNS),
+        )
+
     def search_settings(self) -> SearchSettings:
-        """The search's share of the settings."""
+        """The search's share of the settings (sizes resolved by :meth:`for_runs`)."""
         return SearchSettings(
             seed=self.seed, scan=self.scan, global_members=self.global_members,
             popsize=self.popsize, maxiter=self.maxiter, members=self.members,
@@ -86,31 +105,34 @@ def prepare_curve(curve: MotorCurve) -> tuple[MotorCurve, str]:
     return dataclasses.replace(curve, time=t, omega=om), "; ".join(notes)
 
 
-def data_layout(curve: MotorCurve) -> tuple[Layout, np.ndarray, np.ndarray]:
-    """The layout of the statistics, the data on the uniform grid, and its statistics."""
-    grid = uniform_grid(curve)
-    data = np.interp(grid, curve.time, curve.omega)
+def data_layout(curves: Sequence[MotorCurve]) -> tuple[Layout, np.ndarray, np.ndarray]:
+    """The layout of the statistics, the runs on the uniform grid ``(runs, n)``, and the runs'
+    mean statistics (the layout's time constant is the mean curve's)."""
+    grid = uniform_grid(curves[0])
+    records = np.array([np.interp(grid, c.time, c.omega) for c in curves])
     step = max(1, len(grid) // 300)
-    tau = first_order_trend(grid[::step], data[::step]).tau
-    tau = float(np.clip(tau, 2.0 * curve.dt, grid[-1] - grid[0]))
-    layout = Layout(grid, tau, curve.drive_frequency_hz)
-    return layout, data, record_stats(data, layout)
+    tau = first_order_trend(grid[::step], records.mean(axis=0)[::step]).tau
+    tau = float(np.clip(tau, 2.0 * curves[0].dt, grid[-1] - grid[0]))
+    layout = Layout(grid, tau, curves[0].drive_frequency_hz)
+    return layout, records, np.mean([record_stats(r, layout) for r in records], axis=0)
 
 
-def bootstrap_stats(layout: Layout, data: np.ndarray, n: int, seed: int) -> np.ndarray:
-    """Statistics of ``n`` moving-block resamples of the data's residual about its trend."""
+def bootstrap_stats(layout: Layout, records: np.ndarray, n: int, seed: int) -> np.ndarray:
+    """Mean statistics of the runs over ``n`` moving-block resamples of each run's residual
+    about its trend."""
     rng = np.random.default_rng([seed, 77])
     t = layout.t
     step = max(1, len(t) // 300)
-    base = first_order_trend(t[::step], data[::step])(t)
-    resid = data - base
     b = max(20, len(t) // 40)
-    out = np.empty((n, len(record_stats(data, layout))))
-    for i in range(n):
-        starts = rng.integers(0, len(t) - b + 1, size=len(t) // b + 1)
-        out[i] = record_stats(base + np.concatenate([resid[s : s + b] for s in starts])[: len(t)],
-                              layout)  # fmt: skip
-    return out
+    out = np.zeros((n, len(STATS)))
+    for data in np.atleast_2d(records):
+        base = first_order_trend(t[::step], data[::step])(t)
+        resid = data - base
+        for i in range(n):
+            starts = rng.integers(0, len(t) - b + 1, size=len(t) // b + 1)
+            resampled = np.concatenate([resid[s : s + b] for s in starts])[: len(t)]
+            out[i] += record_stats(base + resampled, layout)
+    return out / len(np.atleast_2d(records))
 
 
 def provisional_cov(target: np.ndarray, boot: np.ndarray) -> np.ndarray:
@@ -141,11 +163,12 @@ class FitResult:
     trend_model: tuple[float, float]
     trend_ci: tuple[tuple[float, float], tuple[float, float]]
     physical: dict[str, float]
-    curve: MotorCurve
+    curve: MotorCurve  # the runs' mean (one run: the curve), as fitted
     note: str
     evaluations: int
     wall_time_s: float
     settings: FitSettings = field(default_factory=FitSettings)
+    runs: tuple[MotorCurve, ...] = ()  # every run-up, as fitted
 
     @property
     def theta(self) -> dict[str, float]:
@@ -166,22 +189,37 @@ def fitted_band(
             "member0": runs[0]}  # fmt: skip
 
 
+def prepare_runs(
+    curve: MotorCurve | Sequence[MotorCurve],
+) -> tuple[list[MotorCurve], MotorCurve, str]:
+    """Check the run-ups (:func:`.runs.check_runs`), bound each (:func:`prepare_curve`).
+
+    Returns the runs as fitted, their mean curve and the note on the work bound.
+    """
+    runs = [curve] if isinstance(curve, MotorCurve) else list(curve)
+    check_runs(runs)
+    prepared = [prepare_curve(c) for c in runs]
+    fitted = [c for c, _ in prepared]
+    return fitted, mean_curve(fitted), prepared[0][1]
+
+
 def fit_curve(
-    curve: MotorCurve,
+    curve: MotorCurve | Sequence[MotorCurve],
     settings: FitSettings | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> FitResult:
-    """Fit the model to ``curve`` (module docstring). Deterministic for a given seed."""
-    s = settings or FitSettings()
+    """Fit the model to ``curve``, or jointly to several run-ups of one motor (module docstring,
+    :mod:`.runs`). Deterministic for a given seed."""
     start = _time.perf_counter()
-    fitted, note = prepare_curve(curve)
+    runs, fitted, note = prepare_runs(curve)
+    s = (settings or FitSettings()).for_runs(len(runs))
     if note and progress:
         progress(f"work bounded: {note}")
-    layout, data, target = data_layout(fitted)
-    boot = bootstrap_stats(layout, data, max(s.bootstrap, 2), s.seed)
+    layout, records, target = data_layout(runs)
+    boot = bootstrap_stats(layout, records, max(s.bootstrap, 2), s.seed)
     spec = EnsembleSpec(e_sigma=s.e_sigma, seed=s.seed, cores=max(1, s.cores))
     obj = Objective(fitted, param_names(fitted), layout, target, spec, s.members,
-                    cov=provisional_cov(target, boot))  # fmt: skip
+                    cov=provisional_cov(target, boot), runs=len(runs))  # fmt: skip
     best = search(obj, s.search_settings(), progress)
     thr = birge(best.chi2, len(target), len(obj.names))
     if progress is not None and thr > THRESHOLD:
@@ -206,7 +244,7 @@ def fit_curve(
     band = fitted_band(theta, fitted, layout, s.band_members, spec)
     step = max(1, len(layout.t) // 300)
     tm = first_order_trend(layout.t[::step], band["mean"][::step])
-    td = first_order_trend(layout.t[::step], data[::step])
+    td = first_order_trend(layout.t[::step], records.mean(axis=0)[::step])
     return FitResult(
         names=obj.names, x=final.x, chi2=final.chi2, profiles=profiles, correlation=corr,
         local_sd=sd, comb_sd=comb_sd, comb_vectors=comb_vec, target=target,
@@ -215,5 +253,5 @@ def fit_curve(
         trend_ci=(tuple(np.percentile(boot[:, 0], [2.5, 97.5])),
                   tuple(np.exp(np.percentile(boot[:, 1], [2.5, 97.5])))),
         physical=physical(theta, fitted), curve=fitted, note=note, evaluations=len(obj.cache),
-        wall_time_s=_time.perf_counter() - start, settings=s,
+        wall_time_s=_time.perf_counter() - start, settings=s, runs=tuple(runs),
     )  # fmt: skip

@@ -1,12 +1,13 @@
 """The objective: a synthetic likelihood of the data's statistics under the model's ensemble.
 
 For a parameter point ``θ`` the model's ``K`` members (:func:`.model.member_records`) give
-statistics ``s_k(θ)`` (:func:`.statistics.record_stats`) with mean ``μ(θ)``. The measured curve is
-one more realization, so its statistics ``s_d`` differ from ``μ(θ)`` by the across-member spread
-``C`` (which includes the measurement noise, added to every member) plus the Monte-Carlo error of
-the mean, ``C / K``:
+statistics ``s_k(θ)`` (:func:`.statistics.record_stats`) with mean ``μ(θ)``. A measured curve is
+one more realization, so its statistics differ from ``μ(θ)`` by the across-member spread ``C``
+(which includes the measurement noise, added to every member); the data's statistics ``s_d`` are
+the mean over ``M`` run-ups of one motor (``M = 1`` for one curve, :mod:`.runs`), which spreads
+by ``C / M``, and the model's mean has the Monte-Carlo error ``C / K``:
 
-    χ²(θ) = (s_d − μ(θ))ᵀ [C (1 + 1/K)]⁻¹ (s_d − μ(θ)),
+    χ²(θ) = (s_d − μ(θ))ᵀ [C (1/M + 1/K)]⁻¹ (s_d − μ(θ)),
 
 ``−2 log`` of a Gaussian synthetic likelihood (Wood, Nature 466, 1102, 2010) with ``C`` held at
 its value near the optimum (regularized, :func:`.statistics.regularized_cov`). The members'
@@ -54,6 +55,8 @@ class Objective:
         Restitution noise, seed and cores of the members.
     members : int
         Members per evaluation ``K`` (changeable between stages).
+    runs : int
+        Run-ups ``M`` whose mean statistics ``target`` is.
     """
 
     curve: MotorCurve
@@ -67,6 +70,7 @@ class Objective:
     log: list[Evaluation] = field(default_factory=list)
     on_eval: Callable[[int], None] | None = None
     points_parallel: bool = False
+    runs: int = 1
 
     def __post_init__(self):
         b = np.array([BOUNDS[n] for n in self.names])
@@ -107,10 +111,10 @@ class Objective:
         return self.cache[key]
 
     def residuals(self, x: np.ndarray, members: int | None = None) -> np.ndarray:
-        """Whitened residuals ``L⁻¹ (μ(x) − s_d) / sqrt(1 + 1/K)`` (``C = L Lᵀ``)."""
+        """Whitened residuals ``L⁻¹ (μ(x) − s_d) / sqrt(1/M + 1/K)`` (``C = L Lᵀ``)."""
         k = members or self.members
         d = self.ensemble(x, k).mean - self.target
-        return np.linalg.solve(self._chol, d) / math.sqrt(1.0 + 1.0 / k)
+        return np.linalg.solve(self._chol, d) / math.sqrt(1.0 / self.runs + 1.0 / k)
 
     def chi2(self, x: np.ndarray, members: int | None = None) -> float:
         """``χ²`` at ``x``; every call is logged (the search never returns a worse point)."""

@@ -48,14 +48,18 @@ def _curves(fit: FitResult, ds_time: np.ndarray) -> dict:
     def var(v, long_name):
         return ("time", v, {"units": "rad/s", "long_name": long_name})
 
-    lo, hi = residual_band(b, fit.curve.sigma)
+    lo, hi = residual_band(b, fit.curve.sigma, max(1, len(fit.runs)))
+    runs = np.array([np.interp(ds_time, r.time, r.omega) for r in fit.runs or (fit.curve,)])
     return {
+        "omega_measured_run": (("run", "time"), runs, {"units": "rad/s", "long_name":
+                               "measured rotor angular velocity of each run-up"}),
         "residual_band_low": var(on_time(lo), "lower end of the 95% band of data minus the "
                                  "ensemble mean: members' 2.5th percentile and the measurement "
                                  "noise in quadrature"),
         "residual_band_high": var(on_time(hi), "upper end of the 95% band of data minus the "
                                   "ensemble mean (see residual_band_low)"),
-        "omega_measured": var(fit.curve.omega, "measured rotor angular velocity"),
+        "omega_measured": var(fit.curve.omega, "measured rotor angular velocity (the mean of "
+                              "the run-ups when several are fitted)"),
         "omega_fitted": var(on_time(b["mean"]), "fitted model: ensemble mean of the rotor "
                             "angular velocity (noise-free members)"),
         "omega_fitted_low": var(on_time(b["low"]), "lower end of the 95% interval of the mean"),
@@ -68,17 +72,18 @@ def _curves(fit: FitResult, ds_time: np.ndarray) -> dict:
     }  # fmt: skip
 
 
-def residual_band(band: dict, sigma: float) -> tuple[np.ndarray, np.ndarray]:
-    """95 % band of one realization minus the ensemble mean (Fig. 5's residual panel).
+def residual_band(band: dict, sigma: float, runs: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """95 % band of the measured curve minus the ensemble mean (Fig. 5's residual panel).
 
     A measured curve is one member plus measurement noise (MODEL.md "Long-run statistics"), so
     ``data − mean`` should stay within the members' central 95 % about the mean, widened in
-    quadrature by the measurement noise ``1.96 σ``.
+    quadrature by the measurement noise ``1.96 σ``. The mean of ``runs`` run-ups spreads
+    ``√runs`` times less (both parts divided by ``√runs``).
     """
     mean = band["mean"]
     noise = (1.96 * sigma) ** 2
-    lo = -np.sqrt((mean - band["p025"]) ** 2 + noise)
-    hi = np.sqrt((band["p975"] - mean) ** 2 + noise)
+    lo = -np.sqrt(((mean - band["p025"]) ** 2 + noise) / runs)
+    hi = np.sqrt(((band["p975"] - mean) ** 2 + noise) / runs)
     return lo, hi
 
 
@@ -171,11 +176,13 @@ def _statistics(fit: FitResult) -> dict:
 def fit_dataset(fit: FitResult, source_path: str | None = None) -> xr.Dataset:
     """The fit file (module docstring)."""
     curve = fit.curve
-    path = source_path or curve.path
+    paths = [source_path] if source_path else [r.path for r in fit.runs or (curve,)]
+    path = ", ".join(paths)
     ds = xr.Dataset(
         {**_curves(fit, curve.time), **_statistics(fit), **_profiles(fit)},
         coords={
             "time": ("time", curve.time, {"units": "s", "long_name": "time", "axis": "T"}),
+            "run": ("run", np.arange(max(1, len(fit.runs)))),
             "source": ("source", ["measured", "fitted_mean", "fitted_member_sd"]),
             "parameter": ("parameter", fit.names),
             "parameter2": ("parameter2", fit.names),
@@ -199,7 +206,7 @@ def fit_dataset(fit: FitResult, source_path: str | None = None) -> xr.Dataset:
         ds["speed_scale"] = xr.DataArray(fit.physical["speed_scale"], attrs={
             "units": "rad/s", "long_name": "R_phi Phi0 / t_c (from the known Phi0)"})  # fmt: skip
     ds.attrs.update(base_attrs(f"bouncedisk fit to {path}"))
-    ds.attrs.update(_global_attrs(fit, path, not_identified))
+    ds.attrs.update(_global_attrs(fit, paths, not_identified))
     check = residual_check(ds)
     ds.attrs.update(residual_outside_fraction=check["outside_fraction"],
                     residual_longest_run_s=check["longest_run_s"],
@@ -207,10 +214,11 @@ def fit_dataset(fit: FitResult, source_path: str | None = None) -> xr.Dataset:
     return ds
 
 
-def _global_attrs(fit: FitResult, path: str, not_identified: list[str]) -> dict:
+def _global_attrs(fit: FitResult, paths: list[str], not_identified: list[str]) -> dict:
     th = fit.physical
+    sha = ", ".join(sha256_file(p) for p in paths)
     return {
-        "run_id": new_run_id("fit", sha256_file(path)), "scene_name": "fit",
+        "run_id": new_run_id("fit", sha), "scene_name": "fit",
         "status": "completed", "e": th["e"], "omega_s": th["omega_s"], "r_phi": th["r_phi"],
         "psi": th["psi"], "effects": "contact,impacts,impulse_cap,restitution_noise,torsion",
         "solver": "exact",
@@ -228,7 +236,7 @@ def _global_attrs(fit: FitResult, path: str, not_identified: list[str]) -> dict:
         "ensemble_members": fit.settings.members, "band_members": fit.settings.band_members,
         "e_sigma": fit.settings.e_sigma, "seed": fit.settings.seed,
         "n_bootstrap": fit.settings.bootstrap, "work_note": fit.note or "none",
-        "curve_file": path, "curve_sha256": sha256_file(path),
+        "curve_file": ", ".join(paths), "curve_sha256": sha, "runs": len(paths),
         "curve_source": fit.curve.source, "curve_synthetic": int(fit.curve.synthetic),
         "drive_frequency_hz": fit.curve.drive_frequency_hz,
         "Phi0_rad": fit.curve.phi0_rad if fit.curve.phi0_rad is not None else "unknown",
