@@ -55,8 +55,8 @@ class FitSettings:
     band_members: int = 128  # noise-free members of the fitted model's band and trend
     global_members: int | None = None  # members per scan point (None: 1, or 4 for several runs)
     scan: int = 192
-    popsize: int = 10
-    maxiter: int = 12
+    zoom: int = 16  # scan points around each of the best zoom_centres (search module)
+    zoom_centres: int = 6
     local_nfev: int = 12
     e_sigma: float = MODEL_E_SIGMA  # restitution noise of the members (MODEL.md), stated
     cores: int = 1
@@ -79,8 +79,8 @@ class FitSettings:
     def search_settings(self) -> SearchSettings:
         """The search's share of the settings (sizes resolved by :meth:`for_runs`)."""
         return SearchSettings(
-            seed=self.seed, scan=self.scan, global_members=self.global_members,
-            popsize=self.popsize, maxiter=self.maxiter, members=self.members,
+            seed=self.seed, scan=self.scan, zoom=self.zoom, zoom_centres=self.zoom_centres,
+            global_members=self.global_members, members=self.members,
             pilot_members=self.pilot_members, local_nfev=self.local_nfev,
         )  # fmt: skip
 

@@ -39,8 +39,6 @@ class SearchSettings:
     seed: int = 12345
     scan: int = 256
     global_members: int = 1
-    popsize: int = 10
-    maxiter: int = 12
     members: int = 12
     pilot_members: int = 32
     local_nfev: int = 40
