@@ -19,6 +19,9 @@ from bouncedisk.records import TrajColumn as C
 from bouncedisk.scene import scene_from_mapping
 from bouncedisk.sweeps import combine_shards, run_continuation, run_sweep
 
+#: its module fixtures are built once, on one worker (pytest-xdist ``--dist loadgroup``)
+pytestmark = pytest.mark.xdist_group("analysis")
+
 TORSION = {
     "name": "tq",
     "parameters": {"e": 0.6, "omega_s": 1.5, "r_phi": 0.01},

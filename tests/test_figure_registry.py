@@ -12,6 +12,9 @@ import pytest
 import bouncedisk
 from bouncedisk import figure_registry, plotting
 
+#: one worker runs every Snakemake in the project root (pytest-xdist ``--dist loadgroup``)
+pytestmark = pytest.mark.xdist_group("snakemake-root")
+
 ROOT = Path(__file__).resolve().parents[1]
 SMALL = ROOT / "tests" / "data" / "config_small.yaml"
 HEAVY = ("matplotlib", "xarray", "pandas", "numba", "scipy")

@@ -24,6 +24,9 @@ import yaml
 from bouncedisk import tracking
 from bouncedisk.cli import main
 
+#: its module fixtures run the pipeline: built once, on one worker (pytest-xdist loadgroup)
+pytestmark = pytest.mark.xdist_group("tracking")
+
 ROOT = Path(__file__).resolve().parents[1]
 SMALL = ROOT / "tests" / "data" / "config_small.yaml"
 SCENE = """name: {name}

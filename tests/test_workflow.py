@@ -15,7 +15,11 @@ from bouncedisk import plotting
 
 ROOT = Path(__file__).resolve().parents[1]
 SMALL = ROOT / "tests" / "data" / "config_small.yaml"
-pytestmark = pytest.mark.skipif(shutil.which("snakemake") is None, reason="snakemake not found")
+#: one worker runs every Snakemake in the project root (pytest-xdist ``--dist loadgroup``)
+pytestmark = [
+    pytest.mark.skipif(shutil.which("snakemake") is None, reason="snakemake not found"),
+    pytest.mark.xdist_group("snakemake-root"),
+]
 
 
 def targets(res: Path) -> list[str]:
