@@ -2,7 +2,6 @@
 
 import inspect
 import os
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -55,42 +54,3 @@ def test_every_drawing_function_takes_the_declared_inputs_and_params():
 def test_every_opener_opens_some_figure_input():
     used = {o for decl in figure_registry.FIGURES.values() for o in decl.inputs.values()}
     assert used == set(plotting.OPENERS)
-
-
-def _dry_run(cwd: Path, res: Path) -> subprocess.CompletedProcess:
-    cmd = ["snakemake", "--cores", "1", "--configfile", str(SMALL), "--config", f"results={res}"]
-    return subprocess.run([*cmd, "-n"], cwd=cwd, capture_output=True, text=True)
-
-
-@pytest.mark.skipif(shutil.which("snakemake") is None, reason="snakemake not found")
-def test_the_figure_table_is_checked_against_the_registry(tmp_path):
-    # a scratch copy of the pipeline, whose figure table disagrees with the registry one way at a
-    # time: the Snakefile fails before any job, naming the table and the entry
-    copy = tmp_path / "copy"
-    shutil.copytree(ROOT / "workflow", copy / "workflow")
-    shutil.copytree(ROOT / "data", copy / "data")
-    shutil.copy(ROOT / "Snakefile", copy / "Snakefile")
-    table = copy / "workflow" / "config" / "figures.yaml"
-    good = table.read_text()
-    entry = "  plot: regime_map\n  inputs: {sweep:"
-    assert entry in good
-    known = ", ".join(sorted(figure_registry.FIGURES))
-    for broken, message in (
-        (
-            good.replace(entry, "  plot: nope\n  inputs: {sweep:"),
-            f"regime_map.plot: unknown figure 'nope' (bouncedisk.plotting.FIGURES: {known})",
-        ),
-        (
-            good.replace(entry, "  plot: regime_map\n  inputs: {swep:"),
-            "regime_map.inputs: 'regime_map' takes ['sweep'], the table gives ['swep']",
-        ),
-        (
-            good.replace("  params: {labels: poincare}\n", ""),
-            "poincare_maps.params: 'poincare' takes ['labels'], the table gives []",
-        ),
-    ):
-        table.write_text(broken)
-        p = _dry_run(copy, tmp_path / "r")
-        out = p.stdout + p.stderr
-        assert p.returncode != 0 and f"figures.yaml: {message}" in out, out[-2000:]
-    assert not (tmp_path / "r").exists()

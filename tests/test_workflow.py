@@ -11,7 +11,7 @@ import pytest
 import xarray as xr
 import yaml
 
-from bouncedisk import plotting
+from bouncedisk import figure_registry, plotting
 
 ROOT = Path(__file__).resolve().parents[1]
 SMALL = ROOT / "tests" / "data" / "config_small.yaml"
@@ -145,14 +145,19 @@ def test_figure_table_names_every_figure_and_uses_every_registered_plot():
         assert (ROOT / "workflow" / "report" / f"{row['caption']}.rst").is_file(), name
 
 
-def test_a_bad_figure_table_names_the_table_and_the_entry(tmp_path):
-    # a scratch copy of the pipeline, whose figure table is broken one way at a time
+def pipeline_copy(tmp_path: Path) -> tuple[Path, Path, str]:
+    """A scratch copy of the pipeline: its root, its figure table and the table's text."""
     copy = tmp_path / "copy"
     shutil.copytree(ROOT / "workflow", copy / "workflow")
     shutil.copytree(ROOT / "data", copy / "data")
     shutil.copy(ROOT / "Snakefile", copy / "Snakefile")
     table = copy / "workflow" / "config" / "figures.yaml"
-    good = table.read_text()
+    return copy, table, table.read_text()
+
+
+def test_a_bad_figure_table_names_the_table_and_the_entry(tmp_path):
+    # a scratch copy of the pipeline, whose figure table is broken one way at a time
+    copy, table, good = pipeline_copy(tmp_path)
     entry = "  caption: regime_map\n  category: Studies beyond the paper\n"
     assert entry in good
     for broken, message in (
@@ -242,3 +247,31 @@ def test_changing_one_scene_reruns_only_what_depends_on_it(tmp_path):
     ]
     assert any(j.startswith("simulate") for j in jobs)
     assert not any(j.startswith(("sweep", "clipped", "compile")) for j in jobs), out
+
+
+def test_the_figure_table_is_checked_against_the_registry(tmp_path):
+    # a scratch copy of the pipeline, whose figure table disagrees with the registry one way at a
+    # time: the Snakefile fails before any job, naming the table and the entry
+    copy, table, good = pipeline_copy(tmp_path)
+    entry = "  plot: regime_map\n  inputs: {sweep:"
+    assert entry in good
+    known = ", ".join(sorted(figure_registry.FIGURES))
+    for broken, message in (
+        (
+            good.replace(entry, "  plot: nope\n  inputs: {sweep:"),
+            f"regime_map.plot: unknown figure 'nope' (bouncedisk.plotting.FIGURES: {known})",
+        ),
+        (
+            good.replace(entry, "  plot: regime_map\n  inputs: {swep:"),
+            "regime_map.inputs: 'regime_map' takes ['sweep'], the table gives ['swep']",
+        ),
+        (
+            good.replace("  params: {labels: poincare}\n", ""),
+            "poincare_maps.params: 'poincare' takes ['labels'], the table gives []",
+        ),
+    ):
+        table.write_text(broken)
+        p = dry_run(SMALL, tmp_path / "r", cwd=copy)
+        out = p.stdout + p.stderr
+        assert p.returncode != 0 and f"figures.yaml: {message}" in out, out[-2000:]
+    assert not (tmp_path / "r").exists()
