@@ -30,6 +30,10 @@ def _same(a: float | None, b: float | None) -> bool:
     return math.isclose(a, b, rel_tol=1e-9, abs_tol=0.0)
 
 
+def _text(v: float | None) -> str:
+    return "unknown" if v is None else f"{v:.6g}"
+
+
 def check_runs(curves: Sequence[MotorCurve]) -> None:
     """Raise :class:`InputError` naming the first run that differs from the first run.
 
@@ -47,8 +51,9 @@ def check_runs(curves: Sequence[MotorCurve]) -> None:
         )
         for name, want, got in checks:
             if not _same(want, got):
-                raise InputError(c.path, name, f"is {got}, but {want} in {first.path}: the run-ups "
-                                 "of one fit must come from one motor and one measurement set-up")  # fmt: skip
+                raise InputError(c.path, name, f"is {_text(got)}, but {_text(want)} in {first.path}: "
+                                 "the run-ups of one fit must come from one motor and one "
+                                 "measurement set-up")  # fmt: skip
         if len(c.time) != len(first.time):
             raise InputError(c.path, "time_s", f"has {len(c.time)} samples, {first.path} has "
                              f"{len(first.time)}: the run-ups of one fit must be equally long")  # fmt: skip
