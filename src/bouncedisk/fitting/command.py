@@ -53,7 +53,7 @@ def validate(args) -> dict:
     """Check every option (before any work); the fit's settings as a dictionary."""
     seed = _int_option(args.seed, "--seed", 0, 2**63 - 1)
     boot = _int_option(args.bootstrap, "--bootstrap", 2, 10_000)
-    members = _int_option(args.members, "--members", 4, 1024) if args.members else None
+    members = _int_option(args.members, "--members", 4, 1024) if args.members is not None else None
     cores = _int_option(args.cores, "--cores", 1, 1024) if args.cores is not None else None
     if args.sidecar is not None and not Path(args.sidecar).is_file():
         raise InputError(str(args.sidecar), "--sidecar", "file not found")
@@ -84,7 +84,6 @@ def fit_command(args) -> None:
     from ..datasets import write_dataset
     from .core import FitSettings, fit_curve
     from .output import fit_dataset, summary_text
-    from .runs import check_runs
 
     opts = validate(args)
     start = time.perf_counter()
@@ -97,7 +96,6 @@ def fit_command(args) -> None:
     for path in args.curve:
         progress(f"reading {path}")
         curves.append(read_curve(path, args.sidecar))
-    check_runs(curves)
     c = curves[0]
     runs = f"{len(curves)} run-ups of " if len(curves) > 1 else ""
     progress(f"{runs}{len(c.time)} samples over {c.time[-1] - c.time[0]:.6g} s")

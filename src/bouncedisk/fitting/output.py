@@ -173,10 +173,10 @@ def _statistics(fit: FitResult) -> dict:
     return out
 
 
-def fit_dataset(fit: FitResult, source_path: str | None = None) -> xr.Dataset:
+def fit_dataset(fit: FitResult) -> xr.Dataset:
     """The fit file (module docstring)."""
     curve = fit.curve
-    paths = [source_path] if source_path else [r.path for r in fit.runs or (curve,)]
+    paths = [r.path for r in fit.runs or (curve,)]
     path = ", ".join(paths)
     ds = xr.Dataset(
         {**_curves(fit, curve.time), **_statistics(fit), **_profiles(fit)},
