@@ -80,6 +80,9 @@ def _run(args, capsys):
         (["--members", "0"], "--members"),
         (["--members", "x"], "--members"),
         (["--cores", "0"], "--cores"),
+        (["--scan", "4"], "--scan"),
+        (["--scan", "many"], "--scan"),
+        (["--zoom", "-1"], "--zoom"),
         (["--sidecar", "/nonexistent/side.yaml"], "--sidecar"),
         (["--e-sigma", "0"], "--e-sigma"),
         (["--e-sigma", "-0.01"], "--e-sigma"),
@@ -228,10 +231,12 @@ def test_fit_command_writes_file(periodic_csv, tmp_path, monkeypatch):
 
     monkeypatch.setattr(core, "FitSettings", lambda **kw: TINY.__class__(**{**TINY.__dict__, **kw}))
     out = tmp_path / "fit.nc"
-    code = main(["fit", str(periodic_csv), "-o", str(out), "--seed", "2", "--members", "4", "-q"])
+    args = ["--seed", "2", "--members", "4", "--scan", "12", "--zoom", "3", "-q"]
+    code = main(["fit", str(periodic_csv), "-o", str(out), *args])
     assert code == 0 and out.exists()
     ds = xr.open_dataset(out)
     assert {"ci_low", "ci_high"} <= set(ds["e"].attrs) and ds.attrs["seed"] == 2
+    assert (ds.attrs["scan_points"], ds.attrs["zoom_points"]) == (12, 3)  # the file says how
 
 
 # ---------------------------------------------------------------- bad curves

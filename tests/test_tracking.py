@@ -457,9 +457,10 @@ def start_and_wait_running(base: Path) -> subprocess.Popen:
 def test_interrupted_or_killed_pipeline_never_reads_finished(tmp_path):
     base = project(tmp_path / "p")
     db = base / "results" / "mlflow.db"
-    # Ctrl-C: Snakemake cancels its jobs, onerror ends the run KILLED
+    # Ctrl-C (SIGINT to the terminal's foreground process group: Snakemake and its running job):
+    # the job stops, Snakemake cancels the rest, onerror ends the run KILLED
     p = start_and_wait_running(base)
-    p.send_signal(signal.SIGINT)
+    os.killpg(p.pid, signal.SIGINT)
     p.wait(timeout=120)
     assert p.returncode != 0
     assert db_statuses(db) == ["KILLED"]

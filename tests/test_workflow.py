@@ -113,6 +113,9 @@ def test_bad_config_fails_before_any_job(tmp_path):
     bad.write_text(SMALL.read_text().replace("per_omega: 50000", "per_omega: -1"))
     p = dry_run(bad, tmp_path / "r")
     assert p.returncode != 0 and "per_omega" in p.stdout + p.stderr
+    bad.write_text(SMALL.read_text().replace("scan: 32", "scan: 4"))
+    p = dry_run(bad, tmp_path / "r")
+    assert p.returncode != 0 and "scan" in p.stdout + p.stderr
     assert not (tmp_path / "r").exists()
 
 

@@ -331,6 +331,17 @@ def _add_fit(sub) -> None:
         default=None,
         help="model members per evaluation, >= 4 (default: 12; 32 for several run-ups)",
     )
+    p.add_argument(
+        "--scan",
+        default=None,
+        help="Sobol scan points of (e, omega_s), >= 8 (default: 192; fewer: a quicker, coarser "
+        "search)",
+    )
+    p.add_argument(
+        "--zoom",
+        default=None,
+        help="scan points around each of the best scan points, >= 0 (default: 16)",
+    )
     p.add_argument("--cores", default=None, help="threads for the members (default: all)")
     p.add_argument(
         "--e-sigma",

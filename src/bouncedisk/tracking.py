@@ -96,6 +96,8 @@ PARAM_ATTRS = {
     "duration",
     "bootstrap",
     "n_bootstrap",
+    "scan_points",
+    "zoom_points",
     "tail",
     "shard",
     "n_shards",

@@ -41,5 +41,6 @@ rule fit_prototype:
         seed=config["prototype"]["seed"],
         bootstrap=config["prototype"]["bootstrap"],
         e_sigma=config["prototype"].get("e_sigma"),  # None: the fit's default
+        search={k: config["prototype"][k] for k in ("scan", "zoom") if k in config["prototype"]},
     script:
         "../scripts/fit_prototype.py"

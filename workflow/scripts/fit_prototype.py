@@ -11,6 +11,7 @@ with log_to(snakemake.log[0]) as log:
         seed=snakemake.params.seed,
         bootstrap=snakemake.params.bootstrap,
         **({} if snakemake.params.e_sigma is None else {"e_sigma": snakemake.params.e_sigma}),
+        **snakemake.params.search,  # scan, zoom: the fit's defaults unless the config sets them
         cores=snakemake.threads,
     )
     fit = fit_curve(curve, settings, progress=log.info)

@@ -54,10 +54,15 @@ def validate(args) -> dict:
     seed = _int_option(args.seed, "--seed", 0, 2**63 - 1)
     boot = _int_option(args.bootstrap, "--bootstrap", 2, 10_000)
     members = _int_option(args.members, "--members", 4, 1024) if args.members is not None else None
+    search = {
+        name: _int_option(text, option, low, 100_000)
+        for name, option, low in (("scan", "--scan", 8), ("zoom", "--zoom", 0))
+        if (text := getattr(args, name, None)) is not None
+    }
     cores = _int_option(args.cores, "--cores", 1, 1024) if args.cores is not None else None
     if args.sidecar is not None and not Path(args.sidecar).is_file():
         raise InputError(str(args.sidecar), "--sidecar", "file not found")
-    opts = {"seed": seed, "bootstrap": boot, "members": members}
+    opts = {"seed": seed, "bootstrap": boot, "members": members, **search}
     if getattr(args, "e_sigma", None) is not None:
         opts["e_sigma"] = _e_sigma_option(args.e_sigma)
     check_output(args.output, list(args.curve), args.sidecar)
