@@ -366,6 +366,15 @@ def test_fit_of_two_runs_keeps_each_run(tmp_path, monkeypatch):
     np.testing.assert_allclose(ds["omega_measured"], runs.mean("run"), rtol=1e-12)
     assert not np.allclose(runs[0], runs[1])  # two realizations, not one twice
     assert ds.attrs["curve_file"] == f"{a}, {b}"
+    # Fig. 5 draws what the fit compared with: the runs' mean, labelled as such
+    import pandas as pd
+
+    from bouncedisk.plotting import fig5_motor
+
+    fig = fig5_motor(pd.read_csv(a), fitted=ds)
+    line = next(ln for ln in fig.axes[0].lines if ln.get_label().startswith("measured"))
+    assert line.get_label() == "measured: mean of 2 run-ups"
+    np.testing.assert_allclose(line.get_ydata(), ds["omega_measured"])
 
 
 # ---------------------------------------------------------------- recovery (the model's trend)

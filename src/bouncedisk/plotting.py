@@ -156,7 +156,8 @@ def fig5_motor(
     Parameters
     ----------
     curve : DataFrame
-        Measured ``time_s``, ``omega_rad_s``.
+        Measured ``time_s``, ``omega_rad_s`` (for a fit of several run-ups, the fit file's
+        ``omega_measured``, their mean, is drawn instead: the data the fit compares with).
     simulated : DataFrame, optional
         Model speed ``time_s``, ``omega_rad_s`` (unfitted scales) when no fit is given.
     fitted : Dataset, optional
@@ -171,8 +172,13 @@ def fig5_motor(
         ax, axr = fig.subplots(2, 1, sharex=True, height_ratios=[3, 1])
     else:
         ax, axr = fig.add_subplot(), None
-    ax.plot(curve["time_s"], curve["omega_rad_s"], color=COLORS["data"], lw=0.6,
-            label="measured (prototype curve)")  # fmt: skip
+    runs = int(fitted.attrs.get("runs", 1)) if fitted is not None else 1
+    if runs > 1:  # run-ups fitted together: the data the fit compares with is their mean
+        ax.plot(fitted["time"], fitted["omega_measured"], color=COLORS["data"], lw=0.6,
+                label=f"measured: mean of {runs} run-ups")  # fmt: skip
+    else:
+        ax.plot(curve["time_s"], curve["omega_rad_s"], color=COLORS["data"], lw=0.6,
+                label="measured (prototype curve)")  # fmt: skip
     if fitted is not None:
         _fig5_fitted(ax, axr, fitted)
     elif simulated is not None:

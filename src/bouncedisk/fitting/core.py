@@ -11,7 +11,7 @@ import dataclasses
 import math
 import time as _time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from scipy import stats as _sps
@@ -167,8 +167,8 @@ class FitResult:
     note: str
     evaluations: int
     wall_time_s: float
-    settings: FitSettings = field(default_factory=FitSettings)
-    runs: tuple[MotorCurve, ...] = ()  # every run-up, as fitted
+    settings: FitSettings
+    runs: tuple[MotorCurve, ...]  # every run-up, as fitted (one run: the curve)
 
     @property
     def theta(self) -> dict[str, float]:

@@ -48,8 +48,8 @@ def _curves(fit: FitResult, ds_time: np.ndarray) -> dict:
     def var(v, long_name):
         return ("time", v, {"units": "rad/s", "long_name": long_name})
 
-    lo, hi = residual_band(b, fit.curve.sigma, max(1, len(fit.runs)))
-    runs = np.array([np.interp(ds_time, r.time, r.omega) for r in fit.runs or (fit.curve,)])
+    lo, hi = residual_band(b, fit.curve.sigma, len(fit.runs))
+    runs = np.array([np.interp(ds_time, r.time, r.omega) for r in fit.runs])
     return {
         "omega_measured_run": (("run", "time"), runs, {"units": "rad/s", "long_name":
                                "measured rotor angular velocity of each run-up"}),
@@ -176,13 +176,13 @@ def _statistics(fit: FitResult) -> dict:
 def fit_dataset(fit: FitResult) -> xr.Dataset:
     """The fit file (module docstring)."""
     curve = fit.curve
-    paths = [r.path for r in fit.runs or (curve,)]
+    paths = [r.path for r in fit.runs]
     path = ", ".join(paths)
     ds = xr.Dataset(
         {**_curves(fit, curve.time), **_statistics(fit), **_profiles(fit)},
         coords={
             "time": ("time", curve.time, {"units": "s", "long_name": "time", "axis": "T"}),
-            "run": ("run", np.arange(max(1, len(fit.runs)))),
+            "run": ("run", np.arange(len(fit.runs))),
             "source": ("source", ["measured", "fitted_mean", "fitted_member_sd"]),
             "parameter": ("parameter", fit.names),
             "parameter2": ("parameter2", fit.names),
