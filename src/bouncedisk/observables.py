@@ -261,31 +261,12 @@ class FirstOrderTrend:
         return self.steady * (1.0 - x) + self.omega0 * x
 
 
-def _trend_fit(dt: np.ndarray, y: np.ndarray, log_tau: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Linear least squares of ``y ≈ Ω∞ (1 − x) + Ω0 x``, ``x = exp(−dt/τ)``, for each ``log τ``.
-
-    The 2×2 normal equations in closed form (the columns ``1 − x`` and ``x`` are never parallel
-    for ``dt`` not constant). Returns ``(cost, Ω∞, Ω0)`` arrays, ``cost`` the residual sum of
-    squares, shaped like ``log_tau``.
-    """
-    x = np.exp(-dt / np.exp(np.asarray(log_tau, float))[..., None])
-    u = 1.0 - x
-    suu, sux, sxx = np.sum(u * u, -1), np.sum(u * x, -1), np.sum(x * x, -1)
-    suy, sxy = u @ y, x @ y
-    det = suu * sxx - sux * sux
-    steady = (sxx * suy - sux * sxy) / det
-    omega0 = (suu * sxy - sux * suy) / det
-    r = y - steady[..., None] * u - omega0[..., None] * x
-    return np.sum(r * r, -1), steady, omega0
-
-
 def first_order_trend(t: np.ndarray, omega: np.ndarray) -> FirstOrderTrend:
     """Least-squares first-order response (steady value and time constant) through ``(t, Ω)``.
 
     For a fixed ``τ`` the model is linear in ``(Ω∞, Ω0)``, so the fit is a bounded 1-D search
-    over ``log τ`` (a grid, then Brent's method around its best point) with the 2-parameter
-    linear solve inside (variable projection, :func:`_trend_fit`). The ripple is the RMS of the
-    residual about the trend.
+    over ``log τ`` with a 2-parameter linear solve inside (variable projection). The ripple is
+    the RMS of the residual about the trend.
     """
     from scipy.optimize import minimize_scalar
 
@@ -295,18 +276,23 @@ def first_order_trend(t: np.ndarray, omega: np.ndarray) -> FirstOrderTrend:
     span = float(t[-1] - t0) or 1.0
     dt = t - t0
 
-    grid = np.linspace(math.log(1e-4 * span), math.log(10.0 * span), 25)
-    costs = _trend_fit(dt, y, grid)[0]
-    k = int(np.nanargmin(costs))
+    def solve(log_tau: float) -> tuple[float, np.ndarray]:
+        x = np.exp(-dt / math.exp(log_tau))
+        a = np.column_stack([1.0 - x, x])
+        coef, *_ = np.linalg.lstsq(a, y, rcond=None)
+        r = y - a @ coef
+        return float(r @ r), coef
+
+    lo, hi = math.log(1e-4 * span), math.log(10.0 * span)
+    grid = np.linspace(lo, hi, 25)
+    costs = [solve(g)[0] for g in grid]
+    k = int(np.argmin(costs))
     a, b = grid[max(0, k - 1)], grid[min(len(grid) - 1, k + 1)]
     best = minimize_scalar(
-        lambda g: float(_trend_fit(dt, y, g)[0]),
-        bounds=(a, b),
-        method="bounded",
-        options={"xatol": 1e-6},
+        lambda g: solve(g)[0], bounds=(a, b), method="bounded", options={"xatol": 1e-6}
     )
     log_tau = float(best.x) if best.fun <= costs[k] else float(grid[k])
-    _, s, o0 = _trend_fit(dt, y, log_tau)
+    cost, (s, o0) = solve(log_tau)
     tau = math.exp(log_tau)
     resid = y - (s * (1.0 - np.exp(-dt / tau)) + o0 * np.exp(-dt / tau))
     return FirstOrderTrend(
