@@ -54,9 +54,11 @@ def validate(args) -> dict:
     seed = _int_option(args.seed, "--seed", 0, 2**63 - 1)
     boot = _int_option(args.bootstrap, "--bootstrap", 2, 10_000)
     members = _int_option(args.members, "--members", 4, 1024) if args.members is not None else None
+    from .search import SIZE_LIMITS
+
     search = {
-        name: _int_option(text, option, low, 100_000)
-        for name, option, low in (("scan", "--scan", 8), ("zoom", "--zoom", 0))
+        name: _int_option(text, f"--{name}", *SIZE_LIMITS[name])
+        for name in ("scan", "zoom")
         if (text := getattr(args, name, None)) is not None
     }
     cores = _int_option(args.cores, "--cores", 1, 1024) if args.cores is not None else None

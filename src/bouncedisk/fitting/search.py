@@ -31,6 +31,10 @@ from scipy.stats import qmc
 from .objective import Evaluation, Objective
 from .statistics import regularized_cov, stat_floor
 
+#: Allowed sizes of the scan and of the zoom around each centre (``bouncedisk fit --scan/--zoom``,
+#: the pipeline's ``prototype.scan/zoom``; the config schema states the same bounds, tested).
+SIZE_LIMITS: dict[str, tuple[int, int]] = {"scan": (8, 100_000), "zoom": (0, 100_000)}
+
 
 @dataclass(frozen=True)
 class SearchSettings:
@@ -46,6 +50,13 @@ class SearchSettings:
     zoom_centres: int = 6
     candidates: int = 24
     starts: int = 4
+
+    def __post_init__(self) -> None:
+        for name, (low, high) in SIZE_LIMITS.items():
+            if not low <= getattr(self, name) <= high:
+                raise ValueError(
+                    f"{name} must be between {low} and {high}, got {getattr(self, name)}"
+                )
 
 
 def _say(progress: Callable[[str], None] | None, msg: str) -> None:
