@@ -285,6 +285,7 @@ def iterate(
             # the kernel marks a finished run MODE_DONE and keeps the mode it ended in
             "in_contact": float(ist[K.I_LASTMODE] == K.MODE_CONTACT),
             "omega_integral": float(st[K.S_OMEGA_INTEGRAL]),
+            "phase": float(st[K.S_PHASE]),  # the stator phase, exact (t is rounded)
         }
         if flg[K.F_STATS]:
             final["audit"] = _audit_terms(cfg, st, ist, bool(final["in_contact"]))
