@@ -52,4 +52,5 @@ FIGURES: dict[str, FigureDecl] = {
     "work_precision": FigureDecl("fig_work_precision", {"table": "csv"}),
     "scaling": FigureDecl("fig_scaling", {"table": "csv"}),
     "stats_cost": FigureDecl("fig_stats_cost", {"table": "csv", "singles": "csv"}),
+    "torque_speed": FigureDecl("fig_torque_speed", {"curve": "load_curve"}),
 }

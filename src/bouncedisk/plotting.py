@@ -24,6 +24,7 @@ from .atomic import atomic_path
 from .datasets import open_checked, open_simulation
 from .figure_registry import FIGURES as DECLARED
 from .figure_registry import FigureDecl
+from .plot_load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
 
 TWO_PI = 2 * math.pi
 COLORS = {"rotor": "#1f77b4", "stator": "#7f7f7f", "fit": "#d62728", "data": "#2ca02c"}
@@ -612,6 +613,7 @@ OPENERS: dict[str, Opener] = {
     "psi_sweep": _netcdf("mean_omega", "mean_omega_ci_low"),
     "clipped_study": _netcdf("omega_rotor"),
     "csv": pd.read_csv,
+    "load_curve": _netcdf("mean_omega", "power_out", what="load curve"),
 }
 
 
