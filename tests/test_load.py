@@ -446,3 +446,16 @@ def test_load_curve_and_run_ups_must_share_the_drive(tmp_path):
     check_same_setup(data, 20000.0, 2e-4)
     with pytest.raises(InputError, match="motor.drive_frequency_hz"):
         check_same_setup(data, 15000.0, 2e-4)
+
+
+def test_simulation_files_carry_the_energy_audit(scene_file, tmp_path):
+    """Every simulated run records its audit (per run, MODEL.md): residuals and terms."""
+    f = scene_file(
+        "parameters: {e: 0.6, omega_s: 1.5, r_phi: 0.01, psi: 0.0, load_torque: 0.2}\n"
+        "effects: [impacts, contact, torsion, load]\nstop: {impacts: 3000}\n"
+    )
+    out = tmp_path / "s.nc"
+    assert main(["simulate", str(f), "-o", str(out), "-q"]) == 0
+    a = xr.open_dataset(out).attrs
+    assert a["audit_residual_axial"] <= 1e-9 and a["audit_residual_torsion"] <= 1e-9
+    assert a["audit_work_load"] > 0.0 and a["load_torque"] == 0.2
