@@ -459,3 +459,31 @@ def test_simulation_files_carry_the_energy_audit(scene_file, tmp_path):
     a = xr.open_dataset(out).attrs
     assert a["audit_residual_axial"] <= 1e-9 and a["audit_residual_torsion"] <= 1e-9
     assert a["audit_work_load"] > 0.0 and a["load_torque"] == 0.2
+
+
+def test_physical_scene_reports_watts_and_the_motor_efficiency():
+    """A physical scene's stats add the powers in W and η = P_out / (P_ax + P_t)."""
+    from bouncedisk.stats import run_stats
+
+    phys = PhysicalParameters.from_nondimensional(
+        scene_from_mapping(
+            {"parameters": {"e": 0.55, "omega_s": 1.7, "r_phi": 0.002, "psi": 0.4}},
+            "<p>",
+        ).params,
+        20000.0, 2e-4, 0.01, 0.004, 0.002, F_preload=0.77, load_torque=5e-5,
+    )  # fmt: skip
+    raw = {
+        "physical": {**phys.as_dict(), "e_sigma": 0.03},
+        "effects": ["impacts", "contact", "torsion", "restitution_noise", "load"],
+        "stop": {"time": 4000.0},
+        "stats": {"discard": 1000.0},
+        "ensemble": {"members": 4, "seed": 1},
+    }
+    scene = scene_from_mapping(raw, "<physical>")
+    s = run_stats(scene).summary()
+    sc = phys.scales()
+    assert s["power_out_W"] == pytest.approx(s["power_out"] * sc.torque * sc.omega_scale)
+    assert s["power_axial_in_W"] == pytest.approx(s["power_axial_in"] * sc.axial_power)
+    eta = s["power_out_W"] / (s["power_out_W"] / s["efficiency_torsion"] + s["power_axial_in_W"])
+    assert s["efficiency"] == pytest.approx(eta, rel=0.05)  # mean of ratios vs ratio of means
+    assert 0.0 < s["efficiency"] < s["efficiency_torsion"] < 1.0
