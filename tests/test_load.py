@@ -465,11 +465,10 @@ def test_physical_scene_reports_watts_and_the_motor_efficiency():
     """A physical scene's stats add the powers in W and η = P_out / (P_ax + P_t)."""
     from bouncedisk.stats import run_stats
 
+    from bouncedisk.params import Parameters
+
     phys = PhysicalParameters.from_nondimensional(
-        scene_from_mapping(
-            {"parameters": {"e": 0.55, "omega_s": 1.7, "r_phi": 0.002, "psi": 0.4}},
-            "<p>",
-        ).params,
+        Parameters(e=0.55, omega_s=1.7, r_phi=0.002, psi=0.4),
         20000.0, 2e-4, 0.01, 0.004, 0.002, F_preload=0.77, load_torque=5e-5,
     )  # fmt: skip
     raw = {
