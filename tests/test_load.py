@@ -463,9 +463,8 @@ def test_simulation_files_carry_the_energy_audit(scene_file, tmp_path):
 
 def test_physical_scene_reports_watts_and_the_motor_efficiency():
     """A physical scene's stats add the powers in W and η = P_out / (P_ax + P_t)."""
-    from bouncedisk.stats import run_stats
-
     from bouncedisk.params import Parameters
+    from bouncedisk.stats import run_stats
 
     phys = PhysicalParameters.from_nondimensional(
         Parameters(e=0.55, omega_s=1.7, r_phi=0.002, psi=0.4),
