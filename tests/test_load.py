@@ -11,6 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.integrate import quad, solve_ivp
 
 from bouncedisk.cli import main
@@ -485,3 +487,23 @@ def test_physical_scene_reports_watts_and_the_motor_efficiency():
     eta = s["power_out_W"] / (s["power_out_W"] / s["efficiency_torsion"] + s["power_axial_in_W"])
     assert s["efficiency"] == pytest.approx(eta, rel=0.05)  # mean of ratios vs ratio of means
     assert 0.0 < s["efficiency"] < s["efficiency_torsion"] < 1.0
+
+
+@settings(max_examples=40)
+@given(
+    e=st.floats(0.0, 1.0),
+    w=st.floats(0.5, 6.0),
+    log_r=st.floats(-3.0, 0.5),
+    psi=st.floats(-math.pi, math.pi),
+    load=st.floats(0.0, 2.0),
+    rho=st.floats(1.0, 1.5),
+)
+def test_audit_closes_for_any_parameters(e, w, log_r, psi, load, rho):
+    """Property: both balances close to round-off for any (e, ω_s, R_φ, ψ, τ_L, μ_s/μ_k)."""
+    cfg = EngineConfig(
+        e=e, omega_s=w, r_phi=10.0**log_r, psi=psi, torsion=True, mu_ratio=rho,
+        max_events=3000, t_end=3000.0, stats_from=0.0, load_torque=load,
+    )  # fmt: skip
+    res = simulate_arrays(cfg)
+    ax, tor = audit_balances(res.final["audit"])
+    assert ax <= 1e-9 and tor <= 1e-9, (ax, tor)
