@@ -252,11 +252,21 @@ class SimulationWriter:
         self._nc.setncatts({k: _attr_value(v) for k, v in attrs.items()})
 
     def __exit__(self, exc_type, exc, tb) -> None:
+        # closing flushes the last chunks: on a full disk that is where the write fails, and the
+        # temporary must still be removed (the atomic context sees the error either way)
         if self._nc is not None:
-            self._nc.close()
-            self._nc = None
+            nc, self._nc = self._nc, None
+            try:
+                nc.close()
+            except (OSError, RuntimeError) as ex:
+                if exc is None:
+                    exc_type, exc, tb = type(ex), ex, ex.__traceback__
         assert self._ctx is not None
-        self._ctx.__exit__(exc_type, exc, tb)
+        ctx, self._ctx = self._ctx, None
+        if exc is None:
+            ctx.__exit__(None, None, None)
+        elif not ctx.__exit__(exc_type, exc, tb):
+            raise exc
 
 
 def open_checked(
@@ -282,6 +292,10 @@ def open_checked(
         raise InputError(str(path), "", "file not found")
     if p.is_dir():
         raise InputError(str(path), "", f"is a directory, not a {what} file")
+    if not p.is_file():  # a FIFO or device would block in open() (and ignore SIGTERM there)
+        raise InputError(
+            str(path), "", f"is not a regular file (a pipe or device?), not a {what} file"
+        )
     try:
         if lazy:
             ds = xr.open_dataset(p, engine="netcdf4")
