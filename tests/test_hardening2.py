@@ -6,8 +6,10 @@ Each test names the numbered item of the issue it covers; each failed before the
 import math
 import os
 import signal
+import socket
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -344,3 +346,226 @@ def test_item11_ordinary_aliases_still_load():
     data = yamlio.load(text, "x")
     assert data["q"] == {"e": 0.3, "omega_s": 1.5} and data["r"] == {"e": 0.5, "omega_s": 1.5}
     assert yamlio._expanded_size(yamlio.Loader(text).get_single_node(), "x") == 23
+
+
+# ------------------------------------------------------------------ item 14: stalled servers
+class StallingServer:
+    """An HTTP server on 127.0.0.1 that answers the connection check, then stalls.
+
+    It answers ``experiments/search`` (what :func:`bouncedisk.tracking.preflight` asks) and
+    holds every other request open without replying until it is stopped or ``lifetime`` seconds
+    have passed; then it closes itself.
+    """
+
+    def __init__(self, lifetime: float = 90.0):
+        self.sock = socket.socket()
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.listen(16)
+        self.sock.settimeout(0.2)
+        self.port = self.sock.getsockname()[1]
+        self.url = f"http://127.0.0.1:{self.port}"
+        self.deadline = time.monotonic() + lifetime
+        self.stop = threading.Event()
+        self.stalled = 0
+        self.thread = threading.Thread(target=self._serve, daemon=True)
+        self.thread.start()
+
+    def _serve(self) -> None:
+        conns = []
+        while not self.stop.is_set() and time.monotonic() < self.deadline:
+            try:
+                conn, _ = self.sock.accept()
+            except TimeoutError:
+                continue
+            conn.settimeout(5)
+            try:
+                head = conn.recv(65536).decode("latin-1")
+            except OSError:
+                conn.close()
+                continue
+            if "experiments/search" in head.split("\r\n", 1)[0]:
+                body = b'{"experiments": []}'
+                conn.sendall(
+                    b"HTTP/1.1 200 OK\r\nContent-Type: application/json\r\nContent-Length: "
+                    + str(len(body)).encode()
+                    + b"\r\nConnection: close\r\n\r\n"
+                    + body
+                )
+                conn.close()
+            else:
+                self.stalled += 1
+                conns.append(conn)  # never answered
+        for c in conns:
+            c.close()
+        self.sock.close()
+
+    def close(self) -> None:
+        self.stop.set()
+        self.thread.join(5)
+
+
+@pytest.fixture
+def stalling_server():
+    srv = StallingServer()
+    yield srv
+    srv.close()
+
+
+def test_item14_runs_on_a_stalled_server_times_out_in_one_line(stalling_server):
+    env = {**ENV, "MLFLOW_HTTP_REQUEST_TIMEOUT": "2"}
+    r = subprocess.run(
+        [sys.executable, "-m", "bouncedisk.cli", "runs", "--tracking-uri", stalling_server.url],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=80,
+    )
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and f"tracking store {stalling_server.url}: cannot be read" in lines[0]
+    assert stalling_server.stalled >= 1
+
+
+def test_item14_simulate_track_on_a_stalled_server_keeps_and_names_the_output(
+    stalling_server, tmp_path
+):
+    out = tmp_path / "x.nc"
+    argv = ["simulate", _scene(tmp_path), "-o", str(out), "-q", "--track"]
+    env = {**ENV, "MLFLOW_HTTP_REQUEST_TIMEOUT": "2"}
+    r = subprocess.run(
+        [sys.executable, "-m", "bouncedisk.cli", *argv, "--tracking-uri", stalling_server.url],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=80,
+    )
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and "recording failed (the outputs were written)" in lines[0]
+    assert out.is_file()
+
+
+def test_item14_interrupt_while_recording_says_the_output_was_kept(stalling_server, tmp_path):
+    out = tmp_path / "x.nc"
+    argv = ["simulate", _scene(tmp_path), "-o", str(out), "-q", "--track"]
+    env = {**ENV, "MLFLOW_HTTP_REQUEST_TIMEOUT": "60"}
+    p = subprocess.Popen(
+        [sys.executable, "-m", "bouncedisk.cli", *argv, "--tracking-uri", stalling_server.url],
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    deadline = time.monotonic() + 60
+    while stalling_server.stalled == 0 and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert stalling_server.stalled, "the command never reached the store"
+    p.send_signal(signal.SIGTERM)  # what `timeout 10 bouncedisk ...` sends
+    err = p.communicate(timeout=30)[1]
+    assert p.returncode == 130
+    assert "no output written" not in err
+    assert "interrupted while recording the run" in err
+    assert f"the outputs were written and kept: {out}" in err
+    assert out.is_file()
+
+
+def test_item14_every_store_request_has_a_timeout(monkeypatch):
+    from bouncedisk import tracking
+
+    env = {k: v for k, v in os.environ.items() if not k.startswith("MLFLOW_HTTP_REQUEST")}
+    monkeypatch.setattr(os, "environ", env)
+    tracking._client(tracking.Store("http://127.0.0.1:9"))
+    assert env["MLFLOW_HTTP_REQUEST_TIMEOUT"] == str(tracking.HTTP_TIMEOUT_S) == "10"
+    assert env["MLFLOW_HTTP_REQUEST_MAX_RETRIES"] == "1"
+
+
+# ------------------------------------------------------------------ item 15: never create stores
+def test_item15_reading_never_touches_a_foreign_or_empty_sqlite_file(tmp_path, capsys):
+    import sqlite3
+
+    foreign = tmp_path / "data.db"
+    con = sqlite3.connect(foreign)
+    con.execute("CREATE TABLE samples (x REAL)")
+    con.commit()
+    con.close()
+    before = foreign.read_bytes()
+    empty = tmp_path / "empty.db"
+    empty.touch()
+    assert main(["runs", "--tracking-uri", str(foreign)]) == 2
+    assert "not an MLflow tracking store" in _one_line(capsys)
+    assert main(["runs", "--tracking-uri", f"sqlite:///{empty}"]) == 2
+    assert "is empty, not an MLflow tracking store" in _one_line(capsys)
+    assert foreign.read_bytes() == before and empty.stat().st_size == 0
+    # writing into a foreign database is refused too
+    argv = ["simulate", _scene(tmp_path), "-o", str(tmp_path / "o.nc"), "-q", "--track"]
+    assert main([*argv, "--tracking-uri", str(foreign)]) == 2
+    assert "not an MLflow tracking store" in _one_line(capsys)
+    assert foreign.read_bytes() == before and not (tmp_path / "o.nc").exists()
+
+
+@pytest.mark.parametrize("uri", ["nonsense", "databricks", "databricks://profile", "s3://b/x"])
+def test_item15_unknown_schemes_are_refused(tmp_path, capsys, monkeypatch, uri):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("MLFLOW_TRACKING_URI", uri)
+    argv = ["simulate", _scene(tmp_path), "-o", "o.nc", "-q", "--track"]
+    assert main(argv) == 2
+    assert _one_line(capsys).startswith(f"bouncedisk: error: tracking store {uri}: ")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.yaml"]
+
+
+def test_item15_missing_parent_folders_are_refused(tmp_path, capsys):
+    root = tmp_path / "no"
+    argv = ["simulate", _scene(tmp_path), "-o", str(tmp_path / "o.nc"), "-q", "--track"]
+    assert main([*argv, "--tracking-uri", f"sqlite:///{root}/such/dir/x.db"]) == 2
+    assert f"folder '{root}/such' does not exist" in _one_line(capsys)
+    assert not root.exists()
+
+
+# ------------------------------------------------------------------ item 16: MLflow's logging
+@pytest.fixture(scope="module")
+def tracked_store(tmp_path_factory):
+    base = tmp_path_factory.mktemp("store")
+    scene = base / "s.yaml"
+    scene.write_text(SMALL)
+    store = base / "mlflow.db"
+    argv = ["simulate", str(scene), "-o", str(base / "a.nc"), "-q", "--track"]
+    r = subprocess.run(
+        [sys.executable, "-m", "bouncedisk.cli", *argv, "--tracking-uri", str(store)],
+        capture_output=True,
+        text=True,
+        env=ENV,
+        timeout=300,
+    )
+    assert r.returncode == 0, r.stderr
+    return store
+
+
+@pytest.mark.parametrize(
+    "damage",
+    ["DROP TABLE latest_metrics", "ALTER TABLE runs RENAME COLUMN lifecycle_stage TO lc"],
+)
+@pytest.mark.parametrize("command", ["runs", "simulate"])
+def test_item16_damaged_store_is_one_line(tracked_store, tmp_path, damage, command):
+    import shutil
+    import sqlite3
+
+    db = tmp_path / "mlflow.db"
+    shutil.copy(tracked_store, db)
+    con = sqlite3.connect(db)
+    con.execute(damage)
+    con.commit()
+    con.close()
+    argv = ["runs"]
+    if command == "simulate":
+        argv = ["simulate", _scene(tmp_path), "-o", str(tmp_path / "o.nc"), "-q", "--track"]
+    r = subprocess.run(
+        [sys.executable, "-m", "bouncedisk.cli", *argv, "--tracking-uri", str(db)],
+        capture_output=True,
+        text=True,
+        env=ENV,
+        timeout=300,
+    )
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1, r.stderr[-3000:]
+    assert lines[0].startswith(f"bouncedisk: error: tracking store sqlite:///{db}: ")
+    assert "latest_metrics" in lines[0] or "lifecycle_stage" in lines[0]

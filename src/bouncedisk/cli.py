@@ -125,7 +125,7 @@ def _track(args, store, kind: str, outputs=(), params=None, metrics=None) -> Non
         ex.kept_outputs = kept
         raise
     except Exception as ex:  # noqa: BLE001 - drivers and REST raise their own types
-        reason = (str(ex).strip().splitlines() or [type(ex).__name__])[0][:200]
+        reason = tracking._one_line(ex)
         raise tracking.TrackingError(
             store.uri, f"recording failed (the outputs were written): {reason}"
         ) from None
