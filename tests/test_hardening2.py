@@ -569,3 +569,73 @@ def test_item16_damaged_store_is_one_line(tracked_store, tmp_path, damage, comma
     assert len(lines) == 1, r.stderr[-3000:]
     assert lines[0].startswith(f"bouncedisk: error: tracking store sqlite:///{db}: ")
     assert "latest_metrics" in lines[0] or "lifecycle_stage" in lines[0]
+
+
+# ------------------------------------------------------------------ item 17: runs diff
+def _fake_run(run_id: str, params: dict, metrics: dict, manifest: dict):
+    from types import SimpleNamespace
+
+    run = SimpleNamespace(
+        info=SimpleNamespace(run_id=run_id),
+        data=SimpleNamespace(params=params, metrics=metrics, tags={}),
+    )
+    run.manifest = manifest
+    return run
+
+
+class _FakeRuns:
+    def manifest(self, run):
+        return run.manifest
+
+
+def _pipeline_pair():
+    """A: a whole pipeline (three jobs); B: an invocation that redrew one figure and changed
+    its dpi; the other jobs are absent from B's snapshot."""
+    jobs = {
+        "simulations/fig4": {"r_phi": "0.01", "scene_sha256": "abc"},
+        "bands/fig4": {"members": "16"},
+        "figures/fig4_trajectory_e06": {"dpi": "150"},
+    }
+    pa = {f"{j}/{k}": v for j, d in jobs.items() for k, v in d.items()}
+    ma = {"simulations/fig4/final_omega": 1.5, "figures/fig4_trajectory_e06/benchmark.s": 2.0}
+    ma["pipeline.jobs_run"] = 3.0
+    fa = {
+        "simulations/fig4.nc": {"sha256": "s1"},
+        "bands/fig4.nc": {"sha256": "b1"},
+        "figures/fig4_trajectory_e06.png": {"sha256": "f1"},
+    }
+    pb = {"figures/fig4_trajectory_e06/dpi": "300"}
+    mb = {"figures/fig4_trajectory_e06/benchmark.s": 2.5, "pipeline.jobs_run": 1.0}
+    fb = {"figures/fig4_trajectory_e06.png": {"sha256": "f2"}}
+    return _fake_run("A", pa, ma, fa), _fake_run("B", pb, mb, fb)
+
+
+def test_item17_diff_compares_the_jobs_both_runs_ran():
+    from bouncedisk import registry
+
+    ra, rb = _pipeline_pair()
+    d = registry.diff(_FakeRuns(), ra, rb)
+    assert d["params"] == {"figures/fig4_trajectory_e06/dpi": ["150", "300"]}
+    assert d["metrics"] == {"figures/fig4_trajectory_e06/benchmark.s": [2.0, 2.5]}
+    assert d["outputs"] == {"figures/fig4_trajectory_e06.png": ["f1", "f2"]}
+    assert d["jobs_only_in_a"] == ["bands/fig4", "simulations/fig4"]
+    assert d["jobs_only_in_b"] == []
+    text = registry.format_diff(d)
+    assert "—" not in text
+    assert "jobs of A that B did not run (2; not compared): bands/fig4, simulations/fig4" in text
+    # tracked commands (keys without a job) compare as before
+    ca = _fake_run("a", {"e": "0.3", "scene_file": "s.yaml"}, {}, {})
+    cb = _fake_run("b", {"e": "0.6", "scene_file": "s.yaml"}, {}, {})
+    assert registry.diff(_FakeRuns(), ca, cb)["params"] == {"e": ["0.3", "0.6"]}
+
+
+def test_item17_changed_since_previous_names_only_changed_inputs():
+    from bouncedisk import registry
+
+    ra, rb = _pipeline_pair()
+    assert registry.changed_keys(ra.data.params, rb.data.params) == [
+        "figures/fig4_trajectory_e06/dpi"
+    ]
+    assert registry.changed_keys(rb.data.params, ra.data.params) == [
+        "figures/fig4_trajectory_e06/dpi"
+    ]
