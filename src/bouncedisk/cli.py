@@ -420,6 +420,8 @@ def flush_stdout() -> None:
 def _discard_stdout() -> None:
     """Point standard output at /dev/null: what could not be written raises no second error
     when Python flushes it at exit."""
+    if getattr(sys.stdout, "_stream", sys.stdout) is not sys.__stdout__:
+        return  # a caller's stream (tests, embedding): theirs to handle
     with contextlib.suppress(OSError, ValueError, io.UnsupportedOperation):
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.__stdout__.fileno())
 
