@@ -356,7 +356,8 @@ def test_item10_physical_scene_gives_seconds_and_scales(tmp_path):
     with xr.open_dataset(out, decode_times=False) as ds:
         t_c = ds.attrs["t_c_s"]
         assert ds["time_s"].attrs["units"] == "s"
-        assert ds["time_s"].attrs["standard_name"] == "time"
+        # issue 21 item 18: CF-1.10 §4.4 keeps standard_name "time" for "UNIT since DATE"
+        assert "standard_name" not in ds["time_s"].attrs and "axis" not in ds["time_s"].attrs
         assert np.allclose(ds["time_s"].values, ds["time"].values * t_c)
         assert np.allclose(ds["t_impact_s"].values, ds["t_impact"].values * t_c)
         for key in ("t_c_s", "U0_m", "omega_scale_rad_s"):
