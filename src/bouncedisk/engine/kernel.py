@@ -47,7 +47,7 @@ from .laws import (
     stick_omega_integral,
 )
 from .noise import member_key, noisy_restitution
-from .roots import TWO_PI, first_root
+from .roots import TWO_PI, first_root, first_root_from, inflections
 
 
 def _nrt_off() -> dict:
@@ -168,6 +168,8 @@ def flight_next_impact(
         Time of impact after the origin (-1 on failure), whole stator periods added to the
         origin's period count, the impact phase in ``[0, 2π)``, the rotor velocity before impact.
     """
+    # the gap's inflection phases, shared by the ascent's and the descent's searches
+    fd, dl, bt = inflections(0.0, -1.0, -0.5, w)
     va = v0 - ta
     if ta == 0.0:
         ka = 0
@@ -180,7 +182,7 @@ def flight_next_impact(
         if va > 0.0 and va * va > 2.0 * (1.0 - ua):
             disc = sqrt(va * va - 2.0 * (1.0 - ua))
             t_up = 2.0 * (1.0 - ua) / (va + disc)
-            r = first_root(ga, va, -0.5, 0.0, -1.0, pha, w, t_up, xtol)
+            r = first_root_from(ga, va, -0.5, 0.0, -1.0, pha, w, t_up, xtol, fd, dl, bt)
             if r >= 0.0:
                 k, ph = _advance(ka, pha, w * r)
                 return ta + r, k, ph, va - r
@@ -188,7 +190,8 @@ def flight_next_impact(
             vd = -disc
         else:
             t_bot = va + sqrt(va * va + 2.0 * (ua + 1.0))
-            r = first_root(ga, va, -0.5, 0.0, -1.0, pha, w, t_bot * (1.0 + 1e-12) + 1e-12, xtol)
+            t_max = t_bot * (1.0 + 1e-12) + 1e-12
+            r = first_root_from(ga, va, -0.5, 0.0, -1.0, pha, w, t_max, xtol, fd, dl, bt)
             if r < 0.0:
                 return -1.0, 0, 0.0, 0.0
             k, ph = _advance(ka, pha, w * r)
@@ -200,7 +203,8 @@ def flight_next_impact(
     k2, ph2 = _advance(ka, pha, w * t_dn)
     g2 = 1.0 - sin(ph2)
     t_bot2 = 4.0 / (sqrt(vd * vd + 4.0) - vd)
-    r = first_root(g2, vd, -0.5, 0.0, -1.0, ph2, w, t_bot2 * (1.0 + 1e-12) + 1e-12, xtol)
+    t_max = t_bot2 * (1.0 + 1e-12) + 1e-12
+    r = first_root_from(g2, vd, -0.5, 0.0, -1.0, ph2, w, t_max, xtol, fd, dl, bt)
     if r < 0.0:
         return -1.0, 0, 0.0, 0.0
     k, ph = _advance(k2, ph2, w * r)
