@@ -171,7 +171,7 @@ def _advance(n, th, dphi):
 
 @njit(cache=True)
 def flight_next_impact(
-    u0: float, v0: float, th0: float, ta: float, ga: float, w: float, xtol: float
+    u0: float, v0: float, th0: float, ta: float, ga: float, w: float, xtol: float, infl: tuple
 ) -> tuple[float, int, float, float]:
     """Next impact of a flight (first root of the gap, paper eq. 20).
 
@@ -179,6 +179,8 @@ def flight_next_impact(
     the anchor ``ta >= 0`` after the origin, where the gap is ``ga >= 0``. The rotor cannot hit
     the stator while ``u > 1``, so a flight rising above the band ``|u| <= 1`` is searched only
     while ascending below 1 and after it falls back to ``u = 1`` (MODEL.md "Events").
+    ``infl`` is the gap's :func:`~bouncedisk.engine.roots.inflections` ``(0, −1, −1/2, w)``, the
+    same for every flight of a run (:func:`run_chunk` computes it once).
 
     Returns
     -------
@@ -186,8 +188,7 @@ def flight_next_impact(
         Time of impact after the origin (-1 on failure), whole stator periods added to the
         origin's period count, the impact phase in ``[0, 2π)``, the rotor velocity before impact.
     """
-    # the gap's inflection phases, shared by the ascent's and the descent's searches
-    fd, dl, bt = inflections(0.0, -1.0, -0.5, w)
+    fd, dl, bt = infl
     va = v0 - ta
     if ta == 0.0:
         ka = 0
@@ -818,7 +819,7 @@ def _contact_end(st, ist, ev, evk, info, prm, clipped, taus, tau_end, n1, th1, s
 
 
 @_on_arrays
-def _flight_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, noise_key):
+def _flight_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, noise_key, infl):
     """A flight and the impact that ends it (MODEL.md "Flight", "Impact").
 
     The first root of the gap (:func:`flight_next_impact`, eq. 20); the flight's outputs
@@ -826,6 +827,7 @@ def _flight_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, n
     this impact's restitution (``restitution_noise``: ``e_k``, :mod:`.noise`) and what follows
     (:func:`_impact`); its event row; then a new flight, contact or a chattering sequence
     (:func:`_enter_contact`). Returns ``ST_CONTINUE`` or the status that ends this call.
+    ``infl``: the gap's inflection data (:func:`flight_next_impact`).
     """
     e = prm[P_E]
     w = prm[P_W]
@@ -833,7 +835,7 @@ def _flight_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, n
     torsion = flg[F_TORSION] != 0
     cap = flg[F_CAP] != 0
     tau, dk, ph, v_minus = flight_next_impact(
-        st[S_U], st[S_V], th, st[S_ANCHOR_TAU], st[S_ANCHOR_GAP], w, xtol
+        st[S_U], st[S_V], th, st[S_ANCHOR_TAU], st[S_ANCHOR_GAP], w, xtol, infl
     )
     if tau < 0.0:
         return _finish(ist, info, ST_NUMERICAL)
@@ -943,6 +945,7 @@ def run_chunk(
     w = prm[P_W]
     noise_key = member_key(flg[F_SEED], flg[F_MEMBER])
     sep = _separation_constants(w)
+    gap_infl = inflections(0.0, -1.0, -0.5, w)  # every flight's gap: u'' = -1, u_s = sin
     info[O_EVENTS:N_OUT] = 0
     if ist[I_MODE] == MODE_DONE:
         _finish(ist, info, ist[I_STATUS])
@@ -959,7 +962,7 @@ def run_chunk(
         t_now = (n * TWO_PI + th) / w
         if ist[I_MODE] == MODE_FLIGHT:
             status = _flight_step(
-                prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, noise_key
+                prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, noise_key, gap_infl
             )
         elif ist[I_UNLOADED]:
             status = _clipped_ride(prm, flg, st, ist, traj, strobe, info, n, th, t_now, sep[1])
