@@ -156,10 +156,10 @@ def test_scene_members_as_text_is_refused():
 
 
 def test_time_origin_keeps_uniform_curves_on_their_grid(frame):
-    """The shipped-style curve (t0 = 0, uniform): relative times are its own grid."""
+    """The shipped-style curve (t0 = 0, uniform): relative times are its own grid (to round-off)."""
     from bouncedisk.curves import MotorCurve
 
     c = MotorCurve(frame["time_s"].to_numpy(), frame["omega_rad_s"].to_numpy(), SIGMA, F_HZ,
                    PHI0, "", True, "x.csv")  # fmt: skip
     (r,), _, note = prepare_runs(dataclasses.replace(c))
-    assert note == "" and np.max(np.abs(r.time - c.time)) <= 1e-18
+    assert note == "" and np.max(np.abs(r.time - c.time)) <= 1e-9 * DT

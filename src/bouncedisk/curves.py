@@ -55,16 +55,18 @@ class MotorCurve:
 
     @property
     def dt(self) -> float:
-        """Sampling interval (s): the mean ``(t_last − t_first)/(n − 1)`` when the samples are
-        uniform (the median step within 1 % of it), else the median step.
+        """Sampling interval (s): the median step, or the mean step ``(t_last − t_first)/(n − 1)``
+        when the stamps are uniform but quantized (median and mean differ by more than 1e-9 but
+        less than 1 %).
 
-        The mean does not depend on the time origin: epoch-like stamps (1e9 s) carry steps
-        quantized to their last bit (1.2e-7 s), which moves a median step by percent.
+        Epoch-like stamps (1e9 s) carry their steps only to their last bit (1.2e-7 s), which moves
+        the median step by up to a percent; the mean does not depend on the time origin. Stamps
+        written from ``k·dt`` keep their median step (the shipped curve's generator used it).
         """
         t = self.time
         mean = float(t[-1] - t[0]) / (len(t) - 1)
         median = float(np.median(np.diff(t)))
-        return mean if abs(median - mean) <= 0.01 * mean else median
+        return mean if 1e-9 * mean < abs(median - mean) <= 0.01 * mean else median
 
 
 def read_sidecar(path: str | Path) -> dict:
