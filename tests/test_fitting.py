@@ -42,7 +42,7 @@ CASES = {
 #: two basins of (e, omega_s, psi) that both reproduce it). 64 run-ups: 7.6 %/8 = 0.95 %.
 RUNS = {"periodic": 1, "chaotic_reinjection": 64, "near_boundary": 1}
 TINY = FitSettings(seed=5, scan=16, zoom=4, zoom_centres=2, members=4, pilot_members=8, band_members=8,
-                   local_nfev=4, bootstrap=4, cores=2)  # fmt: skip
+                   local_nfev=4, bootstrap=40, cores=2)  # fmt: skip
 
 
 def sidecar(f=F_HZ, phi0=PHI0, **extra):

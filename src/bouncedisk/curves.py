@@ -26,6 +26,12 @@ from .params import number
 from .scene import read_yaml
 
 MIN_ROWS = 20
+#: Largest torsional amplitude Φ0 (rad) a sidecar may state: half a turn (MODEL.md's Φ0 is a
+#: small torsion angle of the stator; anything larger is a unit mistake).
+MAX_PHI0_RAD = 3.141592653589793
+#: The measurement noise may not exceed this multiple of the data's own standard deviation (the
+#: data are signal plus noise: their variance is at least the noise's).
+MAX_NOISE_OVER_SPREAD = 2.0
 UNIT_ALIASES = {
     "time": {"s", "second", "seconds", "sec"},
     "omega": {"rad/s", "rad s-1", "rad.s-1", "rad s^-1"},
@@ -45,11 +51,22 @@ class MotorCurve:
     synthetic: bool
     path: str
     sidecar: dict = field(default_factory=dict, compare=False)
+    sidecar_path: str = field(default="", compare=False)
 
     @property
     def dt(self) -> float:
-        """Median sampling interval (s)."""
-        return float(np.median(np.diff(self.time)))
+        """Sampling interval (s): the median step, or the mean step ``(t_last − t_first)/(n − 1)``
+        when the stamps are uniform but quantized (median and mean differ by more than 1e-9 but
+        less than 1 %).
+
+        Epoch-like stamps (1e9 s) carry their steps only to their last bit (1.2e-7 s), which moves
+        the median step by up to a percent; the mean does not depend on the time origin. Stamps
+        written from ``k·dt`` keep their median step (the shipped curve's generator used it).
+        """
+        t = self.time
+        mean = float(t[-1] - t[0]) / (len(t) - 1)
+        median = float(np.median(np.diff(t)))
+        return mean if 1e-9 * mean < abs(median - mean) <= 0.01 * mean else median
 
 
 def read_sidecar(path: str | Path) -> dict:
@@ -91,9 +108,16 @@ def read_sidecar(path: str | Path) -> dict:
         raise InputError(src, "motor.drive_frequency_hz", "is required")
     number(src, "motor.drive_frequency_hz", motor["drive_frequency_hz"], positive=True)
     if motor.get("Phi0_rad") is not None:
-        number(src, "motor.Phi0_rad", motor["Phi0_rad"], positive=True)
+        phi0 = number(src, "motor.Phi0_rad", motor["Phi0_rad"], positive=True)
+        if phi0 > MAX_PHI0_RAD:
+            raise InputError(src, "motor.Phi0_rad", f"must be at most pi rad (a torsional "
+                             f"amplitude), got {phi0:g}; is it in radians?")  # fmt: skip
+    if motor.get("U0_m") is not None:
+        number(src, "motor.U0_m", motor["U0_m"], positive=True)
     if data.get("noise_sigma_rad_s") is not None:
-        number(src, "noise_sigma_rad_s", data["noise_sigma_rad_s"])
+        number(src, "noise_sigma_rad_s", data["noise_sigma_rad_s"], nonneg=True)
+    if "synthetic" in data and not isinstance(data["synthetic"], bool):
+        raise InputError(src, "synthetic", f"must be true or false, got {data['synthetic']!r}")
     if not isinstance(data.get("source", ""), str):
         raise InputError(src, "source", "must be text")
     return data
@@ -121,11 +145,15 @@ def read_curve(path: str | Path, sidecar: str | Path | None = None) -> MotorCurv
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as ex:
         raise InputError(src, "", f"not a readable CSV: {str(ex).splitlines()[0]}") from None
     df.columns = [str(c).strip() for c in df.columns]
+    _check_header(src, list(df.columns))
     for col in ("time_s", "omega_rad_s"):
         if col not in df.columns:
             raise InputError(src, col, f"missing column (have: {', '.join(df.columns)})")
     cols = ["time_s", "omega_rad_s"] + (["sigma_rad_s"] if "sigma_rad_s" in df.columns else [])
     for col in cols:
+        if df[col].dtype == bool or df[col].map(lambda v: isinstance(v, bool)).any():
+            row = int(np.argmax(df[col].map(lambda v: isinstance(v, bool)).to_numpy()))
+            raise InputError(src, col, f"row {row + 2}: not a number: {df[col].iloc[row]!r}")
         values = pd.to_numeric(df[col], errors="coerce")
         bad = values.isna() & df[col].notna()
         if bad.any():
@@ -150,10 +178,20 @@ def read_curve(path: str | Path, sidecar: str | Path | None = None) -> MotorCurv
         sigma = float(np.mean(s))
     elif meta.get("noise_sigma_rad_s") is not None:
         sigma = float(meta["noise_sigma_rad_s"])
+    omega = df["omega_rad_s"].to_numpy()
+    spread = float(np.std(omega))
+    if sigma > MAX_NOISE_OVER_SPREAD * spread:
+        where = (
+            (src, "sigma_rad_s")
+            if "sigma_rad_s" in df.columns
+            else (str(side), "noise_sigma_rad_s")
+        )
+        raise InputError(*where, f"measurement noise {sigma:g} rad/s exceeds {MAX_NOISE_OVER_SPREAD:g} "
+                         f"times the spread of the data themselves ({spread:g} rad/s)")  # fmt: skip
     motor = meta["motor"]
     return MotorCurve(
         time=t,
-        omega=df["omega_rad_s"].to_numpy(),
+        omega=omega,
         sigma=sigma,
         drive_frequency_hz=float(motor["drive_frequency_hz"]),
         phi0_rad=float(motor["Phi0_rad"]) if motor.get("Phi0_rad") is not None else None,
@@ -161,7 +199,22 @@ def read_curve(path: str | Path, sidecar: str | Path | None = None) -> MotorCurv
         synthetic=bool(meta.get("synthetic", False)),
         path=src,
         sidecar=meta,
+        sidecar_path=str(side),
     )
+
+
+def _check_header(src: str, columns: list[str]) -> None:
+    """Refuse a column the reader would otherwise pick one of several of (pandas renames a
+    repeated ``omega_rad_s`` to ``omega_rad_s.1`` and the first would be used silently)."""
+    for c in columns:
+        base, dot, tail = c.rpartition(".")
+        if (
+            dot
+            and tail.isdigit()
+            and base in columns
+            and base in ("time_s", "omega_rad_s", "sigma_rad_s")
+        ):
+            raise InputError(src, base, "the column appears more than once; keep one")
 
 
 def write_curve(df: pd.DataFrame, path: str | Path, sidecar: dict) -> None:

@@ -261,12 +261,29 @@ class FirstOrderTrend:
         return self.steady * (1.0 - x) + self.omega0 * x
 
 
+def _line_fit(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
+    """Least-squares line ``y ≈ a + b x`` in closed form: ``(a, b, Σ r²)``.
+
+    Centred sums (stable when ``x`` barely varies), each a fixed-order ``np.add.reduce`` of
+    elementwise products: no BLAS call, so the result does not depend on which kernel a CPU picks
+    or on the thread count (README, "Reproducible"). A constant ``x`` gives ``b = 0``.
+    """
+    xm, ym = float(np.add.reduce(x)) / len(x), float(np.add.reduce(y)) / len(y)
+    dx, dy = x - xm, y - ym
+    sxx = float(np.add.reduce(dx * dx))
+    b = float(np.add.reduce(dx * dy)) / sxx if sxx > 0.0 else 0.0
+    a = ym - b * xm
+    r = y - (a + b * x)
+    return a, b, float(np.add.reduce(r * r))
+
+
 def first_order_trend(t: np.ndarray, omega: np.ndarray) -> FirstOrderTrend:
     """Least-squares first-order response (steady value and time constant) through ``(t, Ω)``.
 
-    For a fixed ``τ`` the model is linear in ``(Ω∞, Ω0)``, so the fit is a bounded 1-D search
-    over ``log τ`` with a 2-parameter linear solve inside (variable projection). The ripple is
-    the RMS of the residual about the trend.
+    For a fixed ``τ`` the model ``Ω∞ (1 − x) + Ω0 x`` with ``x = exp(−(t − t0)/τ)`` is the line
+    ``Ω∞ + (Ω0 − Ω∞) x`` (:func:`_line_fit`, closed form), so the fit is a bounded 1-D search over
+    ``log τ`` with that solve inside (variable projection). Times enter only as ``t − t0``: the
+    time origin does not matter. The ripple is the RMS of the residual about the trend.
     """
     from scipy.optimize import minimize_scalar
 
@@ -276,12 +293,9 @@ def first_order_trend(t: np.ndarray, omega: np.ndarray) -> FirstOrderTrend:
     span = float(t[-1] - t0) or 1.0
     dt = t - t0
 
-    def solve(log_tau: float) -> tuple[float, np.ndarray]:
-        x = np.exp(-dt / math.exp(log_tau))
-        a = np.column_stack([1.0 - x, x])
-        coef, *_ = np.linalg.lstsq(a, y, rcond=None)
-        r = y - a @ coef
-        return float(r @ r), coef
+    def solve(log_tau: float) -> tuple[float, float, float]:
+        a, b, cost = _line_fit(np.exp(-dt / math.exp(log_tau)), y)
+        return cost, a, a + b
 
     lo, hi = math.log(1e-4 * span), math.log(10.0 * span)
     grid = np.linspace(lo, hi, 25)
@@ -292,7 +306,7 @@ def first_order_trend(t: np.ndarray, omega: np.ndarray) -> FirstOrderTrend:
         lambda g: solve(g)[0], bounds=(a, b), method="bounded", options={"xatol": 1e-6}
     )
     log_tau = float(best.x) if best.fun <= costs[k] else float(grid[k])
-    cost, (s, o0) = solve(log_tau)
+    _cost, s, o0 = solve(log_tau)
     tau = math.exp(log_tau)
     resid = y - (s * (1.0 - np.exp(-dt / tau)) + o0 * np.exp(-dt / tau))
     return FirstOrderTrend(

@@ -492,6 +492,10 @@ def _check_paired(src: str, raw: dict, effects: frozenset[str]) -> None:
 def _ensemble(src: str, v: Any, effects: frozenset[str], params: Parameters) -> Ensemble:
     """Validate ``ensemble: {members, seed}`` (INTERFACES.md)."""
     em = _mapping(src, "ensemble", v, ("members", "seed"))
+    if isinstance(em.get("members"), str):  # a quoted '3' is text, not a count
+        raise InputError(
+            src, "ensemble.members", f"must be a whole number, got the text {em['members']!r}"
+        )
     members = whole_number(src, "ensemble.members", em.get("members", 1))
     if members > MAX_MEMBERS:
         raise InputError(src, "ensemble.members", f"must be <= {MAX_MEMBERS}, got {members}")

@@ -6,7 +6,9 @@ trend and the ripple (:mod:`.statistics`), compared by a synthetic likelihood th
 model's across-member spread (:mod:`.objective`), searched globally then locally
 (:mod:`.search`), and profiled for every parameter (:mod:`.uncertainty`). :mod:`.model` holds the
 physical conversion (MODEL.md "Physical conversion"), :mod:`.output` the fit file, and
-:mod:`.command` the ``bouncedisk fit`` command.
+:mod:`.command` the ``bouncedisk fit`` command. Round-off chooses nothing (README,
+"Reproducible"): :mod:`.detlinalg` does the small linear algebra in a fixed order (no BLAS), and
+:mod:`.basins` lists the acceptable basins and holds the rule that picks the reported one.
 """
 
 from .command import fit_command

@@ -52,7 +52,9 @@ def check_output(output: str, curves: list[str], sidecar: str | None) -> Path:
 def validate(args) -> dict:
     """Check every option (before any work); the fit's settings as a dictionary."""
     seed = _int_option(args.seed, "--seed", 0, 2**63 - 1)
-    boot = _int_option(args.bootstrap, "--bootstrap", 2, 10_000)
+    from .core import MIN_BOOTSTRAP
+
+    boot = _int_option(args.bootstrap, "--bootstrap", MIN_BOOTSTRAP, 10_000)
     members = _int_option(args.members, "--members", 4, 1024) if args.members is not None else None
     from .search import SIZE_LIMITS
 
@@ -100,7 +102,12 @@ def fit_command(args) -> None:
             print(f"fit: [{time.perf_counter() - start:6.1f} s] {msg}", file=sys.stderr, flush=True)
 
     curves = []
+    seen = {}
     for path in args.curve:
+        if Path(path).resolve() in seen:
+            raise InputError(str(path), "", f"is the same file as {seen[Path(path).resolve()]}: "
+                             "give each run-up once")  # fmt: skip
+        seen[Path(path).resolve()] = str(path)
         progress(f"reading {path}")
         curves.append(read_curve(path, args.sidecar))
     c = curves[0]

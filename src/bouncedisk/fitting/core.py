@@ -17,7 +17,9 @@ import numpy as np
 from scipy import stats as _sps
 
 from ..curves import MotorCurve
+from ..errors import InputError
 from ..observables import first_order_trend
+from .basins import Basin, choose, list_basins
 from .model import MODEL_E_SIGMA, EnsembleSpec, member_records, param_names, physical, uniform_grid
 from .objective import Objective
 from .runs import check_runs, mean_curve
@@ -42,6 +44,13 @@ MAX_PERIODS = 20_000
 MEMBERS_ONE, MEMBERS_RUNS = 12, 32
 #: Members per scan point when several run-ups are fitted together.
 SCAN_MEMBERS_RUNS = 4
+#: Fewest samples (after the work bound) the statistics are taken on: the block bootstrap's
+#: blocks are at least 20 samples, and the data must hold at least 10 of them.
+MIN_FIT_SAMPLES = 200
+#: Fewest drive periods a record must span (the run-up is many impacts long).
+MIN_PERIODS = 50
+#: Fewest bootstrap resamples: a 95 % percentile interval needs a 2.5 % tail of at least one.
+MIN_BOOTSTRAP = 40
 
 
 @dataclass(frozen=True)
@@ -61,6 +70,11 @@ class FitSettings:
     e_sigma: float = MODEL_E_SIGMA  # restitution noise of the members (MODEL.md), stated
     cores: int = 1
     profile: tuple[str, ...] | None = None  # coordinates to profile (None: all)
+
+    def __post_init__(self) -> None:
+        if self.bootstrap < MIN_BOOTSTRAP:
+            raise ValueError(f"bootstrap must be at least {MIN_BOOTSTRAP} (a 95 % percentile "
+                             f"interval), got {self.bootstrap}")  # fmt: skip
 
     def for_runs(self, runs: int) -> FitSettings:
         """The settings with the ensemble sizes left open (``None``) set for ``runs`` run-ups.
@@ -92,7 +106,9 @@ def prepare_curve(curve: MotorCurve) -> tuple[MotorCurve, str]:
     sampled the same way. Returns the curve to fit and a note (empty when nothing changed).
     """
     notes = []
-    t, om = curve.time, curve.omega
+    t, om = _relative_time(curve), curve.omega
+    if curve.time[0] != 0.0:
+        notes.append(f"times counted from the first sample (t0 = {curve.time[0]:.17g} s)")
     t_max = t[0] + MAX_PERIODS / curve.drive_frequency_hz
     if t[-1] > t_max:
         keep = t <= t_max
@@ -103,6 +119,40 @@ def prepare_curve(curve: MotorCurve) -> tuple[MotorCurve, str]:
         notes.append(f"every {k}th of {len(t)} samples kept ({len(t[::k])} samples)")
         t, om = t[::k], om[::k]
     return dataclasses.replace(curve, time=t, omega=om), "; ".join(notes)
+
+
+def _relative_time(curve: MotorCurve) -> np.ndarray:
+    """Times from the first sample; ``k·dt`` when every sample is within 1 % of ``dt`` of it.
+
+    The statistics then do not depend on the time origin: stamps of 1e9 s (epoch-like) carry
+    their steps only to 1.2e-7 s, and are put back on the uniform grid they were taken on.
+    """
+    t = curve.time - curve.time[0]
+    dt = curve.dt
+    grid = dt * np.arange(len(t))
+    return grid if np.max(np.abs(t - grid)) <= 0.01 * dt else t
+
+
+def check_fittable(curve: MotorCurve) -> None:
+    """Refuse a curve too short or too coarse for the fit's statistics (before any work).
+
+    The record must span :data:`MIN_PERIODS` drive periods and hold :data:`MIN_FIT_SAMPLES`
+    samples within the first :data:`MAX_PERIODS` of them (the work bound, :func:`prepare_curve`).
+    """
+    side = curve.sidecar_path or curve.path
+    f, span, n = curve.drive_frequency_hz, float(curve.time[-1] - curve.time[0]), len(curve.time)
+    if n < MIN_FIT_SAMPLES:
+        raise InputError(curve.path, "time_s", f"has {n} samples; the fit's statistics need at "
+                         f"least {MIN_FIT_SAMPLES} (trend, ripple and a block bootstrap)")  # fmt: skip
+    if not span * f >= MIN_PERIODS:
+        raise InputError(side, "motor.drive_frequency_hz", f"{f:g} Hz: the record ({span:.6g} s) "
+                         f"spans {span * f:.3g} drive periods; the fit needs at least {MIN_PERIODS}")  # fmt: skip
+    per_sample = curve.dt * f
+    kept = min(n, int(MAX_PERIODS / per_sample) + 1)
+    if kept < MIN_FIT_SAMPLES:
+        raise InputError(side, "motor.drive_frequency_hz", f"{f:g} Hz: one sampling interval "
+                         f"spans {per_sample:.3g} drive periods, so the first {MAX_PERIODS} "
+                         f"periods hold {kept} samples; the fit needs at least {MIN_FIT_SAMPLES}")  # fmt: skip
 
 
 def data_layout(curves: Sequence[MotorCurve]) -> tuple[Layout, np.ndarray, np.ndarray]:
@@ -163,6 +213,7 @@ class FitResult:
     trend_model: tuple[float, float]
     trend_ci: tuple[tuple[float, float], tuple[float, float]]
     physical: dict[str, float]
+    basins: list[Basin]  # acceptable basins, best first; the estimate is basins[0]'s point
     curve: MotorCurve  # the runs' mean (one run: the curve), as fitted
     note: str
     evaluations: int
@@ -197,10 +248,24 @@ def prepare_runs(
     Returns the runs as fitted, their mean curve and the note on the work bound.
     """
     runs = [curve] if isinstance(curve, MotorCurve) else list(curve)
+    for c in runs:
+        check_fittable(c)
     check_runs(runs)
     prepared = [prepare_curve(c) for c in runs]
     fitted = [c for c, _ in prepared]
     return fitted, mean_curve(fitted), prepared[0][1]
+
+
+def fit_basins(obj: Objective, members: int, thr: float) -> list[Basin]:
+    """Every basin of evaluated points (``members`` members, current metric) within ``thr`` of
+    the best ``χ²`` (:func:`.basins.list_basins`), ordered so the chosen one
+    (:func:`.basins.choose`) is first."""
+    pts = {tuple(ev.x): ev.x for ev in obj.log if ev.members == members}
+    xs = np.array(list(pts.values()))
+    chis = np.array([obj.chi2_now(x, members) for x in xs])
+    basins = list_basins(xs, chis, obj.span, thr)
+    k = choose(basins)
+    return [basins[k], *basins[:k], *basins[k + 1 :]]
 
 
 def fit_curve(
@@ -216,7 +281,7 @@ def fit_curve(
     if note and progress:
         progress(f"work bounded: {note}")
     layout, records, target = data_layout(runs)
-    boot = bootstrap_stats(layout, records, max(s.bootstrap, 2), s.seed)
+    boot = bootstrap_stats(layout, records, s.bootstrap, s.seed)
     spec = EnsembleSpec(e_sigma=s.e_sigma, seed=s.seed, cores=max(1, s.cores))
     obj = Objective(fitted, param_names(fitted), layout, target, spec, s.members,
                     cov=provisional_cov(target, boot), runs=len(runs))  # fmt: skip
@@ -232,6 +297,10 @@ def fit_curve(
     profiles, jac, corr, sd = all_profiles(obj, best.x, s.members, s.profile and list(s.profile),
                                            progress, thr, extra)  # fmt: skip
     final = obj.best(s.members)  # a profile may have found a better point
+    basins = fit_basins(obj, s.members, thr)
+    if progress is not None and len(basins) > 1:
+        progress(f"{len(basins)} basins within delta chi2 {thr:.3g} of the best: the data do not "
+                 "single one out; the estimate is the lowest chi2 (basins.choose)")  # fmt: skip
     if not adequate(final.chi2, len(target)):
         # the best point found does not reproduce the data: nothing is identified by it
         profiles = [dataclasses.replace(p, identified=False) for p in profiles]
@@ -252,6 +321,6 @@ def fit_curve(
         trend_data=(td.steady, td.tau), trend_model=(tm.steady, tm.tau),
         trend_ci=(tuple(np.percentile(boot[:, 0], [2.5, 97.5])),
                   tuple(np.exp(np.percentile(boot[:, 1], [2.5, 97.5])))),
-        physical=physical(theta, fitted), curve=fitted, note=note, evaluations=len(obj.cache),
+        physical=physical(theta, fitted), basins=basins, curve=fitted, note=note, evaluations=len(obj.cache),
         wall_time_s=_time.perf_counter() - start, settings=s, runs=tuple(runs),
     )  # fmt: skip

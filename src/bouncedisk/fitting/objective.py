@@ -12,6 +12,11 @@ by ``C / M``, and the model's mean has the Monte-Carlo error ``C / K``:
 ``−2 log`` of a Gaussian synthetic likelihood (Wood, Nature 466, 1102, 2010) with ``C`` held at
 its value near the optimum (regularized, :func:`.statistics.regularized_cov`). The members'
 noise streams are fixed (common random numbers), so ``χ²`` is deterministic for a seed.
+
+Round-off cannot move it (README, "Reproducible"): every point is first put on a lattice of
+:data:`SNAP_DECIMALS` decimals (:func:`snap`; an optimizer's step that differs in the last bits
+between BLAS kernels lands on the same lattice point), the members' statistics are reduced in a
+fixed order, and the whitening and ``χ²`` use :mod:`.detlinalg` (no BLAS).
 """
 
 from __future__ import annotations
@@ -24,8 +29,24 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..curves import MotorCurve
+from . import detlinalg
+from .basins import rank_key
 from .model import BOUNDS, EnsembleSpec, member_records
 from .statistics import EnsembleStats, Layout, record_stats
+
+#: Decimals of the lattice every evaluated point is put on (:func:`snap`): far finer than any step
+#: of the search (the finest, a finite difference, is 1e-3 of a range), far coarser than round-off.
+SNAP_DECIMALS = 8
+
+
+def snap(x: np.ndarray) -> np.ndarray:
+    """``x`` on the lattice of :data:`SNAP_DECIMALS` decimals, where the objective evaluates.
+
+    A change of ``x`` by round-off (1e-16) moves the lattice point only if ``x`` lies within that
+    much of a cell boundary (probability ~1e-8 per coordinate), so two machines whose optimizer
+    steps differ in the last bits evaluate the model at the same points.
+    """
+    return np.round(np.asarray(x, float), SNAP_DECIMALS) + 0.0  # + 0.0: no negative zero
 
 
 @dataclass
@@ -87,7 +108,7 @@ class Objective:
     def set_cov(self, cov: np.ndarray) -> None:
         """Use the across-member covariance ``cov`` (already regularized) from now on."""
         self.cov = np.asarray(cov, float)
-        self._chol = np.linalg.cholesky(self.cov)
+        self._white = detlinalg.lower_inverse(detlinalg.cholesky(self.cov))
 
     def theta(self, x: np.ndarray) -> dict[str, float]:
         """Parameter dictionary of search coordinates ``x`` (ψ wrapped into ``[−π, π)``)."""
@@ -99,7 +120,8 @@ class Objective:
     def ensemble(self, x: np.ndarray, members: int | None = None) -> EnsembleStats:
         """Statistics of the first ``members`` members at ``x`` (cached per point and size)."""
         k = members or self.members
-        key = (k, *np.round(np.asarray(x, float), 12))
+        x = snap(x)
+        key = (k, *x)
         if key not in self.cache:
             spec = replace(self.spec, cores=1) if self.points_parallel else self.spec
             vals = member_records(
@@ -114,13 +136,13 @@ class Objective:
         """Whitened residuals ``L⁻¹ (μ(x) − s_d) / sqrt(1/M + 1/K)`` (``C = L Lᵀ``)."""
         k = members or self.members
         d = self.ensemble(x, k).mean - self.target
-        return np.linalg.solve(self._chol, d) / math.sqrt(1.0 / self.runs + 1.0 / k)
+        return detlinalg.matvec(self._white, d) / math.sqrt(1.0 / self.runs + 1.0 / k)
 
     def chi2(self, x: np.ndarray, members: int | None = None) -> float:
         """``χ²`` at ``x``; every call is logged (the search never returns a worse point)."""
-        x = np.asarray(x, float)
+        x = snap(x)
         r = self.residuals(x, members)
-        value = float(r @ r)
+        value = detlinalg.dot(r, r)
         if not math.isfinite(value):
             value = 1e300
         self.log.append(Evaluation(x.copy(), members or self.members, value))
@@ -145,9 +167,17 @@ class Objective:
             self.points_parallel = False
 
     def best(self, members: int | None = None) -> Evaluation:
-        """The best logged evaluation with ``members`` members under the current metric."""
+        """The best logged evaluation with ``members`` members under the current metric
+        (ties, and ``χ²`` equal to :data:`.basins.CHI2_DIGITS` digits, go to the smaller point in
+        coordinate order: the choice does not depend on the order points were logged in)."""
         k = members or self.members
-        pts = [ev for ev in self.log if ev.members == k]
-        scored = [(float(np.sum(self.residuals(ev.x, k) ** 2)), i) for i, ev in enumerate(pts)]
-        value, i = min(scored)
-        return Evaluation(pts[i].x.copy(), k, value)
+        pts = {tuple(ev.x): ev.x for ev in self.log if ev.members == k}
+        scored = [(self.chi2_now(x, k), x) for x in pts.values()]
+        value, x = min(scored, key=lambda s: rank_key(s[0], s[1]))
+        return Evaluation(x.copy(), k, value)
+
+    def chi2_now(self, x: np.ndarray, members: int | None = None) -> float:
+        """``χ²`` at an evaluated point under the current metric, not logged."""
+        r = self.residuals(x, members)
+        value = detlinalg.dot(r, r)
+        return value if math.isfinite(value) else 1e300

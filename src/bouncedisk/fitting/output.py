@@ -173,6 +173,21 @@ def _statistics(fit: FitResult) -> dict:
     return out
 
 
+def _basins(fit: FitResult) -> xr.Dataset:
+    """Every acceptable basin (:mod:`.basins`): its best point, ``χ²`` and size; the first is the
+    estimate's."""
+    n = len(fit.basins)
+    x = np.array([b.x for b in fit.basins]).reshape(n, len(fit.names))
+    return xr.Dataset({
+        "basin_x": (("basin", "parameter"), x, {"units": "1", "long_name": "best point of each "
+                    "acceptable basin in search coordinates (basin 0: the estimate)"}),
+        "basin_chi2": ("basin", np.array([b.chi2 for b in fit.basins]), {"units": "1",
+                       "long_name": "chi2 of each basin's best point"}),
+        "basin_points": ("basin", np.array([b.points for b in fit.basins], dtype=np.int64),
+                         {"units": "1", "long_name": "evaluated points in each basin"}),
+    }, coords={"basin": ("basin", np.arange(n)), "parameter": ("parameter", fit.names)})  # fmt: skip
+
+
 def fit_dataset(fit: FitResult) -> xr.Dataset:
     """The fit file (module docstring)."""
     curve = fit.curve
@@ -195,6 +210,7 @@ def fit_dataset(fit: FitResult) -> xr.Dataset:
     ds["combination_sd"] = ("combination", fit.comb_sd, {"units": "1", "long_name":
                             "standard deviation of each eigen-combination, as a fraction of "
                             "the search ranges (< 1: identified by the curve)"})  # fmt: skip
+    ds = ds.merge(_basins(fit))
     ds["combination_vector"] = (("combination", "parameter"), fit.comb_vectors,
                                 {"units": "1", "long_name": "eigen-combination of the search "
                                  "coordinates scaled to their ranges"})  # fmt: skip
@@ -230,6 +246,11 @@ def _global_attrs(fit: FitResult, paths: list[str], not_identified: list[str]) -
         "trend_comment": "steady_speed_rad_s, time_constant_s: first-order trend of the data "
         "(95% intervals: block bootstrap); model_*: trend of the fitted model's ensemble mean",
         "not_identified": ",".join(not_identified) or "none",
+        "basins": len(fit.basins),
+        "basin_rule": "basins: evaluated points within the interval threshold of the best chi2, "
+        "grouped within 5% of every search range; the estimate is the basin with the lowest chi2 "
+        "(10 significant digits, ties to the smaller point); more than one basin: the data do not "
+        "single one out",
         "chi2": fit.chi2, "n_statistics": len(STATS),
         "chi2_p_value": float(chi2_dist.sf(fit.chi2, len(STATS))),
         "fit_adequate": int(adequate(fit.chi2, len(STATS))), "evaluations": fit.evaluations,

@@ -16,6 +16,11 @@
 
 Every evaluation is logged, and the result is the best logged point at the final ensemble size
 under the final metric: the search never returns a point worse than one it evaluated.
+
+Round-off chooses nothing (README, "Reproducible"): the objective evaluates on a lattice
+(:func:`.objective.snap`) with BLAS-free reductions, and every ranking of candidates (scan, zoom,
+re-ranking, starts, the result) uses the total order :func:`.basins.rank_key`, the same whatever
+order the threads logged the points in.
 """
 
 from __future__ import annotations
@@ -28,6 +33,8 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.stats import qmc
 
+from .basins import rank_key
+from .basins import ranked as rank_order
 from .objective import Evaluation, Objective
 from .statistics import regularized_cov, stat_floor
 
@@ -202,7 +209,8 @@ def _scan(
         best = min(ev.chi2 for ev in obj.log if ev.members == members)
         _say(progress, f"{label}: {min(i + chunk, len(pts))}/{len(pts)} (e, omega_s) points, "
                        f"best chi2 {best:.4g}")  # fmt: skip
-    return sorted((ev for ev in obj.log if ev.members == members), key=lambda ev: ev.chi2)
+    return sorted((ev for ev in obj.log if ev.members == members),
+                  key=lambda ev: rank_key(ev.chi2, ev.x))  # fmt: skip
 
 
 def measure_cov(obj: Objective, x: np.ndarray, members: int) -> np.ndarray:
@@ -250,9 +258,9 @@ def search(
     # scan points on `members` members under the model's covariance, measured at the best of them
     cands = [ev.x for ev in _distinct(ranked, obj.span, s.candidates)]
     scores = obj.map(lambda x: obj.chi2(x, s.members), cands)
-    obj.set_cov(measure_cov(obj, cands[int(np.argmin(scores))], s.pilot_members))
+    obj.set_cov(measure_cov(obj, cands[rank_order(scores, cands)[0]], s.pilot_members))
     scores = [obj.chi2(x, s.members) for x in cands]
-    starts = [cands[i] for i in np.argsort(scores)[: s.starts]]
+    starts = [cands[i] for i in rank_order(scores, cands)[: s.starts]]
     _say(progress, f"pilot: model covariance from {s.pilot_members} members; {len(cands)} scan "
                    f"points re-ranked on {s.members} members, best chi2 {min(scores):.4g}")  # fmt: skip
     # the starts themselves, then each refined (never worse than the best start)

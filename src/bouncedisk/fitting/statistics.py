@@ -179,8 +179,14 @@ class EnsembleStats:
     def from_values(cls, values: np.ndarray) -> EnsembleStats:
         """Summarise per-member statistics ``values`` of shape ``(members, n_stats)``."""
         v = np.asarray(values, float)
-        cov = np.cov(v.T, ddof=1) if len(v) > 1 else np.zeros((v.shape[1],) * 2)
-        return cls(mean=v.mean(axis=0), cov=np.atleast_2d(cov), members=len(v), values=v)
+        # fixed-order sums over the members (no BLAS: the same bits under every kernel)
+        mean = np.add.reduce(v, axis=0) / len(v)
+        c = v - mean
+        if len(v) > 1:
+            cov = np.add.reduce(c[:, :, None] * c[:, None, :], axis=0) / (len(v) - 1)
+        else:
+            cov = np.zeros((v.shape[1],) * 2)
+        return cls(mean=mean, cov=np.atleast_2d(cov), members=len(v), values=v)
 
 
 def regularized_cov(cov: np.ndarray, floor: np.ndarray, shrink: float = 0.2) -> np.ndarray:

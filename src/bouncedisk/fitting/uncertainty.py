@@ -20,7 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import chi2 as chi2_dist
 
-from .objective import Objective
+from . import detlinalg
+from .objective import Objective, snap
 
 #: Δχ² of a 95 % profile interval (one parameter).
 THRESHOLD = float(chi2_dist.ppf(0.95, 1))
@@ -53,6 +54,7 @@ def jacobian(obj: Objective, x: np.ndarray, members: int, rel_step: float = 0.01
         xp, xm = x.copy(), x.copy()
         xp[j] = min(obj.hi[j], x[j] + h)
         xm[j] = max(obj.lo[j], x[j] - h)
+        xp, xm = snap(xp), snap(xm)
         obj.chi2(xp, members)
         obj.chi2(xm, members)
         jac[:, j] = (obj.residuals(xp, members) - obj.residuals(xm, members)) / (xp[j] - xm[j])
@@ -61,8 +63,8 @@ def jacobian(obj: Objective, x: np.ndarray, members: int, rel_step: float = 0.01
 
 def curvature(jac: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Covariance (pseudo-inverse of ``JᵀJ``), correlation, and standard deviations."""
-    info = jac.T @ jac
-    cov = np.linalg.pinv(info, rcond=1e-10)
+    info = detlinalg.gram(jac)
+    cov = detlinalg.pinv_sym(info, 1e-10)
     sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(sd, sd)
@@ -76,8 +78,8 @@ def combinations(jac: np.ndarray, span: np.ndarray) -> tuple[np.ndarray, np.ndar
     the curve constrains it) and the unit vectors (rows), best determined first.
     """
     js = jac * span[None, :]
-    w, v = np.linalg.eigh(js.T @ js)
-    order = np.argsort(w)[::-1]
+    w, v = detlinalg.sym_eig(detlinalg.gram(js))
+    order = np.argsort(-w, kind="stable")
     sd = 1.0 / np.sqrt(np.maximum(w[order], 1e-300))
     return sd, v[:, order].T
 
@@ -86,28 +88,28 @@ def _side(obj, x0, j, sign, step, chi0, members, jac, max_steps, thr=THRESHOLD):
     """Points of one side of the profile of coordinate ``j``: (values, χ², points)."""
     others = [k for k in range(len(x0)) if k != j]
     jo = jac[:, others]
-    pinv = np.linalg.pinv(jo, rcond=1e-8)
+    pinv = detlinalg.pinv(jo, 1e-8)
     out = []
     x = x0.copy()
     v = x0[j]
     for _ in range(max_steps):
         if (sign > 0 and v >= obj.hi[j]) or (sign < 0 and v <= obj.lo[j]):
             break
-        v = float(np.clip(v + sign * step, obj.lo[j], obj.hi[j]))
+        v = float(snap(np.clip(v + sign * step, obj.lo[j], obj.hi[j])))
         # linear prediction of the others, then two chord Gauss-Newton steps
         x = x.copy()
-        x[others] -= pinv @ jac[:, j] * (v - x[j])
+        x[others] -= detlinalg.matvec(pinv, jac[:, j]) * (v - x[j])
         x[j] = v
         x = np.clip(x, obj.lo, obj.hi)
         best_x, best_c = x, obj.chi2(x, members)
         for _ in range(2):
             y = best_x.copy()
-            y[others] -= pinv @ obj.residuals(best_x, members)
+            y[others] -= detlinalg.matvec(pinv, obj.residuals(best_x, members))
             y = np.clip(y, obj.lo, obj.hi)
             c = obj.chi2(y, members)
             if c < best_c:
                 best_x, best_c = y, c
-        x = best_x
+        x = snap(best_x)
         out.append((v, best_c, x.copy()))
         if best_c - chi0 > 2.0 * thr:
             break
@@ -205,7 +207,7 @@ def acceptable_points(obj: Objective, members: int, thr: float) -> np.ndarray:
     """Every evaluated point (``members`` members) within ``thr`` of the best ``χ²`` now."""
     pts = {tuple(ev.x): ev.x for ev in obj.log if ev.members == members}
     xs = np.array(list(pts.values()))
-    chis = np.array([float(np.sum(obj.residuals(x, members) ** 2)) for x in xs])
+    chis = np.array([obj.chi2_now(x, members) for x in xs])
     return xs[chis <= chis.min() + thr]
 
 

@@ -1,0 +1,165 @@
+"""The fit's data at the edges (issue 21, items 3, 4, 12, 13): time origin, too-short data and a
+too-small bootstrap, extreme sidecar values, data the fit used to accept wrongly."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+import yaml
+
+from bouncedisk.cli import main
+from bouncedisk.curves import read_curve, write_curve
+from bouncedisk.errors import InputError
+from bouncedisk.fitting import core
+from bouncedisk.fitting.core import data_layout, prepare_runs
+from bouncedisk.fitting.model import synthesize_curve
+from bouncedisk.fitting.statistics import STATS
+
+F_HZ, PHI0, DT, SIGMA = 15000.0, 3.0e-4, 2.5e-5, 0.05
+TRUE = {"e": 0.31, "r_phi": 0.0041, "psi": 0.25, "omega_s": 1.37}
+
+
+def _sidecar(**extra):
+    motor = {"drive_frequency_hz": F_HZ, "Phi0_rad": PHI0, **extra.pop("motor", {})}
+    return {"source": "test", "synthetic": True, "units": {"time": "s", "omega": "rad/s"},
+            "motor": motor, **extra}  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def frame():
+    """A short synthetic run-up (0.02 s, 801 samples)."""
+    return synthesize_curve(TRUE, F_HZ, PHI0, 0.02, DT, SIGMA, 3, member=0)
+
+
+def _curve(tmp_path, df, side=None, name="c.csv"):
+    p = tmp_path / name
+    write_curve(df, p, side or _sidecar())
+    return p
+
+
+def _fails(capsys, args, field, path=None):
+    assert main(["fit", *args, "-q"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and field in err[0], err
+    assert "Traceback" not in err[0]
+    if path is not None:
+        assert str(path) in err[0]
+    return err[0]
+
+
+# ---------------------------------------------------------------- item 3: the time origin
+
+
+def test_statistics_do_not_depend_on_the_time_origin(tmp_path, frame):
+    """Stamps shifted by 1e9 s (epoch-like; their steps carry only 1.2e-7 s) give the data's
+    statistics of the unshifted curve to 1e-5: the sampling interval itself is known only to
+    ulp(1e9)/span = 6e-6 from such stamps, and the statistics scale with it at most linearly."""
+    bound = np.spacing(1e9) / 0.02
+    shifted = frame.assign(time_s=frame["time_s"] + 1e9)
+    a = read_curve(_curve(tmp_path, frame, name="a.csv"))
+    b = read_curve(_curve(tmp_path, shifted, name="b.csv"))
+    assert b.time[0] == 1e9 and abs(b.dt / a.dt - 1) <= bound
+    (ra,), _, _ = prepare_runs(a)
+    (rb,), _, note = prepare_runs(b)
+    assert "t0 = 1000000000 s" in note and rb.time[0] == 0.0
+    np.testing.assert_array_equal(ra.omega, rb.omega)
+    la, _, sa = data_layout([ra])
+    lb, _, sb = data_layout([rb])
+    assert len(la.t) == len(lb.t) and abs(lb.tau_ref / la.tau_ref - 1) <= 2 * bound
+    np.testing.assert_allclose(sb, sa, rtol=2 * bound, atol=1e-9, err_msg=str(STATS))
+
+
+# ---------------------------------------------------------------- item 4: too short, too small
+
+
+def test_data_too_short_for_the_statistics(tmp_path, capsys, frame):
+    p = _curve(tmp_path, frame.iloc[:20])
+    err = _fails(capsys, [str(p), "-o", str(tmp_path / "f.nc")], "time_s", p)
+    assert f"at least {core.MIN_FIT_SAMPLES}" in err and not (tmp_path / "f.nc").exists()
+
+
+@pytest.mark.parametrize("n", ["2", "39"])
+def test_bootstrap_too_small_for_a_95_interval(tmp_path, capsys, frame, n):
+    p = _curve(tmp_path, frame)
+    _fails(capsys, [str(p), "-o", str(tmp_path / "f.nc"), "--bootstrap", n], "--bootstrap")
+
+
+# ---------------------------------------------------------------- item 12: extreme sidecar values
+
+
+@pytest.mark.parametrize(
+    "side,field",
+    [
+        ({"noise_sigma_rad_s": 1e300}, "noise_sigma_rad_s"),
+        ({"motor": {"drive_frequency_hz": 1e300}}, "motor.drive_frequency_hz"),
+        ({"motor": {"drive_frequency_hz": 1e-300}}, "motor.drive_frequency_hz"),
+        ({"motor": {"drive_frequency_hz": 1e9}}, "motor.drive_frequency_hz"),
+        ({"motor": {"Phi0_rad": 1e300}}, "motor.Phi0_rad"),
+    ],
+)
+def test_extreme_sidecar_values_one_line(tmp_path, capsys, frame, side, field):
+    df = frame.drop(columns="sigma_rad_s") if "noise_sigma_rad_s" in side else frame
+    p = _curve(tmp_path, df, _sidecar(**side))
+    _fails(capsys, [str(p), "-o", str(tmp_path / "f.nc")], field, p.with_suffix(".yaml"))
+
+
+# ---------------------------------------------------------------- item 13: wrongly accepted
+
+
+@pytest.mark.parametrize(
+    "side,field",
+    [
+        ({"noise_sigma_rad_s": -0.5}, "noise_sigma_rad_s"),
+        ({"synthetic": "no"}, "synthetic"),
+        ({"motor": {"U0_m": "banana"}}, "motor.U0_m"),
+    ],
+)
+def test_bad_sidecar_fields(tmp_path, capsys, frame, side, field):
+    p = _curve(tmp_path, frame.drop(columns="sigma_rad_s"), _sidecar(**side))
+    _fails(capsys, [str(p), "-o", str(tmp_path / "f.nc")], field, p.with_suffix(".yaml"))
+
+
+def test_boolean_omega_column(tmp_path, capsys, frame):
+    p = tmp_path / "c.csv"
+    rows = [f"{t!r},True" for t in frame["time_s"]]
+    p.write_text("time_s,omega_rad_s\n" + "\n".join(rows) + "\n")
+    p.with_suffix(".yaml").write_text(yaml.safe_dump(_sidecar(noise_sigma_rad_s=0.0)))
+    _fails(capsys, [str(p), "-o", str(tmp_path / "f.nc")], "omega_rad_s", p)
+
+
+def test_repeated_omega_column(tmp_path, capsys, frame):
+    p = tmp_path / "c.csv"
+    rows = [f"{t!r},{w!r},0.0" for t, w in zip(frame["time_s"], frame["omega_rad_s"], strict=True)]
+    p.write_text("time_s,omega_rad_s,omega_rad_s\n" + "\n".join(rows) + "\n")
+    p.with_suffix(".yaml").write_text(yaml.safe_dump(_sidecar(noise_sigma_rad_s=SIGMA)))
+    err = _fails(capsys, [str(p), "-o", str(tmp_path / "f.nc")], "omega_rad_s", p)
+    assert "more than once" in err
+
+
+def test_the_same_curve_twice(tmp_path, capsys, frame):
+    p = _curve(tmp_path, frame)
+    same = tmp_path / "." / "c.csv"
+    _fails(capsys, [str(p), str(same), "-o", str(tmp_path / "f.nc")], "same file", same)
+
+
+def test_scene_members_as_text_is_refused():
+    from types import SimpleNamespace
+
+    from bouncedisk.scene import _ensemble
+
+    noisy = (frozenset({"restitution_noise"}), SimpleNamespace(e_sigma=0.03))
+    assert _ensemble("s.yaml", {"members": 3}, *noisy).members == 3
+    with pytest.raises(InputError, match="ensemble.members"):
+        _ensemble("s.yaml", {"members": "3"}, *noisy)
+
+
+def test_time_origin_keeps_uniform_curves_on_their_grid(frame):
+    """The shipped-style curve (t0 = 0, uniform): relative times are its own grid (to round-off)."""
+    from bouncedisk.curves import MotorCurve
+
+    c = MotorCurve(frame["time_s"].to_numpy(), frame["omega_rad_s"].to_numpy(), SIGMA, F_HZ,
+                   PHI0, "", True, "x.csv")  # fmt: skip
+    (r,), _, note = prepare_runs(dataclasses.replace(c))
+    assert note == "" and np.max(np.abs(r.time - c.time)) <= 1e-9 * DT
