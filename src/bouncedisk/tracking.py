@@ -120,6 +120,7 @@ KINDS = (
     ("clipped", "study"),
     ("work_precision", "study"),
     ("scaling", "study"),
+    ("sensitivity", "study"),
     ("synthetic", "data"),
 )
 COPIED = {".png", ".pdf", ".svg", ".md", ".csv", ".json", ".txt", ".html", ".yaml", ".tsv"}
