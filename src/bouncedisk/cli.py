@@ -53,6 +53,18 @@ def _cmd_stats(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_torque_speed(args: argparse.Namespace) -> int:
+    from .loadcli import torque_speed_command
+
+    store = _tracking_store(args)
+    summary = torque_speed_command(args)
+    params = {"scene_file": args.scene, "set": args.set or [], "loads": args.loads or ""}
+    scalars = ("no_load_speed", "stall_torque", "max_power", "max_power_load")
+    metrics = {k: summary[k] for k in scalars if summary[k] is not None}
+    _track(args, store, "torque-speed", [args.output] if args.output else [], params, metrics)
+    return 0
+
+
 def _cmd_info(args: argparse.Namespace) -> int:
     from .datasets import open_simulation
 
@@ -228,7 +240,16 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for add in (_add_simulate, _add_stats, _add_info, _add_runs, _add_check, _add_fit):
         add(sub)
+    _add_torque_speed(sub)
     return parser
+
+
+def _add_torque_speed(sub) -> None:
+    """``bouncedisk torque-speed`` (:mod:`bouncedisk.loadcli`)."""
+    from .loadcli import add_torque_speed
+
+    add_torque_speed(sub, _add_set_option, _add_track_options)
+    sub.choices["torque-speed"].set_defaults(func=_cmd_torque_speed)
 
 
 def _add_set_option(p: argparse.ArgumentParser, example: str) -> None:

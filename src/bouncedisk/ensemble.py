@@ -22,6 +22,7 @@ import numpy as np
 from . import observables as ob
 from . import stator
 from .engine import KIND_CHATTER, KIND_IMPACT, EngineConfig, InitialState, iterate
+from .engine.driver import audit_balances
 
 #: Events kept from the end of each member's run to classify its regime.
 TAIL_EVENTS = 1200
@@ -34,7 +35,11 @@ class MemberStats:
     """Long-run observables of one member over ``[t_from, t_end]`` (nondimensional).
 
     ``lyapunov`` is ``-inf`` for a chattering-periodic member (its cycle passes through a reset,
-    whose Jacobian is zero) and ``nan`` when too few free flights were seen.
+    whose Jacobian is zero) and ``nan`` when too few free flights were seen. The powers are the
+    energy audit's terms over the window divided by its duration (MODEL.md "Power and energy
+    audit"): the load's ``τ_L Ω̄``, the stator's torsional and axial inputs, the axial energy left
+    to summed chattering tails; ``efficiency_torsion = W_L / W_t``; the residuals are the
+    balances' relative residuals (:func:`bouncedisk.engine.driver.audit_balances`).
     """
 
     member: int
@@ -50,6 +55,13 @@ class MemberStats:
     n_impacts: int
     n_chatter: int
     duration: float
+    power_out: float = math.nan
+    power_torsion_in: float = math.nan
+    power_axial_in: float = math.nan
+    power_chatter_axial: float = math.nan
+    efficiency_torsion: float = math.nan
+    audit_residual_axial: float = math.nan
+    audit_residual_torsion: float = math.nan
 
 
 class _Reducer:
@@ -105,8 +117,12 @@ class _Reducer:
         for k in tl:
             tl[k] = cat[k][-TAIL_EVENTS:]
 
-    def result(self, member: int, omega_integral: float, t_end: float, r_phi: float, psi: float):
-        """The member's :class:`MemberStats` (``omega_integral`` = ``∫Ω dt`` over the window)."""
+    def result(
+        self, member: int, final: dict, t_end: float, r_phi: float, psi: float
+    ) -> MemberStats:
+        """The member's :class:`MemberStats` from its final state (``final["omega_integral"]``
+        = ``∫Ω dt`` over the window, ``final["audit"]`` the energy audit's terms)."""
+        omega_integral = final["omega_integral"]
         dur = t_end - self.t_from
         mean_om = omega_integral / dur
         # ∫Ω_s dt = φ_s(t_end) − φ_s(t_from), φ_s = sin(w t + ψ): the mean slip s = RΩ − Ω_s
@@ -135,7 +151,23 @@ class _Reducer:
             n_impacts=self.n_impacts,
             n_chatter=self.n_chatter,
             duration=dur,
+            **_powers(final["audit"], dur),
         )
+
+
+def _powers(audit: dict, duration: float) -> dict[str, float]:
+    """Mean powers, efficiency and audit residuals of one member (see :class:`MemberStats`)."""
+    res_ax, res_t = audit_balances(audit)
+    w_t = audit["work_torsion"]
+    return {
+        "power_out": audit["work_load"] / duration,
+        "power_torsion_in": w_t / duration,
+        "power_axial_in": audit["work_axial"] / duration,
+        "power_chatter_axial": audit["chatter_axial"] / duration,
+        "efficiency_torsion": audit["work_load"] / w_t if w_t > 0.0 else math.nan,
+        "audit_residual_axial": res_ax,
+        "audit_residual_torsion": res_t,
+    }
 
 
 def run_member(
@@ -171,7 +203,7 @@ def run_member(
             _, final = stop.value
             break
         red.add(c.t, c.phase, c.v_rel, c.kind)
-    stats = red.result(member, final["omega_integral"], cfg.t_end, cfg.r_phi, cfg.psi)
+    stats = red.result(member, final, cfg.t_end, cfg.r_phi, cfg.psi)
     return stats, final, red.tail
 
 

@@ -10,7 +10,7 @@ amplitude ratio, ``psi`` torsional phase. Physical: ``t_c = sqrt(U0 / g_eff)`` w
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields
 
 from .errors import InputError
 
@@ -98,6 +98,9 @@ class Parameters:
     e_sigma : float
         ``σ_e >= 0``, standard deviation of the per-impact restitution for the
         ``restitution_noise`` effect (MODEL.md "Long-run statistics of chaotic motion").
+    load_torque : float
+        ``τ_L >= 0``, the constant load torque of the ``load`` effect in units of the friction
+        torque at the static normal load, ``μ m_r g_eff r_eff`` (MODEL.md "The motor under load").
     """
 
     e: float
@@ -107,11 +110,12 @@ class Parameters:
     inertia_ratio: float = math.inf
     mu_ratio: float = 1.0
     e_sigma: float = 0.0
+    load_torque: float = 0.0
 
     @classmethod
     def from_mapping(cls, data: dict, source: str = "", prefix: str = "parameters") -> Parameters:
         """Validate a mapping (e.g. a scene's ``parameters:``) into :class:`Parameters`."""
-        known = {"e", "omega_s", "r_phi", "psi", "inertia_ratio", "mu_ratio", "e_sigma"}
+        known = {f.name for f in fields(cls)}
         for key in data:
             if key not in known:
                 raise InputError(
@@ -151,6 +155,10 @@ class Parameters:
             )
         if not self.e_sigma >= 0.0:
             raise InputError(source, f"{prefix}.e_sigma", f"must be >= 0, got {self.e_sigma}")
+        if not self.load_torque >= 0.0:
+            raise InputError(
+                source, f"{prefix}.load_torque", f"must be >= 0, got {self.load_torque}"
+            )
         if not self.mu_ratio >= 1.0:
             raise InputError(source, f"{prefix}.mu_ratio", f"must be >= 1, got {self.mu_ratio}")
         if abs(self.psi) > 1e3:
@@ -169,13 +177,19 @@ class Scales:
     """Conversion from nondimensional to SI units.
 
     ``time_s = t * t_c``; ``omega_rad_s = Ω * omega_scale`` with ``omega_scale = R_φ Φ0 / t_c``;
-    ``length_m = u * U0``.
+    ``length_m = u * U0``; ``torque_Nm = τ * torque`` with ``torque = μ m_r g_eff r_eff`` (MODEL.md
+    "The motor under load"); powers in W are ``P * torsion_power`` (torsional terms, units
+    ``J_r omega_scale² / t_c``, equal to ``torque * omega_scale``) and ``P * axial_power`` (axial
+    terms, units ``m_r g_eff U0 / t_c``).
     """
 
     t_c: float
     omega_scale: float
     length: float
     g_eff: float
+    torque: float = math.nan
+    torsion_power: float = math.nan
+    axial_power: float = math.nan
 
 
 @dataclass(frozen=True)
@@ -206,6 +220,10 @@ class PhysicalParameters:
         Torsional phase [rad].
     F_preload : float
         Constant spring preload [N], acting as extra gravity.
+    load_torque : float
+        Constant load torque on the rotor [N·m] (effect ``load``).
+    e_sigma : float
+        Standard deviation of the per-impact restitution (effect ``restitution_noise``).
     """
 
     m_r: float
@@ -219,6 +237,8 @@ class PhysicalParameters:
     Phi0: float
     psi: float = 0.0
     F_preload: float = 0.0
+    load_torque: float = 0.0
+    e_sigma: float = 0.0
 
     @classmethod
     def from_mapping(
@@ -242,16 +262,25 @@ class PhysicalParameters:
                 raise InputError(source, f"{prefix}.{key}", f"must be > 0, got {getattr(p, key)}")
         if not 0.0 <= p.e <= 1.0:
             raise InputError(source, f"{prefix}.e", f"must be in [0, 1], got {p.e}")
-        if p.F_preload < 0.0:
-            raise InputError(source, f"{prefix}.F_preload", f"must be >= 0, got {p.F_preload}")
+        for key in ("F_preload", "load_torque", "e_sigma"):
+            if getattr(p, key) < 0.0:
+                raise InputError(source, f"{prefix}.{key}", f"must be >= 0, got {getattr(p, key)}")
         return p
 
     def scales(self) -> Scales:
         """Time, angular-velocity and length scales (paper eq. 14)."""
         g_eff = self.g + self.F_preload / self.m_r
         t_c = math.sqrt(self.U0 / g_eff)
+        omega_scale = self.r_phi * self.Phi0 / t_c
+        torque = self.mu * self.m_r * g_eff * self.r_eff
         return Scales(
-            t_c=t_c, omega_scale=self.r_phi * self.Phi0 / t_c, length=self.U0, g_eff=g_eff
+            t_c=t_c,
+            omega_scale=omega_scale,
+            length=self.U0,
+            g_eff=g_eff,
+            torque=torque,
+            torsion_power=torque * omega_scale,
+            axial_power=self.m_r * g_eff * self.U0 / t_c,
         )
 
     @property
@@ -266,10 +295,16 @@ class PhysicalParameters:
         return (self.r_eff / self.r_g) ** 2 * self.mu / r_d
 
     def to_nondimensional(self) -> Parameters:
-        """The four nondimensional parameters ``(e, omega_s, r_phi, psi)``."""
-        t_c = self.scales().t_c
+        """The four nondimensional parameters ``(e, omega_s, r_phi, psi)`` and the load
+        ``τ_L = T_L / (μ m_r g_eff r_eff)`` (MODEL.md "The motor under load")."""
+        sc = self.scales()
         return Parameters(
-            e=self.e, omega_s=2.0 * math.pi * self.f * t_c, r_phi=self.r_phi, psi=self.psi
+            e=self.e,
+            omega_s=2.0 * math.pi * self.f * sc.t_c,
+            r_phi=self.r_phi,
+            psi=self.psi,
+            e_sigma=self.e_sigma,
+            load_torque=self.load_torque / sc.torque,
         )
 
     def as_dict(self) -> dict:

@@ -50,6 +50,7 @@ def engine_config(scene: Scene) -> EngineConfig:
         clipped=scene.model == "clipped",
         e_sigma=p.e_sigma if "restitution_noise" in eff else 0.0,
         seed=scene.ensemble.seed,
+        load_torque=p.load_torque if "load" in eff else 0.0,
     )
 
 
@@ -214,6 +215,8 @@ def scene_attrs(scene: Scene) -> dict:
         attrs["mu_ratio"] = p.mu_ratio
     if "restitution_noise" in scene.effects:
         attrs.update({"e_sigma": p.e_sigma, "ensemble_seed": scene.ensemble.seed})
+    if "load" in scene.effects:
+        attrs["load_torque"] = p.load_torque
     if scene.ensemble.members > 1:
         attrs["ensemble_members"] = scene.ensemble.members
     if scene.solver.step is not None:

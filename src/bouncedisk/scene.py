@@ -30,6 +30,7 @@ EFFECTS = (
     "stator_inertia",
     "kinetic_static",
     "restitution_noise",
+    "load",
 )
 #: Solver methods: the exact engine, and comparators for the accuracy study.
 SOLVERS = ("exact", "rk45", "dop853", "lsoda", "moreau")
@@ -250,7 +251,7 @@ def _effects(src: str, v: Any) -> frozenset[str]:
     on = {k for k, flag in chosen.items() if flag} | {"impacts"}
     if "torsion" in on and chosen.get("impulse_cap") is not False:
         on.add("impulse_cap")
-    for dep in ("impulse_cap", "stator_inertia", "kinetic_static"):
+    for dep in ("impulse_cap", "stator_inertia", "kinetic_static", "load"):
         if dep in on and "torsion" not in on:
             raise InputError(src, f"effects.{dep}", "needs the 'torsion' effect")
     if "kinetic_static" in on and "contact" not in on:
@@ -347,7 +348,7 @@ def _check_effect_parameters(
         and "mu_ratio" not in (raw.get("parameters") or {})
     ):
         raise InputError(src, "parameters.mu_ratio", "is required by the 'kinetic_static' effect")
-    _check_noise(src, raw, effects)
+    _check_paired(src, raw, effects)
 
 
 def _initial(src: str, v: Any, params: Parameters) -> InitialState:
@@ -467,13 +468,20 @@ def _model(src: str, model: Any, stop: Stop, solver: Solver) -> str:
     return model
 
 
-def _check_noise(src: str, raw: dict, effects: frozenset[str]) -> None:
-    """``parameters.e_sigma`` goes with the ``restitution_noise`` effect, both or neither."""
-    given = "e_sigma" in (raw.get("parameters") or {})
-    if "restitution_noise" in effects and not given:
-        raise InputError(src, "parameters.e_sigma", "is required by the 'restitution_noise' effect")
-    if given and "restitution_noise" not in effects:
-        raise InputError(src, "parameters.e_sigma", "needs the 'restitution_noise' effect")
+#: Parameters that go with one effect, both or neither: (parameter, effect).
+PAIRED_PARAMETERS = (("e_sigma", "restitution_noise"), ("load_torque", "load"))
+
+
+def _check_paired(src: str, raw: dict, effects: frozenset[str]) -> None:
+    """``parameters.e_sigma`` goes with ``restitution_noise`` and ``load_torque`` with ``load``
+    (``physical.load_torque`` in a physical scene), both or neither."""
+    for name, effect in PAIRED_PARAMETERS:
+        section = "physical" if "physical" in raw else "parameters"
+        given = name in (raw.get(section) or {})
+        if effect in effects and not given:
+            raise InputError(src, f"{section}.{name}", f"is required by the '{effect}' effect")
+        if given and effect not in effects:
+            raise InputError(src, f"{section}.{name}", f"needs the '{effect}' effect")
 
 
 def _ensemble(src: str, v: Any, effects: frozenset[str], params: Parameters) -> Ensemble:

@@ -19,6 +19,7 @@ from scipy import stats as _sps
 from . import observables as ob
 from .ensemble import MemberStats, run_ensemble
 from .errors import InputError
+from .params import Scales
 from .provenance import base_attrs, new_run_id
 from .runner import engine_config, scene_attrs
 from .scene import Scene
@@ -34,6 +35,24 @@ QUANTITIES: dict[str, tuple[str, str]] = {
         "1",
     ),
     "lyapunov": ("largest Lyapunov exponent of the impact map per impact, between resets", "1"),
+    "power_torsion_in": ("mean power the stator puts in through friction", "1"),
+    "power_axial_in": ("mean power the stator puts in through the normal force", "1"),
+    "power_chatter_axial": ("mean axial power left to summed chattering tails", "1"),
+    "power_out": ("mean output power tau_L * mean omega", "1"),
+    "efficiency_torsion": ("efficiency of the friction drive, power_out / power_torsion_in", "1"),
+}
+#: Quantities reported only for scenes with the ``load`` effect (zero by definition without it).
+LOAD_ONLY = ("power_out", "efficiency_torsion")
+#: Largest relative residuals of the energy balances over the members (MODEL.md).
+AUDIT = {
+    "audit_residual_axial": "largest relative residual of the axial energy balance",
+    "audit_residual_torsion": "largest relative residual of the torsional energy balance",
+}
+#: Powers converted to W for physical scenes: field -> attribute of Scales giving its unit.
+POWER_UNITS = {
+    "power_out": "torsion_power",
+    "power_torsion_in": "torsion_power",
+    "power_axial_in": "axial_power",
 }
 LEVEL = 0.95
 #: Quantities that cannot be negative: their intervals are cut at 0 (the parameter space).
@@ -66,6 +85,8 @@ class EnsembleStats:
     members: list[MemberStats]
     discard: float
     duration: float
+    load: bool = False
+    scales: Scales | None = None
 
     def column(self, name: str) -> np.ndarray:
         """One per-member quantity as an array in member order."""
@@ -100,11 +121,17 @@ class EnsembleStats:
             "duration": self.duration,
         }
         for name in QUANTITIES:
+            if name in LOAD_ONLY and not self.load:
+                continue
             mean, low, high = confidence_interval(self.column(name))
             if name in NONNEGATIVE and low < 0.0:
                 low = 0.0
             out[name] = _finite_or_none(mean)
             out[f"{name}_ci95"] = [_finite_or_none(low), _finite_or_none(high)]
+        for name in AUDIT:
+            out[name] = _finite_or_none(float(np.nanmax(self.column(name), initial=-np.inf)))
+        if self.scales is not None:
+            out.update(self._physical_powers())
         lam = self.column("lyapunov")
         reset = float(np.mean(np.isneginf(lam)))
         out["lyapunov_reset_fraction"] = reset
@@ -113,6 +140,27 @@ class EnsembleStats:
         out["regime_fraction"] = frac
         out["regime_tie"] = self.regime_tie
         out["period"] = period
+        return out
+
+    def _physical_powers(self) -> dict:
+        """Powers in W and the motor's mechanical efficiency ``η = P_out / (P_ax + P_t)``
+        (MODEL.md "The motor under load"), each with its interval across members."""
+        sc = self.scales
+        out: dict = {}
+        watts = {}
+        for name, unit in POWER_UNITS.items():
+            if name in LOAD_ONLY and not self.load:
+                continue
+            watts[name] = self.column(name) * getattr(sc, unit)
+            mean, low, high = confidence_interval(watts[name])
+            out[f"{name}_W"] = _finite_or_none(mean)
+            out[f"{name}_W_ci95"] = [_finite_or_none(low), _finite_or_none(high)]
+        if self.load:
+            with np.errstate(invalid="ignore", divide="ignore"):
+                eta = watts["power_out"] / (watts["power_axial_in"] + watts["power_torsion_in"])
+            mean, low, high = confidence_interval(eta)
+            out["efficiency"] = _finite_or_none(mean)
+            out["efficiency_ci95"] = [_finite_or_none(low), _finite_or_none(high)]
         return out
 
 
@@ -159,7 +207,9 @@ def run_stats(
         on_member=on_member,
         should_stop=should_stop,
     )
-    return EnsembleStats(members, scene.stats.discard, t_end - t_from)
+    return EnsembleStats(
+        members, scene.stats.discard, t_end - t_from, "load" in scene.effects, scene.scales
+    )
 
 
 def to_dataset(scene: Scene, result: EnsembleStats, wall_time_s: float) -> xr.Dataset:
@@ -169,7 +219,9 @@ def to_dataset(scene: Scene, result: EnsembleStats, wall_time_s: float) -> xr.Da
         if f.name == "member":
             continue
         values = result.column(f.name)
-        long_name, units = QUANTITIES.get(f.name, (f.name.replace("_", " "), "1"))
+        long_name, units = QUANTITIES.get(
+            f.name, (AUDIT.get(f.name, f.name.replace("_", " ")), "1")
+        )
         if f.name in ("regime", "period_p", "period_q", "n_impacts", "n_chatter"):
             values = values.astype(np.int64)
         data[f.name] = ("member", values, {"long_name": long_name, "units": units})

@@ -49,6 +49,16 @@ def format_summary(summary: dict) -> str:
             f"{'':>18}  ({100 * summary['lyapunov_reset_fraction']:.0f}% of members reset every "
             "cycle: exponent -inf)"
         )
+    for name in ("power_out", "power_torsion_in", "power_axial_in", "efficiency_torsion"):
+        if name in summary:
+            lines.append(_row(name, summary[name], summary[f"{name}_ci95"]))
+    for name in ("power_out_W", "power_torsion_in_W", "power_axial_in_W", "efficiency"):
+        if name in summary:
+            lines.append(_row(name, summary[name], summary[f"{name}_ci95"]))
+    lines.append(
+        f"{'energy audit':>18}: largest relative residual {_g(summary['audit_residual_axial'])} "
+        f"(axial), {_g(summary['audit_residual_torsion'])} (torsional)"
+    )
     period = summary["period"]
     reg = summary["regime"] + (f" ({period[0]} impacts / {period[1]} periods)" if period else "")
     frac = summary["regime_fraction"]
@@ -59,6 +69,10 @@ def format_summary(summary: dict) -> str:
     else:
         lines.append(f"{'regime':>18}: {reg}, {100 * frac:.0f}% of members")
     return "\n".join(lines)
+
+
+def _g(x: float | None) -> str:
+    return "n/a" if x is None else f"{x:.2g}"
 
 
 def _row(name: str, value, ci) -> str:

@@ -66,7 +66,12 @@ class EngineConfig:
     seed, member : int
         The noise stream: ensemble seed and member index (both ``>= 0``).
     stats_from : float
-        Accumulate ``∫Ω dt`` from this time on (``final["omega_integral"]``); ``inf`` for none.
+        Accumulate ``∫Ω dt`` and the energy audit from this time on (``final["omega_integral"]``,
+        ``final["audit"]``, :func:`audit_balances`); ``inf`` for none.
+    load_torque : float
+        Constant load torque ``τ_L >= 0`` on the rotor against positive rotation (effect
+        ``load``; MODEL.md "The motor under load"), in units of the friction torque at the static
+        normal load; 0 for none.
     """
 
     e: float
@@ -90,6 +95,7 @@ class EngineConfig:
     seed: int = 0
     member: int = 0
     stats_from: float = math.inf
+    load_torque: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -164,6 +170,7 @@ def _pack(cfg: EngineConfig) -> tuple[np.ndarray, np.ndarray]:
     prm[K.P_T1] = min(cfg.traj_t1, cfg.t_end)
     prm[K.P_ESIG] = cfg.e_sigma
     prm[K.P_TSTAT] = cfg.stats_from
+    prm[K.P_LOAD] = cfg.load_torque
     flg = np.zeros(K.N_FLG, dtype=np.int64)
     flg[K.F_CONTACT] = int(cfg.contact)
     flg[K.F_TORSION] = int(cfg.torsion)
@@ -176,6 +183,8 @@ def _pack(cfg: EngineConfig) -> tuple[np.ndarray, np.ndarray]:
     flg[K.F_SEED] = int(cfg.seed)
     flg[K.F_MEMBER] = int(cfg.member)
     flg[K.F_STATS] = int(math.isfinite(cfg.stats_from))
+    # the clipped model's rotor follows the stator where N is clipped to 0: no axial balance
+    flg[K.F_AXIAL_AUDIT] = int(math.isfinite(cfg.stats_from) and not cfg.clipped)
     return prm, flg
 
 
@@ -199,7 +208,7 @@ def initial_state(cfg: EngineConfig, init: InitialState) -> tuple[np.ndarray, np
     if in_contact and load >= 0.0 and cfg.contact:
         ist[K.I_MODE] = K.MODE_CONTACT
         if cfg.torsion:
-            K._enter_contact_torsion(st, ist, cfg.r_phi, w, cfg.psi, cfg.mu_ratio, th0)
+            K._enter_contact_torsion(st, ist, _pack(cfg)[0], th0)
     else:
         ist[K.I_MODE] = K.MODE_FLIGHT
         u = us if init.u is None else max(init.u, us)
@@ -276,8 +285,51 @@ def iterate(
             # the kernel marks a finished run MODE_DONE and keeps the mode it ended in
             "in_contact": float(ist[K.I_LASTMODE] == K.MODE_CONTACT),
             "omega_integral": float(st[K.S_OMEGA_INTEGRAL]),
+            "phase": float(st[K.S_PHASE]),  # the stator phase, exact (t is rounded)
         }
+        if flg[K.F_STATS]:
+            final["audit"] = _audit_terms(cfg, st, ist, bool(final["in_contact"]))
         return status, final
+
+
+def _audit_terms(cfg: EngineConfig, st: np.ndarray, ist: np.ndarray, in_contact: bool) -> dict:
+    """The energy audit's accumulated terms over the window, with the energies at its ends."""
+    if in_contact:
+        th = st[K.S_PHASE]
+        u, v = math.sin(th), cfg.omega_s * math.cos(th)
+    else:  # a run ends in flight at an impact or at its end time: the flight's origin is now
+        u, v = st[K.S_U], st[K.S_V]
+    started = bool(ist[K.I_AUD_STARTED])
+    axial = not cfg.clipped
+    return {
+        "work_axial": float(st[K.S_AUD_WAX]) if axial else math.nan,
+        "loss_axial": float(st[K.S_AUD_DAX]) if axial else math.nan,
+        "chatter_axial": float(st[K.S_AUD_CAX]) if axial else math.nan,
+        "energy_axial_change": (0.5 * v * v + u - st[K.S_AUD_E0]) if started and axial else 0.0,
+        "work_torsion": float(st[K.S_AUD_WT]),
+        "loss_friction": float(st[K.S_AUD_DF]),
+        "work_load": cfg.load_torque * float(st[K.S_OMEGA_INTEGRAL]),
+        "energy_torsion_change": (0.5 * st[K.S_OMEGA] ** 2 - st[K.S_AUD_K0] if started else 0.0),
+    }
+
+
+def audit_balances(terms: dict) -> tuple[float, float]:
+    """Relative residuals of the two energy balances (MODEL.md "Power and energy audit").
+
+    Axial ``W_ax = ΔE_ax + D_ax (+ C_ax)``, torsional ``W_t = Δ(Ω²/2) + D_f + W_L``, each
+    residual divided by the largest of its terms (0 when every term is 0). ``C_ax`` is the
+    axial energy left to summed chattering tails, reported apart (``terms["chatter_axial"]``).
+    The axial residual is ``nan`` for the clipped model (no axial balance).
+    """
+
+    def rel(lhs: float, *rhs: float) -> float:
+        scale = max(abs(lhs), *(abs(x) for x in rhs))
+        return abs(lhs - sum(rhs)) / scale if scale > 0.0 else 0.0
+
+    t = terms
+    ax = rel(t["work_axial"], t["energy_axial_change"], t["loss_axial"], t["chatter_axial"])
+    tor = rel(t["work_torsion"], t["energy_torsion_change"], t["loss_friction"], t["work_load"])
+    return ax, tor
 
 
 def simulate_arrays(

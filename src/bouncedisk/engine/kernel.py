@@ -37,14 +37,21 @@ from numba import njit
 from .laws import (
     GRAZE_GAP,
     chatter_time,
+    contact_axial_work,
     impact_law,
+    loaded_omega,
+    loaded_omega_integral,
     normal_load,
     separation_phase,
     separation_window,
     slip,
+    slip_load_omega_integral,
     slip_omega,
     slip_omega_integral,
+    slip_twist_work,
+    stick_margin_shift,
     stick_omega_integral,
+    stick_twist_work,
 )
 from .noise import member_key, noisy_restitution
 from .roots import TWO_PI, first_root
@@ -74,12 +81,14 @@ P_MU_RATIO = 6  # static/kinetic friction ratio of the kinetic_static effect
 P_TEND = 7  # end time
 P_DT, P_T0, P_T1 = 8, 9, 10  # trajectory grid: step, first and last sample time
 P_ESIG = 11  # restitution noise σ_e (effect `restitution_noise`)
-P_TSTAT = 12  # time from which ∫Ω dt is accumulated (ensemble statistics)
-N_PRM = 13
+P_TSTAT = 12  # time from which ∫Ω dt and the energy audit are accumulated
+P_LOAD = 13  # load torque τ_L (effect `load`; MODEL.md "The motor under load")
+N_PRM = 14
 # --- flags (int64) ----------------------------------------------------------------------------
 F_CONTACT, F_TORSION, F_CAP, F_TRAJ, F_STROBE, F_MAXEV, F_CLIPPED = range(7)
 F_NOISE, F_SEED, F_MEMBER, F_STATS = range(7, 11)  # restitution noise stream; accumulate ∫Ω dt
-N_FLG = 11
+F_AXIAL_AUDIT = 11  # accumulate the axial energy audit too (not in the clipped model)
+N_FLG = 12
 # --- float state ------------------------------------------------------------------------------
 S_PHASE = 0  # stator phase θ in [0, 2π) (with I_PERIOD: t = (2π n + θ)/w)
 S_U, S_V = 1, 2  # rotor position and velocity at the flight's origin
@@ -88,7 +97,15 @@ S_ANCHOR_TAU = 4  # flight: time after the origin where the impact search starts
 S_ANCHOR_GAP = 5  # flight: the gap at that time
 S_CHATTER_PHASE = 6  # contact: stator phase of a chattering sequence's accumulation point
 S_OMEGA_INTEGRAL = 7  # ∫Ω dt since prm[P_TSTAT] (when flg[F_STATS])
-N_ST = 8
+# energy audit since prm[P_TSTAT] (when flg[F_STATS]; MODEL.md "Power and energy audit"):
+S_AUD_WAX = 8  # stator's axial work W_ax (impacts and contact)
+S_AUD_DAX = 9  # axial impact loss D_ax
+S_AUD_CAX = 10  # axial energy of summed chattering tails (their approximation, kept apart)
+S_AUD_WT = 11  # stator's torsional input W_t (friction in contact and angular impulses)
+S_AUD_DF = 12  # friction loss D_f
+S_AUD_E0 = 13  # axial energy v²/2 + u where the audit window starts
+S_AUD_K0 = 14  # rotational energy Ω²/2 where the audit window starts
+N_ST = 15
 # --- int state --------------------------------------------------------------------------------
 I_PERIOD = 0  # stator period count n
 I_MODE = 1  # MODE_FLIGHT, MODE_CONTACT or MODE_DONE
@@ -103,7 +120,8 @@ I_ZERO_STEPS = 9  # consecutive contact segments of zero length (a stall guard)
 I_STATUS = 10  # status of a finished run
 I_UNLOADED = 11  # clipped model: riding the stator without load
 I_LASTMODE = 12  # the mode (flight or contact) the run ended in
-N_IST = 13
+I_AUD_STARTED = 13  # the audit window has started (S_AUD_E0, S_AUD_K0 are set)
+N_IST = 14
 # --- modes ------------------------------------------------------------------------------------
 MODE_FLIGHT, MODE_CONTACT, MODE_DONE = 0, 1, 2
 # --- statuses ---------------------------------------------------------------------------------
@@ -208,16 +226,17 @@ def flight_next_impact(
 
 
 @njit(cache=True, inline="always")
-def _seg_state(kind, u0, v0, om0, sig, w, r, psi, th0, tau):
-    """Rotor ``(u, v, Ω)`` at ``tau`` into a segment, from the closed forms."""
+def _seg_state(kind, u0, v0, om0, sig, w, r, psi, load, th0, tau):
+    """Rotor ``(u, v, Ω)`` at ``tau`` into a segment, from the closed forms (with the load
+    torque ``τ_L``, MODEL.md "The motor under load")."""
     if kind == SEG_FLIGHT:
-        return u0 + v0 * tau - 0.5 * tau * tau, v0 - tau, om0
+        return u0 + v0 * tau - 0.5 * tau * tau, v0 - tau, loaded_omega(om0, load, tau)
     ph = th0 + w * tau
     if kind == SEG_SLIP:
-        return sin(ph), w * cos(ph), slip_omega(om0, sig, w, th0, tau)
+        return sin(ph), w * cos(ph), slip_omega(om0, sig, w, th0, tau, load)
     if kind == SEG_STICK:
         return sin(ph), w * cos(ph), w * cos(ph + psi) / r
-    return sin(ph), w * cos(ph), om0
+    return sin(ph), w * cos(ph), loaded_omega(om0, load, tau)
 
 
 @_on_arrays
@@ -266,13 +285,14 @@ def _write_samples(kind, n_a, th_a, u0, v0, om0, sig, prm, traj, n_tr, j, strobe
     w = prm[P_W]
     r = prm[P_R]
     psi = prm[P_PSI]
+    load = prm[P_LOAD]
     t_a = (n_a * TWO_PI + th_a) / w
     dt = prm[P_DT]
     t0 = prm[P_T0]
     for i in range(j[0], j[1]):
         tj = t0 + i * dt
         tau = tj - t_a
-        u, v, om = _seg_state(kind, u0, v0, om0, sig, w, r, psi, th_a, tau)
+        u, v, om = _seg_state(kind, u0, v0, om0, sig, w, r, psi, load, th_a, tau)
         traj[n_tr, TR_T] = tj
         traj[n_tr, TR_U] = u
         traj[n_tr, TR_V] = v
@@ -281,7 +301,7 @@ def _write_samples(kind, n_a, th_a, u0, v0, om0, sig, prm, traj, n_tr, j, strobe
         n_tr += 1
     for i in range(k[0], k[1]):
         tau = ((i - n_a) * TWO_PI - th_a) / w
-        u, v, om = _seg_state(kind, u0, v0, om0, sig, w, r, psi, th_a, tau)
+        u, v, om = _seg_state(kind, u0, v0, om0, sig, w, r, psi, load, th_a, tau)
         strobe[n_sb, SB_PERIOD] = i
         strobe[n_sb, SB_T] = i * TWO_PI / w
         strobe[n_sb, SB_U] = u
@@ -340,28 +360,85 @@ def _sample(
 
 
 @njit(cache=True, inline="always")
-def _omega_integral(kind, om0, sig, w, r, psi, th0, tau):
+def _omega_integral(kind, om0, sig, w, r, psi, load, th0, tau):
     """``∫_0^τ Ω dτ'`` over the first ``τ`` of a segment (closed forms; see :func:`_seg_state`)."""
     if kind == SEG_SLIP:
-        return slip_omega_integral(om0, sig, w, th0, tau)
+        return slip_omega_integral(om0, sig, w, th0, tau, load)
     if kind == SEG_STICK:
         return stick_omega_integral(w, r, psi, th0, tau)
-    return om0 * tau
+    return loaded_omega_integral(om0, load, tau)
 
 
 @_on_arrays
-def _accumulate_omega(st, prm, kind, n_a, th_a, length, om0, sig):
-    """Add ``∫Ω dt`` over the part of a segment after ``prm[P_TSTAT]`` to ``st[S_OMEGA_INTEGRAL]``."""
+def _accumulate(st, ist, prm, flg, kind, n_a, th_a, length, u0, v0, om0, sig):
+    """Add the part of a segment after ``prm[P_TSTAT]`` to ``∫Ω dt`` and the energy audit.
+
+    On the first segment that reaches into the window, the rotor's axial and rotational energy
+    there are kept (``S_AUD_E0``, ``S_AUD_K0``) for the audit's balances.
+    """
     w = prm[P_W]
     tau0 = prm[P_TSTAT] - (n_a * TWO_PI + th_a) / w
     if tau0 >= length:
         return
     r = prm[P_R]
     psi = prm[P_PSI]
-    total = _omega_integral(kind, om0, sig, w, r, psi, th_a, length)
+    load = prm[P_LOAD]
+    total = _omega_integral(kind, om0, sig, w, r, psi, load, th_a, length)
     if tau0 > 0.0:
-        total -= _omega_integral(kind, om0, sig, w, r, psi, th_a, tau0)
+        total -= _omega_integral(kind, om0, sig, w, r, psi, load, th_a, tau0)
     st[S_OMEGA_INTEGRAL] += total
+    tb = tau0 if tau0 > 0.0 else 0.0
+    u, v, om = _seg_state(kind, u0, v0, om0, sig, w, r, psi, load, th_a, tb)
+    if not ist[I_AUD_STARTED]:
+        ist[I_AUD_STARTED] = 1
+        st[S_AUD_E0] = 0.5 * v * v + u
+        st[S_AUD_K0] = 0.5 * om * om
+    _audit_segment(st, prm, flg, kind, sig, om, th_a + w * tb, length - tb)
+
+
+@_on_arrays
+def _audit_segment(st, prm, flg, kind, sig, om, th, length):
+    """The energy audit's terms of a segment from phase ``th``, with ``Ω = om`` there, ``length``
+    long (MODEL.md "Power and energy audit"; closed forms in :mod:`.laws`): the stator's axial
+    work in contact, and in contact with torsion its torsional input and the friction loss."""
+    if kind == SEG_FLIGHT:
+        return
+    w = prm[P_W]
+    if flg[F_AXIAL_AUDIT]:
+        st[S_AUD_WAX] += contact_axial_work(w, th, length)
+    if kind == SEG_SLIP:
+        r = prm[P_R]
+        load = prm[P_LOAD]
+        w_t = slip_twist_work(sig, w, r, prm[P_PSI], th, length)
+        st[S_AUD_WT] += w_t
+        st[S_AUD_DF] += w_t + sig * slip_load_omega_integral(om, sig, w, th, length, load)
+    elif kind == SEG_STICK:
+        st[S_AUD_WT] += stick_twist_work(w, prm[P_R], prm[P_PSI], prm[P_LOAD], th, length)
+
+
+@_on_arrays
+def _audit_impact(st, prm, flg, w, r, psi, phase, v_minus, v_plus, om_minus, om_plus, settles):
+    """The energy audit's terms of an impact (MODEL.md "Power and energy audit").
+
+    Axial: the impulse ``F = v⁺ − v⁻`` does the work ``F v_s`` and dissipates
+    ``F (v_s − (v⁺ + v⁻)/2)``. Torsional: the angular impulse ``J = Ω⁺ − Ω⁻`` puts in
+    ``J Ω_s/R`` and dissipates ``−J ((Ω⁺ + Ω⁻)/2 − Ω_s/R)`` (``H |Ω_avg − Ω_s/R|`` when the slip
+    does not reverse). An impact after which the rotor ``settles`` on the stator (a summed
+    chattering tail, or a rebound below the grazing gap) leaves it at ``v_s``: the energy
+    ``(v⁺² − v_s²)/2`` its remaining bounces dissipate is kept apart (``S_AUD_CAX``).
+    """
+    if flg[F_AXIAL_AUDIT]:
+        vs = w * cos(phase)
+        f = v_plus - v_minus
+        st[S_AUD_WAX] += f * vs
+        st[S_AUD_DAX] += f * (vs - 0.5 * (v_plus + v_minus))
+        if settles:
+            st[S_AUD_CAX] += 0.5 * (v_plus - vs) * (v_plus + vs)
+    j = om_plus - om_minus
+    if j != 0.0:
+        os_r = w * cos(phase + psi) / r
+        st[S_AUD_WT] += j * os_r
+        st[S_AUD_DF] -= j * (0.5 * (om_plus + om_minus) - os_r)
 
 
 @_on_arrays
@@ -386,7 +463,7 @@ def _segment_output(kind, n_a, th_a, length, inclusive, prm, flg, st, ist, traj,
         if status != ST_CONTINUE:
             return status
     if flg[F_STATS]:
-        _accumulate_omega(st, prm, kind, n_a, th_a, length, om0, sig)
+        _accumulate(st, ist, prm, flg, kind, n_a, th_a, length, u0, v0, om0, sig)
     return ST_CONTINUE
 
 
@@ -444,6 +521,7 @@ def _flight_output(prm, flg, st, ist, traj, strobe, info, n, th, t_now, t_hit, t
     v0 = st[S_V]
     st[S_U] = u0 + v0 * length - 0.5 * length * length
     st[S_V] = v0 - length
+    st[S_OMEGA] = loaded_omega(st[S_OMEGA], prm[P_LOAD], length)
     ist[I_PERIOD], st[S_PHASE] = _advance(n, th, prm[P_W] * length)
     return _finish(ist, info, ST_TIME)
 
@@ -500,7 +578,7 @@ def _enter_contact(st, ist, prm, torsion, n_hit, phase, t_acc):
         ist[I_CHATTERING] = 0
     ist[I_SLIP_SIGN] = 0
     if torsion:
-        _enter_contact_torsion(st, ist, prm[P_R], w, prm[P_PSI], prm[P_MU_RATIO], phase)
+        _enter_contact_torsion(st, ist, prm, phase)
 
 
 @_on_arrays
@@ -538,8 +616,9 @@ def _clipped_ride(prm, flg, st, ist, traj, strobe, info, n, th, t_now, th_sep):
     """Clipped spring-contact model, unloaded (paper refs. [2, 3]): ride to the window's end.
 
     ``N = max(0, 1 + a_s)`` is clipped to 0 while ``1 + a_s < 0`` (phases ``(θ_sep, π − θ_sep)``):
-    no torque, the rotor keeps ``Ω`` and rides the stator. Returns ``ST_CONTINUE`` or the status
-    that ends this call.
+    no friction torque, the rotor rides the stator and its ``Ω`` changes only under the load
+    torque (``Ω' = −τ_L``, MODEL.md "The motor under load"). Returns ``ST_CONTINUE`` or the
+    status that ends this call.
     """
     w = prm[P_W]
     th_back = pi - th_sep
@@ -555,12 +634,14 @@ def _clipped_ride(prm, flg, st, ist, traj, strobe, info, n, th, t_now, th_sep):
         ist[I_PERIOD], st[S_PHASE] = _advance(n, th, w * seg)
         st[S_U] = sin(st[S_PHASE])
         st[S_V] = w * cos(st[S_PHASE])
+        st[S_OMEGA] = loaded_omega(st[S_OMEGA], prm[P_LOAD], seg)
         return _finish(ist, info, ST_TIME)
     ist[I_PERIOD] = n + (1 if th > th_back else 0)
     st[S_PHASE] = th_back
+    st[S_OMEGA] = loaded_omega(st[S_OMEGA], prm[P_LOAD], seg)
     ist[I_UNLOADED] = 0
     if flg[F_TORSION]:
-        _enter_contact_torsion(st, ist, prm[P_R], w, prm[P_PSI], prm[P_MU_RATIO], th_back)
+        _enter_contact_torsion(st, ist, prm, th_back)
     return ST_CONTINUE
 
 
@@ -590,7 +671,7 @@ def _contact_horizon(n, th, t_now, st, ist, prm, never_sep, th_sep):
 
 
 @njit(cache=True)
-def _slip_root(sig, guard, om, th, tau_end, w, r, psi, xtol):
+def _slip_root(sig, guard, om, th, tau_end, w, r, psi, load, xtol):
     """End of a slipping segment (MODEL.md "Stick–slip transitions"; paper eqs. 22–23).
 
     Slipping with ``σ = sgn(s)``, ``Ω' = −σN``. Just after leaving ``s = 0`` (``guard``) the
@@ -601,6 +682,8 @@ def _slip_root(sig, guard, om, th, tau_end, w, r, psi, xtol):
     if guard:
         s0 = sin(th + psi)
         q0 = -r * normal_load(w, th) + sig * w * w * s0
+        if load != 0.0:
+            q0 -= sig * stick_margin_shift(r, load)
         if q0 < 0.0:
             q0 = 0.0
         a = sig * w * w * sin(psi)
@@ -611,12 +694,15 @@ def _slip_root(sig, guard, om, th, tau_end, w, r, psi, xtol):
     if f0 < 0.0:
         f0 = 0.0
     a = -r * w - sig * w * cos(psi)
-    tz = first_root(f0, -r, 0.0, a, sig * w * sin(psi), th, w, tau_end, xtol)
+    c1 = -r
+    if load != 0.0:
+        c1 -= sig * stick_margin_shift(r, load)
+    tz = first_root(f0, c1, 0.0, a, sig * w * sin(psi), th, w, tau_end, xtol)
     return (tz, True) if tz >= 0.0 else (tau_end, False)
 
 
 @njit(cache=True)
-def _stick_root(th, tau_end, w, r, psi, rho, xtol):
+def _stick_root(th, tau_end, w, r, psi, rho, load, xtol):
     """End of a sticking segment (MODEL.md "Stick–slip transitions"; paper §2.5 corrected).
 
     While ``RΩ = Ω_s`` the rotor sticks until ``|α_s| = ρRN`` (``ρ`` the static/kinetic
@@ -633,6 +719,8 @@ def _stick_root(th, tau_end, w, r, psi, rho, xtol):
     new_sig = 0
     for sgn in (1.0, -1.0):
         m0 = rr * normal_load(w, th) - sgn * w * w * sin(th + psi)
+        if load != 0.0:
+            m0 += sgn * stick_margin_shift(r, load)
         if m0 < 0.0:
             m0 = 0.0
         a = -sgn * w * w * sin(psi)
@@ -658,9 +746,10 @@ def _contact_segment(st, ist, prm, torsion, th, tau_end):
     psi = prm[P_PSI]
     xtol = prm[P_TOL]
     if sig != 0:
-        seg, hit = _slip_root(sig, ist[I_SLIP_GUARD], st[S_OMEGA], th, tau_end, w, r, psi, xtol)
+        guard = ist[I_SLIP_GUARD]
+        seg, hit = _slip_root(sig, guard, st[S_OMEGA], th, tau_end, w, r, psi, prm[P_LOAD], xtol)
         return SEG_SLIP, seg, hit, sig
-    seg, new_sig, hit = _stick_root(th, tau_end, w, r, psi, prm[P_MU_RATIO], xtol)
+    seg, new_sig, hit = _stick_root(th, tau_end, w, r, psi, prm[P_MU_RATIO], prm[P_LOAD], xtol)
     return SEG_STICK, seg, hit, new_sig
 
 
@@ -677,7 +766,7 @@ def _contact_advance(st, ist, prm, kind, hit, new_sig, th, seg, n1, th1):
     psi = prm[P_PSI]
     om = st[S_OMEGA]
     if kind == SEG_SLIP:
-        om = slip_omega(om, float(ist[I_SLIP_SIGN]), w, th, seg)
+        om = slip_omega(om, float(ist[I_SLIP_SIGN]), w, th, seg, prm[P_LOAD])
     elif kind == SEG_STICK:
         om = w * cos(th1 + psi) / r
     ist[I_PERIOD] = n1
@@ -689,7 +778,7 @@ def _contact_advance(st, ist, prm, kind, hit, new_sig, th, seg, n1, th1):
         elif hit:
             # the slip reached zero: stick, or slip on in the stator's direction (§2.5)
             st[S_OMEGA] = w * cos(th1 + psi) / r
-            _enter_contact_torsion(st, ist, r, w, psi, prm[P_MU_RATIO], th1)
+            _enter_contact_torsion(st, ist, prm, th1)
     elif kind == SEG_STICK and hit:
         ist[I_SLIP_SIGN] = new_sig
         ist[I_SLIP_GUARD] = 1
@@ -739,7 +828,6 @@ def _flight_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, n
     xtol = prm[P_TOL]
     torsion = flg[F_TORSION] != 0
     cap = flg[F_CAP] != 0
-    om = st[S_OMEGA]
     tau, dk, ph, v_minus = flight_next_impact(
         st[S_U], st[S_V], th, st[S_ANCHOR_TAU], st[S_ANCHOR_GAP], w, xtol
     )
@@ -754,9 +842,12 @@ def _flight_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, n
     e_k = noisy_restitution(e, prm[P_ESIG], noise_key, ist[I_EVENTS]) if flg[F_NOISE] else e
     r = prm[P_R]
     psi = prm[P_PSI]
+    om = loaded_omega(st[S_OMEGA], prm[P_LOAD], tau)
     v_rel, v_plus, om_plus, go_contact, t_acc = _impact(
         e_k, e, w, r, psi, ph, v_minus, om, torsion, cap, prm[P_INERTIA], xtol
     )
+    if flg[F_STATS] and t_hit > prm[P_TSTAT]:
+        _audit_impact(st, prm, flg, w, r, psi, ph, v_minus, v_plus, om, om_plus, go_contact)
     _record_event(ev, evk, ist, info, t_hit, ph, v_rel, om_plus, om, KIND_IMPACT)
     ist[I_PERIOD] = n_hit
     st[S_PHASE] = ph
@@ -883,28 +974,34 @@ def _slip_is_zero(r, w, psi, omega, phase):
 
 
 @njit(cache=True)
-def _contact_sigma(r, w, psi, rho, omega, phase):
-    """Slip direction in contact: ``sgn(s)``, or at ``s = 0`` stick (0) when ``|α_s| <= ρRN``,
-    else the direction set by the stator's acceleration (paper §2.5, corrected)."""
+def _contact_sigma(r, w, psi, rho, load, omega, phase):
+    """Slip direction in contact: ``sgn(s)``, or at ``s = 0`` stick (0) when
+    ``|α_s + Rτ_L| <= ρRN``, else the direction set by the stator's acceleration and the load
+    (paper §2.5, corrected; MODEL.md "The motor under load")."""
     if not _slip_is_zero(r, w, psi, omega, phase):
         return 1 if slip(r, w, psi, omega, phase) > 0.0 else -1
     n_load = normal_load(w, phase)
     alpha = -w * w * sin(phase + psi)
+    if load != 0.0:
+        alpha += stick_margin_shift(r, load)
     if abs(alpha) <= rho * r * n_load:
         return 0
     return 1 if alpha < 0.0 else -1
 
 
 @_on_arrays
-def _enter_contact_torsion(st, ist, r, w, psi, rho, phase):
+def _enter_contact_torsion(st, ist, prm, phase):
     """Torsional state on entering contact at ``phase`` with the rotor's current ``Ω``.
 
     Sets the slip direction (:func:`_contact_sigma`); when the rotor leaves ``s = 0`` the guard,
     so the slip search starts once the slip has grown (module ``run_chunk``); when it sticks,
     ``RΩ = Ω_s`` exactly.
     """
+    r = prm[P_R]
+    w = prm[P_W]
+    psi = prm[P_PSI]
     om = st[S_OMEGA]
-    sig = _contact_sigma(r, w, psi, rho, om, phase)
+    sig = _contact_sigma(r, w, psi, prm[P_MU_RATIO], prm[P_LOAD], om, phase)
     ist[I_SLIP_SIGN] = sig
     ist[I_SLIP_GUARD] = 1 if sig != 0 and _slip_is_zero(r, w, psi, om, phase) else 0
     if sig == 0:

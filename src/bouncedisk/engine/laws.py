@@ -143,25 +143,49 @@ def separation_window(w):
 
 
 @njit(cache=True, inline="always")
-def slip_omega(omega0, sigma, w, th0, tau):
-    """Rotor angular velocity while slipping, eq. (23) corrected.
+def slip_omega(omega0, sigma, w, th0, tau, load):
+    """Rotor angular velocity while slipping, eq. (23) corrected, with a load torque.
 
-    ``Ω(τ) = Ω0 − σ [τ + (v_s(τ) − v_s(0))]`` with ``v_s = w cos φ``, written in difference form.
+    ``Ω(τ) = Ω0 − σ [τ + (v_s(τ) − v_s(0))] − τ_L τ`` with ``v_s = w cos φ``, written in difference
+    form (MODEL.md "Stick–slip transitions"; "The motor under load": eq. 23 gains ``− τ_L τ``).
     """
     half = 0.5 * w * tau
     dv = -2.0 * w * sin(th0 + half) * sin(half)
-    return omega0 - sigma * (tau + dv)
+    if load == 0.0:
+        return omega0 - sigma * (tau + dv)
+    return omega0 - sigma * (tau + dv) - load * tau
 
 
 @njit(cache=True, inline="always")
-def slip_omega_integral(omega0, sigma, w, th0, tau):
+def slip_omega_integral(omega0, sigma, w, th0, tau, load):
     """``∫_0^τ Ω dτ'`` while slipping: the integral of :func:`slip_omega` (eq. 23 corrected).
 
-    ``Ω0 τ − σ [τ²/2 + (u_s(τ) − u_s(0)) − v_s(0) τ]`` with ``u_s = sin φ``, ``v_s = w cos φ``.
+    ``Ω0 τ − σ [τ²/2 + (u_s(τ) − u_s(0)) − v_s(0) τ] − τ_L τ²/2`` with ``u_s = sin φ``,
+    ``v_s = w cos φ``.
     """
     half = 0.5 * w * tau
     du = 2.0 * cos(th0 + half) * sin(half)
-    return omega0 * tau - sigma * (0.5 * tau * tau + du - w * cos(th0) * tau)
+    total = omega0 * tau - sigma * (0.5 * tau * tau + du - w * cos(th0) * tau)
+    if load == 0.0:
+        return total
+    return total - 0.5 * load * tau * tau
+
+
+@njit(cache=True, inline="always")
+def loaded_omega(omega0, load, tau):
+    """``Ω(τ) = Ω0 − τ_L τ`` with no friction: flight, or the clipped model's unloaded ride
+    (MODEL.md "The motor under load": ``Ω' = −τ_L``)."""
+    if load == 0.0:
+        return omega0
+    return omega0 - load * tau
+
+
+@njit(cache=True, inline="always")
+def loaded_omega_integral(omega0, load, tau):
+    """``∫_0^τ Ω dτ' = Ω0 τ − τ_L τ²/2`` of :func:`loaded_omega`."""
+    if load == 0.0:
+        return omega0 * tau
+    return omega0 * tau - 0.5 * load * tau * tau
 
 
 @njit(cache=True, inline="always")
@@ -169,3 +193,87 @@ def stick_omega_integral(w, r, psi, th0, tau):
     """``∫_0^τ Ω dτ'`` while sticking, ``RΩ = Ω_s = w cos(φ + ψ)``: ``(φ_s(τ) − φ_s(0))/R``."""
     half = 0.5 * w * tau
     return 2.0 * cos(th0 + psi + half) * sin(half) / r
+
+
+@njit(cache=True, inline="always")
+def stick_margin_shift(r, load):
+    """``R τ_L``: the load's share of the stick condition ``|α_s + R τ_L| <= ρ R N``
+    (MODEL.md "The motor under load": the friction must supply ``α_s/R + τ_L``)."""
+    return r * load
+
+
+# --- the energy audit (MODEL.md "The motor under load", "Power and energy audit") ------------
+# Closed forms of the audit's integrals over one segment of length L that starts at phase th0
+# (φ = th0 + w τ), each in difference form: dsin(x, h) = sin(x + h) − sin(x) etc.
+
+
+@njit(cache=True, inline="always")
+def dsin(x, h):
+    """``sin(x + h) − sin(x)`` without cancellation."""
+    return 2.0 * cos(x + 0.5 * h) * sin(0.5 * h)
+
+
+@njit(cache=True, inline="always")
+def dcos(x, h):
+    """``cos(x + h) − cos(x)`` without cancellation."""
+    return -2.0 * sin(x + 0.5 * h) * sin(0.5 * h)
+
+
+@njit(cache=True, inline="always")
+def contact_axial_work(w, th0, length):
+    """Stator's work on a rotor riding it, ``∫ N v_s dt = Δu_s + Δ(v_s²/2)`` (units ``m_r g U0``).
+
+    ``N v_s = (1 + a_s) v_s`` and ``a_s v_s = d(v_s²/2)/dt``: the work is the change of the
+    riding rotor's energy ``E_ax = v²/2 + u`` (MODEL.md "Power and energy audit").
+    """
+    h = w * length
+    du = dsin(th0, h)
+    dc = dcos(th0, h)
+    c0 = cos(th0)
+    # Δ(w² cos²φ / 2) = w² (cos φ1 − cos φ0)(cos φ1 + cos φ0) / 2
+    return du + 0.5 * w * w * dc * (dc + 2.0 * c0)
+
+
+@njit(cache=True, inline="always")
+def slip_twist_work(sigma, w, r, psi, th0, length):
+    """Stator's torsional input while slipping, ``W_t = ∫ f Ω_s/R dt`` with ``f = −σN``.
+
+    ``∫ N Ω_s dt = Δ sin(φ + ψ) + (w²/4) Δ cos(2φ + ψ) + (w³ L / 2) sin ψ`` (``N = 1 − w² sin φ``,
+    ``Ω_s = w cos(φ + ψ)``); units of ``Ω²/2`` (MODEL.md "Power and energy audit").
+    """
+    h = w * length
+    n_os = dsin(th0 + psi, h) + 0.25 * w * w * dcos(2.0 * th0 + psi, 2.0 * h)
+    n_os += 0.5 * w * w * h * sin(psi)
+    return -sigma * n_os / r
+
+
+@njit(cache=True, inline="always")
+def slip_load_omega_integral(omega0, sigma, w, th0, length, load):
+    """``∫ N Ω dt`` over a slip segment (``N = 1 − w² sin φ``, Ω from :func:`slip_omega`).
+
+    With ``Ω = A + Bτ − σ w cos φ``, ``A = Ω0 + σ w cos θ0``, ``B = −(σ + τ_L)``:
+    ``A L + B L²/2 − σ Δsin φ + A w Δcos φ + B w L cos φ1 − B Δsin φ + σ (w²/2) Δ sin²φ``.
+    """
+    h = w * length
+    s0 = sin(th0)
+    c0 = cos(th0)
+    ds = dsin(th0, h)
+    dc = dcos(th0, h)
+    a = omega0 + sigma * w * c0
+    b = -(sigma + load)
+    total = a * length + 0.5 * b * length * length - sigma * ds + a * w * dc
+    total += b * w * length * (c0 + dc) - b * ds + 0.5 * sigma * w * w * ds * (ds + 2.0 * s0)
+    return total
+
+
+@njit(cache=True, inline="always")
+def stick_twist_work(w, r, psi, load, th0, length):
+    """Stator's torsional input while sticking, ``f = α_s/R + τ_L``:
+    ``W_t = Δ(Ω_s²/2)/R² + τ_L Δφ_s / R`` (MODEL.md "The motor under load")."""
+    h = w * length
+    x = th0 + psi
+    dc = dcos(x, h)
+    work = 0.5 * w * w * dc * (dc + 2.0 * cos(x)) / (r * r)
+    if load != 0.0:
+        work += load * dsin(x, h) / r
+    return work
