@@ -77,8 +77,9 @@ def test_ishigami_shards_join_to_the_one_job_result_bit_for_bit(tmp_path):
 
 
 def test_motor_shards_join_to_the_one_job_result_bit_for_bit():
-    st = settings(base_samples=4, members=2, duration=5.0, discard=5.0)
+    st = settings(base_samples=4, members=2, duration=5.0, discard=5.0, loads=(0.0, 0.7, 1.3))
     model = sens.MotorModel(st)
+    assert model.outputs == tuple(sens.OUTPUTS)  # the load figures too
     one = run_sharded(dataclasses.replace(st, shards=1), model)
     many = run_sharded(dataclasses.replace(st, shards=3), model)
     assert one.sizes["point"] == 4 * 6
@@ -88,6 +89,10 @@ def test_motor_shards_join_to_the_one_job_result_bit_for_bit():
     y, lo, hi = (one[f"no_load_speed{s}"].values for s in ("", "_ci_low", "_ci_high"))
     assert np.all(lo <= y) and np.all(y <= hi)
     assert np.all(np.isfinite(one["log10_tau"].values))
+    # the loads start at 0, where the power is 0: the largest power over them is never negative
+    assert np.all(one["max_power"].values >= 0.0)
+    stall = one["stall_torque"].values
+    assert np.all((stall >= 0.0) & (stall <= 1.3))  # the speed is <= 0 by tau_L = 1.3 > 1
 
 
 def test_joining_refuses_missing_points():

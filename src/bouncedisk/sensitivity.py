@@ -50,8 +50,8 @@ OUTPUTS: dict[str, tuple[str, str, bool]] = {
         "1",
         True,
     ),
-    "max_power": ("maximum output power R_phi * tau_L * mean Omega over the loads", "1", True),
-    "efficiency_at_max_power": ("torsional efficiency at the load of maximum power", "1", True),
+    "max_power": ("largest mean output power R_phi * tau_L * mean Omega over the loads", "1", True),
+    "efficiency_at_max_power": ("torsional efficiency at the load of the largest power", "1", True),
 }
 #: The design maps' outputs, and the one that picks the best operating point (first present).
 MAP_OUTPUTS = ("no_load_speed", "stall_torque", "efficiency_at_max_power")
@@ -78,13 +78,22 @@ def interval(values: Sequence[float]) -> tuple[float, float, float, float]:
     return mean, low, high, se
 
 
-def _from_ci(mean, ci, members: int, scale: float = 1.0) -> tuple[float, float, float, float]:
-    """``(mean, low, high, se)`` from a reported value and ``[low, high]`` (``None``: NaN); the
-    standard error is the half-width over Student's ``t_{0.975, K−1}``."""
+def _from_ci(
+    mean, ci, members: int | None, scale: float = 1.0
+) -> tuple[float, float, float, float]:
+    """``(mean, low, high, se)`` from a reported value and ``[low, high]`` (``None``: NaN).
+
+    The standard error is the half-width over Student's ``t_{0.975, K−1}`` for a Student
+    interval of ``members`` members, over the normal ``z_{0.975}`` for a bootstrap percentile
+    interval (``members=None``).
+    """
     m = math.nan if mean is None else float(mean) * scale
     lo, hi = (math.nan if v is None else float(v) * scale for v in (ci or (None, None)))
-    t = float(_sps.t.ppf(0.5 + LEVEL / 2.0, max(1, members - 1)))
-    return m, lo, hi, (hi - lo) / (2.0 * t)
+    if members is None:
+        q = float(_sps.norm.ppf(0.5 + LEVEL / 2.0))
+    else:
+        q = float(_sps.t.ppf(0.5 + LEVEL / 2.0, max(1, members - 1)))
+    return m, lo, hi, (hi - lo) / (2.0 * q)
 
 
 # ----------------------------------------------------------------------------- models
@@ -178,17 +187,27 @@ class MotorModel:
         return full, full - half, full + half, se
 
     def _load(self, point: Mapping[str, float], r: float) -> dict:
-        """Stall torque, maximum power and the efficiency at it, from the torque–speed curve."""
+        """Stall torque, maximum power and the efficiency at it, from the torque–speed curve's
+        up branch (loads increasing by continuation; MODEL.md "The motor under load").
+
+        The stall torque and its bootstrap interval are the curve's. The maximum power is the
+        largest mean power ``τ_L Ω̄`` over the loads asked for, with its Student interval, and
+        the efficiency is taken at that load: the curve's parabolic peak overshoots where the
+        speed collapses at the stall (a vertex far above every sample).
+        """
+        scene = self.scene(point, load=True)
+        curve = self._torque_speed(scene, list(self.s.loads), cores=1, branches=("up",))
+        s = curve.summary()
         k = self.s.members
-        s = self._torque_speed(self.scene(point, load=True), list(self.s.loads), cores=1).summary()
-        out = {
-            "stall_torque": _from_ci(s["stall_torque"], s["stall_torque_ci95"], k),
-            "max_power": _from_ci(s["max_power"], s["max_power_ci95"], k, scale=r),
+        power = np.array([math.nan if p is None else p for p in s["power_out"]], float)
+        i = int(np.nanargmax(power)) if np.isfinite(power).any() else 0
+        return {
+            "stall_torque": _from_ci(s["stall_torque"], s["stall_torque_ci95"], None),
+            "max_power": _from_ci(s["power_out"][i], s["power_out_ci95"][i], k, scale=r),
+            "efficiency_at_max_power": _from_ci(
+                s["efficiency_torsion"][i], s["efficiency_torsion_ci95"][i], k
+            ),
         }
-        i = int(np.argmin(np.abs(np.asarray(s["loads"], float) - float(s["max_power_load"]))))
-        eff = s["efficiency_torsion"][i]
-        out["efficiency_at_max_power"] = _from_ci(eff, s["efficiency_torsion_ci95"][i], k)
-        return out
 
 
 # ----------------------------------------------------------------------------- sampling
