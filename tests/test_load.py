@@ -1,0 +1,361 @@
+"""The motor under load (MODEL.md "The motor under load"): closed forms, the energy audit,
+the momentum bound, the torque–speed curve and bad input."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+from scipy.integrate import quad, solve_ivp
+
+from bouncedisk.cli import main
+from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
+from bouncedisk.engine import laws as L
+from bouncedisk.engine.driver import audit_balances
+from bouncedisk.loadcurve import first_zero, parse_loads, peak, torque_speed
+from bouncedisk.params import PhysicalParameters
+from bouncedisk.scene import scene_from_mapping
+
+W, R, PSI = 1.5, 0.01, 0.7
+
+# --- closed forms against quadrature of the ODE with the load ----------------------------------
+
+
+def _n(ph):
+    return 1.0 - W * W * math.sin(ph)
+
+
+@pytest.mark.parametrize("sigma", [1.0, -1.0])
+@pytest.mark.parametrize("load", [0.0, 0.35])
+def test_slip_omega_with_load_solves_the_ode(sigma, load):
+    """Eq. 23 with the load: Ω' = −σN − τ_L, integrated numerically from the same start."""
+    th0, om0, tau = 0.4, 37.0, 1.9
+    sol = solve_ivp(
+        lambda t, y: [-sigma * _n(th0 + W * t) - load],
+        (0.0, tau),
+        [om0],
+        rtol=1e-12,
+        atol=1e-12,
+        dense_output=True,
+    )
+    for t in np.linspace(0.0, tau, 7):
+        assert L.slip_omega(om0, sigma, W, th0, t, load) == pytest.approx(sol.sol(t)[0], abs=1e-9)
+        ref = quad(lambda x: L.slip_omega(om0, sigma, W, th0, x, load), 0.0, t)[0]
+        assert L.slip_omega_integral(om0, sigma, W, th0, t, load) == pytest.approx(ref, abs=1e-10)
+
+
+def test_flight_omega_with_load_is_linear():
+    """Flight: Ω' = −τ_L, and its integral Ω0 τ − τ_L τ²/2."""
+    assert L.loaded_omega(5.0, 0.25, 2.0) == 4.5
+    assert L.loaded_omega_integral(5.0, 0.25, 2.0) == pytest.approx(10.0 - 0.5)
+    assert L.loaded_omega(5.0, 0.0, 2.0) == 5.0
+
+
+@pytest.mark.parametrize("sigma", [1.0, -1.0])
+@pytest.mark.parametrize("load", [0.0, 0.35])
+def test_audit_integrals_of_a_slip_segment_match_quadrature(sigma, load):
+    """W_t = ∫ −σN Ω_s/R dt and ∫ N Ω dt in closed form, against quadrature."""
+    th0, om0, tau = 2.2, -12.0, 3.1
+    w_t = quad(lambda t: -sigma * _n(th0 + W * t) * W * math.cos(th0 + W * t + PSI) / R, 0, tau)
+    assert L.slip_twist_work(sigma, W, R, PSI, th0, tau) == pytest.approx(w_t[0], rel=1e-11)
+    n_om = quad(lambda t: _n(th0 + W * t) * L.slip_omega(om0, sigma, W, th0, t, load), 0, tau)
+    got = L.slip_load_omega_integral(om0, sigma, W, th0, tau, load)
+    assert got == pytest.approx(n_om[0], rel=1e-11, abs=1e-11)
+
+
+@pytest.mark.parametrize("load", [0.0, 0.35])
+def test_stick_and_contact_work_match_quadrature(load):
+    """Sticking, f = α_s/R + τ_L: W_t = ∫ f Ω_s/R dt; riding: W_ax = ∫ N v_s dt."""
+    th0, tau = 5.0, 2.3
+
+    def stick_power(t):
+        ph = th0 + W * t + PSI
+        return (-W * W * math.sin(ph) / R + load) * W * math.cos(ph) / R
+
+    ref = quad(stick_power, 0.0, tau)[0]
+    assert L.stick_twist_work(W, R, PSI, load, th0, tau) == pytest.approx(ref, rel=1e-11)
+    ref_ax = quad(lambda t: _n(th0 + W * t) * W * math.cos(th0 + W * t), 0.0, tau)[0]
+    assert L.contact_axial_work(W, th0, tau) == pytest.approx(ref_ax, rel=1e-11, abs=1e-13)
+
+
+def _cfg(**kw):
+    base = dict(e=0.0, omega_s=W, r_phi=R, psi=PSI, torsion=True, max_events=10**9)
+    base.update(kw)
+    return EngineConfig(**base)
+
+
+def test_stick_ends_where_the_loaded_stick_condition_fails():
+    """While sticking (RΩ = Ω_s), |α_s + Rτ_L| <= RN; between, the slip obeys Ω' = −σN − τ_L.
+
+    Checked on the dense trajectory of an e = 0 stick–slip run under load.
+    """
+    load, r = 0.4, 2.0  # a large R: the rotor sticks for long stretches
+    res = simulate_arrays(_cfg(t_end=60.0, traj_dt=1e-3, load_torque=load, r_phi=r))
+    t, om = res.traj[:, 0], res.traj[:, 4]
+    ph = W * t
+    n_load = 1.0 - W * W * np.sin(ph)
+    alpha = -W * W * np.sin(ph + PSI)
+    s = r * om - W * np.cos(ph + PSI)
+    contact = np.abs(res.traj[:, 1] - res.traj[:, 3]) < 1e-12
+    sticking = contact & (np.abs(s) < 1e-12)
+    assert sticking.sum() > 1000 and (contact & ~sticking).sum() > 1000
+    margin = np.abs(alpha + r * load) - r * n_load
+    assert margin[sticking].max() <= 1e-9
+    # slipping samples: the finite-difference acceleration is −σN − τ_L
+    slipping = contact & ~sticking
+    k = np.flatnonzero(slipping[1:-1] & slipping[:-2] & slipping[2:]) + 1
+    k = k[np.sign(s[k - 1]) == np.sign(s[k + 1])]
+    acc = (om[k + 1] - om[k - 1]) / (t[k + 1] - t[k - 1])
+    assert np.allclose(acc, -np.sign(s[k]) * n_load[k] - load, atol=1e-4)
+
+
+def test_flight_under_load_decelerates_linearly():
+    """In flight Ω' = −τ_L exactly (no friction in the air)."""
+    res = simulate_arrays(_cfg(e=0.6, t_end=40.0, traj_dt=1e-2, load_torque=0.3))
+    t, u, us, om = res.traj[:, 0], res.traj[:, 1], res.traj[:, 3], res.traj[:, 4]
+    fly = u - us > 1e-6
+    k = np.flatnonzero(fly[:-1] & fly[1:])
+    # consecutive flight samples with no impact between them
+    imp = res.events["t"]
+    between = np.searchsorted(imp, t[k]) == np.searchsorted(imp, t[k + 1])
+    k = k[between]
+    assert len(k) > 500
+    slope = (om[k + 1] - om[k]) / (t[k + 1] - t[k])
+    assert np.allclose(slope, -0.3, atol=1e-9)
+
+
+def test_zero_load_gives_the_same_numbers_as_no_load():
+    """Effect ``load`` with τ_L = 0 is bit-identical to the same scene without it."""
+    a = simulate_arrays(_cfg(e=0.6, t_end=3000.0, traj_dt=0.5, stats_from=0.0))
+    b = simulate_arrays(_cfg(e=0.6, t_end=3000.0, traj_dt=0.5, stats_from=0.0, load_torque=0.0))
+    for key in a.events:
+        assert a.events[key].tobytes() == b.events[key].tobytes(), key
+    assert a.traj.tobytes() == b.traj.tobytes()
+    assert a.final == b.final
+
+
+def test_scene_with_load_zero_equals_scene_without(tmp_path):
+    raw = {
+        "parameters": {"e": 0.3, "omega_s": 1.5, "r_phi": 0.01, "psi": 0.0},
+        "effects": ["impacts", "contact", "torsion"],
+        "stop": {"impacts": 500},
+    }
+    outs = []
+    for with_load in (False, True):
+        r = json.loads(json.dumps(raw))
+        if with_load:
+            r["effects"].append("load")
+            r["parameters"]["load_torque"] = 0.0
+        path = tmp_path / f"s{int(with_load)}.yaml"
+        import yaml
+
+        path.write_text(yaml.safe_dump(r))
+        out = tmp_path / f"o{int(with_load)}.nc"
+        assert main(["simulate", str(path), "-o", str(out), "-q"]) == 0
+        outs.append(xr.open_dataset(out))
+    for name in ("t_impact", "phase", "v_rel", "omega_after"):
+        assert outs[0][name].values.tobytes() == outs[1][name].values.tobytes()
+
+
+# --- the energy audit closes to round-off in every regime -------------------------------------
+
+REGIMES = {
+    # name: engine settings; 10^6 events, or a time stop where the rotor never leaves
+    "periodic e=0.3": dict(e=0.3, psi=0.0, max_events=10**6),
+    "chaotic with chatter e=0.6": dict(e=0.6, psi=0.0, max_events=10**6),
+    "e=0 stick-slip": dict(e=0.0, max_events=10**6),
+    "w<=1 permanent contact": dict(e=0.5, omega_s=0.9, t_end=2.0e5),
+    "e=1": dict(e=1.0, max_events=10**6),
+    "kinetic-static, finite stator inertia": dict(
+        e=0.4, mu_ratio=1.3, inertia_ratio=5.0, max_events=3 * 10**5
+    ),
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("load", [0.0, 0.3])
+@pytest.mark.parametrize("regime", sorted(REGIMES))
+def test_energy_audit_closes_to_round_off(regime, load):
+    """MODEL.md "Power and energy audit": both balances close to ≤ 1e-9 relative over 10⁶
+    events (flights, slips, sticks, impacts, chattering tails)."""
+    res = simulate_arrays(_cfg(stats_from=0.0, load_torque=load, **REGIMES[regime]))
+    assert res.ok
+    terms = res.final["audit"]
+    ax, tor = audit_balances(terms)
+    assert ax <= 1e-9 and tor <= 1e-9, (ax, tor, terms)
+    assert terms["work_torsion"] != 0.0
+    if load:
+        assert terms["work_load"] != 0.0
+    if REGIMES[regime].get("omega_s", W) > 1.0 and REGIMES[regime]["e"] < 1.0:
+        assert terms["loss_axial"] > 0.0  # impacts dissipate
+
+
+def test_audit_catches_a_wrong_term():
+    """The residual is not zero by construction: a 1e-6 error in one term shows."""
+    res = simulate_arrays(_cfg(e=0.6, psi=0.0, max_events=20000, stats_from=0.0, load_torque=0.2))
+    terms = dict(res.final["audit"])
+    terms["loss_friction"] *= 1.0 + 1e-6
+    terms["loss_axial"] *= 1.0 + 1e-6
+    ax, tor = audit_balances(terms)
+    assert ax > 1e-8 and tor > 1e-8
+
+
+def test_audit_window_starts_inside_a_segment():
+    """An audit from t = 1234.5 (inside some flight or contact) closes as well as from 0."""
+    res = simulate_arrays(_cfg(e=0.6, psi=0.0, t_end=20000.0, stats_from=1234.5, load_torque=0.2))
+    ax, tor = audit_balances(res.final["audit"])
+    assert ax <= 1e-9 and tor <= 1e-9
+
+
+# --- the momentum bound: the mean friction torque is at most 1 --------------------------------
+
+
+@pytest.mark.parametrize("load", [1.2, 1.5])
+def test_a_load_above_one_runs_away_backwards(load):
+    """Mean N = 1 (momentum balance), so |mean friction torque| <= 1: with τ_L > 1 the rotor
+    decelerates at least at τ_L − 1 on average and runs away backwards."""
+    t_end = 20000.0
+    res = simulate_arrays(_cfg(e=0.6, psi=0.0, t_end=t_end, load_torque=load))
+    mean_friction = (res.final["omega"] - 0.0) / t_end + load
+    assert abs(mean_friction) <= 1.0 + 1e-3
+    assert res.final["omega"] < -(load - 1.0) * t_end * 0.9
+
+
+# --- torque–speed curves ---------------------------------------------------------------------
+
+
+def test_first_zero_and_peak_closed_forms():
+    loads = np.linspace(0.0, 1.0, 11)
+    assert first_zero(loads, 2.0 - 3.0 * loads) == pytest.approx(2.0 / 3.0)
+    assert math.isnan(first_zero(loads, 1.0 + loads))
+    assert first_zero(loads, -1.0 - loads) == 0.0
+    p, at = peak(loads, 5.0 - 20.0 * (loads - 0.437) ** 2)
+    assert p == pytest.approx(5.0) and at == pytest.approx(0.437)
+
+
+def _stats_scene(**over):
+    raw = {
+        "name": "loadcurve",
+        "parameters": {"e": 0.6, "omega_s": 1.5, "r_phi": 0.01, "psi": 0.0, "e_sigma": 1e-9},
+        "effects": ["impacts", "contact", "torsion", "restitution_noise", "load"],
+        "stop": {"time": 3000.0},
+        "stats": {"discard": 500.0},
+        "ensemble": {"members": 6, "seed": 3},
+    }
+    raw["parameters"]["load_torque"] = 0.0
+    raw.update(over)
+    return scene_from_mapping(raw, "<test>")
+
+
+def test_torque_speed_curve_falls_with_load_and_does_not_depend_on_cores():
+    scene = _stats_scene()
+    loads = [0.0, 0.2, 0.4, 0.6, 0.8]
+    one = torque_speed(scene, loads, cores=1).summary()
+    two = torque_speed(scene, loads, cores=2).summary()
+    assert json.dumps(one) == json.dumps(two)
+    speed = one["mean_omega"]
+    assert all(a > b for a, b in zip(speed, speed[1:], strict=False))
+    assert 0.0 < one["stall_torque"] < 1.0  # the momentum bound
+    lo, hi = one["stall_torque_ci95"]
+    assert lo <= one["stall_torque"] <= hi
+    assert one["max_power"] == pytest.approx(max(one["power_out"]), rel=0.2)
+    assert max(one["audit_residual_torsion"]) <= 1e-9
+    assert max(one["audit_residual_axial"]) <= 1e-9
+    # output power is τ_L Ω̄ exactly, per load
+    for load, p, om in zip(loads, one["power_out"], speed, strict=True):
+        assert p == pytest.approx(load * om, rel=1e-12, abs=1e-12)
+    assert one["down"]["mean_omega"][0] == pytest.approx(speed[0], rel=0.1)
+
+
+def test_physical_load_torque_is_scaled_by_the_friction_torque():
+    phys = PhysicalParameters(
+        m_r=0.01,
+        r_g=0.004,
+        r_c=0.002,
+        mu=0.3,
+        e=0.5,
+        g=9.81,
+        f=15e3,
+        U0=1e-6,
+        Phi0=1e-4,
+        F_preload=0.5,
+        load_torque=2e-5,
+    )
+    g_eff = 9.81 + 0.5 / 0.01
+    scale = 0.3 * 0.01 * g_eff * (2.0 * 0.002 / 3.0)
+    assert phys.scales().torque == pytest.approx(scale, rel=1e-14)
+    assert phys.to_nondimensional().load_torque == pytest.approx(2e-5 / scale, rel=1e-14)
+    sc = phys.scales()
+    assert sc.torsion_power == pytest.approx(sc.torque * sc.omega_scale)
+
+
+def test_parse_loads():
+    assert np.allclose(parse_loads("0:1:5"), [0, 0.25, 0.5, 0.75, 1.0])
+    assert np.allclose(parse_loads("0.5, 0.1,0"), [0.0, 0.1, 0.5])
+
+
+# --- bad input: one line, exit 2, nothing written ---------------------------------------------
+
+SCENE = """\
+parameters: {{e: 0.6, omega_s: 1.5, r_phi: 0.01, psi: 0.0, e_sigma: 1.0e-9{extra}}}
+effects: [{effects}]
+stop: {{time: 1000.0}}
+ensemble: {{members: 2, seed: 1}}
+"""
+FULL = "impacts, contact, torsion, restitution_noise, load"
+
+
+@pytest.mark.parametrize(
+    "extra, effects, field",
+    [
+        (", load_torque: -0.2", FULL, "parameters.load_torque"),
+        (", load_torque: .nan", FULL, "parameters.load_torque"),
+        (", load_torque: heavy", FULL, "parameters.load_torque"),
+        ("", FULL, "parameters.load_torque"),
+        (", load_torque: 0.2", "impacts, contact, torsion, restitution_noise", "load_torque"),
+        (", load_torque: 0.2", "impacts, contact, restitution_noise, load", "effects.load"),
+    ],
+)
+def test_bad_load_input_is_one_line_exit_2_and_no_output(
+    extra, effects, field, scene_file, tmp_path, capsys
+):
+    f = scene_file(SCENE.format(extra=extra, effects=effects))
+    for cmd in (["simulate", str(f), "-o"], ["stats", str(f), "-o"]):
+        out = tmp_path / "out.nc"
+        assert main([*cmd, str(out)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and field in err[0] and str(f) in err[0], err
+        assert not out.exists()
+
+
+@pytest.mark.parametrize("loads", ["1:0:3", "a,b", "0:1:1", "0,0.1,0.1", "nan,1", "=-1,2", "0:1"])
+def test_bad_loads_option(loads, scene_file, tmp_path, capsys):
+    f = scene_file(SCENE.format(extra=", load_torque: 0.0", effects=FULL))
+    out = tmp_path / "c.nc"
+    opt = ["--loads" + loads] if loads.startswith("=") else ["--loads", loads]
+    assert main(["torque-speed", str(f), *opt, "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--loads" in err[0]
+    assert not out.exists()
+
+
+def test_torque_speed_command_writes_a_curve_file(scene_file, tmp_path, capsys):
+    """The command adds the load effect itself, writes the file and prints JSON."""
+    f = scene_file(SCENE.format(extra="", effects="impacts, contact, torsion, restitution_noise"))
+    out = tmp_path / "c.nc"
+    args = ["torque-speed", str(f), "--loads", "0,0.3,0.9", "-o", str(out), "--json", "-q"]
+    assert main(args) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["loads"] == [0.0, 0.3, 0.9]
+    ds = xr.open_dataset(out)
+    assert ds.mean_omega.dims == ("branch", "load_torque")
+    assert list(ds.branch.values) == ["up", "down"]
+    assert np.allclose(ds.mean_omega.sel(branch="up").values, summary["mean_omega"])
+    assert ds.attrs["no_load_speed"] == pytest.approx(summary["no_load_speed"])
+    for name in ds.variables:
+        assert "units" in ds[name].attrs or name == "branch"
+    assert dataclasses.is_dataclass(EngineConfig) and InitialState().t == 0.0
