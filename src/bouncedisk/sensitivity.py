@@ -478,8 +478,9 @@ def best_point(ds: xr.Dataset, output: str) -> dict:
 
 
 def summary(indices: xr.Dataset, maps: Sequence[xr.Dataset] = ()) -> dict:
-    """The study as JSON: indices with intervals and the noise share per output, and the best
-    operating point of every design map."""
+    """The study as JSON: per output the noise share and each parameter's ``S1`` and ``ST`` as
+    ``{"index", "ci95": [low, high]}`` (SALib's bootstrap interval), and the best operating
+    point of every design map (:func:`best_point`)."""
     out: dict = {"n_points": int(indices.attrs["n_points"]), "outputs": {}}
     out["cpu_s_per_point"] = float(indices.attrs["cpu_s_per_point"])
     for o in indices["output"].values.tolist():
@@ -489,10 +490,10 @@ def summary(indices: xr.Dataset, maps: Sequence[xr.Dataset] = ()) -> dict:
             "n_undefined": int(row["n_undefined"]),
         }
         for k in ("S1", "ST"):
-            entry[k] = {
-                p: [_num(row[k].sel(parameter=p)), _num(row[f"{k}_conf"].sel(parameter=p))]
-                for p in indices["parameter"].values.tolist()
-            }
+            entry[k] = {}
+            for p in indices["parameter"].values.tolist():
+                v, c = float(row[k].sel(parameter=p)), float(row[f"{k}_conf"].sel(parameter=p))
+                entry[k][p] = {"index": _num(v), "ci95": [_num(v - c), _num(v + c)]}
         out["outputs"][o] = entry
     best = next((b for b in BEST_BY if maps and b in maps[0]), None)
     out["best"] = {}
