@@ -30,6 +30,7 @@ def targets(res: Path) -> list[str]:
         "poincare/poincare_e06.nc",
         "figures/fig3_trajectory_e03.png",
         "studies/clipped_vs_bouncing.nc",
+        "sensitivity/points.nc",
     ]
     return [str(res / n) for n in names]
 
