@@ -6,10 +6,13 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 import xarray as xr
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.integrate import quad, solve_ivp
 
 from bouncedisk.cli import main
@@ -17,6 +20,7 @@ from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
 from bouncedisk.engine import laws as L
 from bouncedisk.engine.driver import audit_balances
 from bouncedisk.loadcurve import first_zero, parse_loads, peak, torque_speed
+from bouncedisk.loaddata import read_load_curve
 from bouncedisk.params import PhysicalParameters
 from bouncedisk.scene import scene_from_mapping
 
@@ -359,3 +363,147 @@ def test_torque_speed_command_writes_a_curve_file(scene_file, tmp_path, capsys):
     for name in ds.variables:
         assert "units" in ds[name].attrs or name == "branch"
     assert dataclasses.is_dataclass(EngineConfig) and InitialState().t == 0.0
+
+
+def test_clipped_model_takes_the_load():
+    """The clipped spring-contact model takes the load too: where N is clipped to 0 the rotor
+    decelerates at −τ_L, and the torsional balance closes (no axial balance there)."""
+    cfg = _cfg(e=0.6, psi=0.0, clipped=True, t_end=400.0, stats_from=0.0, load_torque=0.3)
+    res = simulate_arrays(dataclasses.replace(cfg, traj_dt=0.01))
+    ax, tor = audit_balances(res.final["audit"])
+    assert math.isnan(ax) and tor <= 1e-9
+    t, om = res.traj[:, 0], res.traj[:, 4]
+    ph = np.mod(W * t, 2 * math.pi)
+    th_sep = math.asin(1.0 / (W * W))
+    free = (ph > th_sep + 0.01) & (ph < math.pi - th_sep - 0.01)
+    k = np.flatnonzero(free[:-1] & free[1:])
+    slope = (om[k + 1] - om[k]) / (t[k + 1] - t[k])
+    assert len(k) > 100 and np.allclose(slope, -0.3, atol=1e-9)
+
+
+# --- measured load curves (INTERFACES.md): the shipped synthetic one and bad files ------------
+
+
+def test_shipped_synthetic_load_curve_is_regenerated_byte_for_byte(tmp_path):
+    import yaml
+
+    from bouncedisk.curves import write_curve
+    from bouncedisk.loadcurve import synthetic_load_curve
+
+    root = Path(__file__).resolve().parents[1]
+    spec = yaml.safe_load((root / "workflow/config/synthetic_motor.yaml").read_text())
+    df, sidecar = synthetic_load_curve(spec)
+    write_curve(df, tmp_path / "synthetic_motor_load.csv", sidecar)
+    for name in ("synthetic_motor_load.csv", "synthetic_motor_load.yaml"):
+        shipped = (root / "data/prototype" / name).read_bytes()
+        assert (tmp_path / name).read_bytes() == shipped, name
+    data = read_load_curve(root / "data/prototype/synthetic_motor_load.csv")
+    assert data.synthetic and data.window_s == (0.06, 0.12)
+    # from no load to past stall: the speed changes sign once
+    assert data.speed[0] > 0 > data.speed[-1]
+
+
+LOAD_CSV = "torque_Nm,speed_rad_s,speed_sd_rad_s\n0,20,0.3\n1e-4,14,0.5\n2e-4,0.6,0.5\n"
+LOAD_YAML = """\
+units: {torque: N m, speed: rad/s}
+motor: {drive_frequency_hz: 20000.0, Phi0_rad: 2.0e-4}
+rotor: {m_r_kg: 0.01, r_g_m: 0.004, r_c_m: 0.002}
+window_s: [0.06, 0.12]
+"""
+
+
+@pytest.mark.parametrize(
+    "csv, yaml_text, field",
+    [
+        (LOAD_CSV.replace("1e-4,14", "1e-4,fast"), LOAD_YAML, "speed_rad_s: row 3"),
+        (LOAD_CSV.replace("1e-4,14", "1e-4,nan"), LOAD_YAML, "speed_rad_s: row 3"),
+        (LOAD_CSV.replace("1e-4,14", "-1e-4,14"), LOAD_YAML, "torque_Nm: row 3"),
+        (LOAD_CSV.replace("2e-4,0.6", "1e-4,0.6"), LOAD_YAML, "torque_Nm: row 4"),
+        (LOAD_CSV.replace("speed_rad_s,", "omega,"), LOAD_YAML, "speed_rad_s"),
+        (LOAD_CSV, LOAD_YAML.replace(" r_c_m: 0.002", " r_x: 0.002"), "rotor.r_x"),
+        (LOAD_CSV, LOAD_YAML.replace(", r_c_m: 0.002", ""), "rotor.r_c_m"),
+        (LOAD_CSV, LOAD_YAML.replace("[0.06, 0.12]", "[0.12, 0.06]"), "window_s"),
+        (LOAD_CSV, LOAD_YAML.replace("rotor:", "rotr:"), "rotr"),
+        (LOAD_CSV.replace("0,20,0.3", "0,20,-0.3"), LOAD_YAML, "speed_sd_rad_s: row 2"),
+    ],
+)
+def test_bad_load_curve_names_file_row_and_column(csv, yaml_text, field, tmp_path):
+    from bouncedisk.errors import InputError
+
+    (tmp_path / "load.csv").write_text(csv)
+    (tmp_path / "load.yaml").write_text(yaml_text)
+    with pytest.raises(InputError) as ex:
+        read_load_curve(tmp_path / "load.csv")
+    line = ex.value.line()
+    assert field in line and "load." in line and "\n" not in line
+
+
+def test_load_curve_and_run_ups_must_share_the_drive(tmp_path):
+    from bouncedisk.errors import InputError
+    from bouncedisk.loaddata import check_same_setup
+
+    (tmp_path / "load.csv").write_text(LOAD_CSV)
+    (tmp_path / "load.yaml").write_text(LOAD_YAML)
+    data = read_load_curve(tmp_path / "load.csv")
+    check_same_setup(data, 20000.0, 2e-4)
+    with pytest.raises(InputError, match="motor.drive_frequency_hz"):
+        check_same_setup(data, 15000.0, 2e-4)
+
+
+def test_simulation_files_carry_the_energy_audit(scene_file, tmp_path):
+    """Every simulated run records its audit (per run, MODEL.md): residuals and terms."""
+    f = scene_file(
+        "parameters: {e: 0.6, omega_s: 1.5, r_phi: 0.01, psi: 0.0, load_torque: 0.2}\n"
+        "effects: [impacts, contact, torsion, load]\nstop: {impacts: 3000}\n"
+    )
+    out = tmp_path / "s.nc"
+    assert main(["simulate", str(f), "-o", str(out), "-q"]) == 0
+    a = xr.open_dataset(out).attrs
+    assert a["audit_residual_axial"] <= 1e-9 and a["audit_residual_torsion"] <= 1e-9
+    assert a["audit_work_load"] > 0.0 and a["load_torque"] == 0.2
+
+
+def test_physical_scene_reports_watts_and_the_motor_efficiency():
+    """A physical scene's stats add the powers in W and η = P_out / (P_ax + P_t)."""
+    from bouncedisk.params import Parameters
+    from bouncedisk.stats import run_stats
+
+    phys = PhysicalParameters.from_nondimensional(
+        Parameters(e=0.55, omega_s=1.7, r_phi=0.002, psi=0.4),
+        20000.0, 2e-4, 0.01, 0.004, 0.002, F_preload=0.77, load_torque=5e-5,
+    )  # fmt: skip
+    raw = {
+        "physical": {**phys.as_dict(), "e_sigma": 0.03},
+        "effects": ["impacts", "contact", "torsion", "restitution_noise", "load"],
+        "stop": {"time": 4000.0},
+        "stats": {"discard": 1000.0},
+        "ensemble": {"members": 4, "seed": 1},
+    }
+    scene = scene_from_mapping(raw, "<physical>")
+    s = run_stats(scene).summary()
+    sc = phys.scales()
+    assert s["power_out_W"] == pytest.approx(s["power_out"] * sc.torque * sc.omega_scale)
+    assert s["power_axial_in_W"] == pytest.approx(s["power_axial_in"] * sc.axial_power)
+    eta = s["power_out_W"] / (s["power_out_W"] / s["efficiency_torsion"] + s["power_axial_in_W"])
+    assert s["efficiency"] == pytest.approx(eta, rel=0.05)  # mean of ratios vs ratio of means
+    assert 0.0 < s["efficiency"] < s["efficiency_torsion"] < 1.0
+
+
+@settings(max_examples=40)
+@given(
+    e=st.floats(0.0, 1.0),
+    w=st.floats(0.5, 6.0),
+    log_r=st.floats(-3.0, 0.5),
+    psi=st.floats(-math.pi, math.pi),
+    load=st.floats(0.0, 2.0),
+    rho=st.floats(1.0, 1.5),
+)
+def test_audit_closes_for_any_parameters(e, w, log_r, psi, load, rho):
+    """Property: both balances close to round-off for any (e, ω_s, R_φ, ψ, τ_L, μ_s/μ_k)."""
+    cfg = EngineConfig(
+        e=e, omega_s=w, r_phi=10.0**log_r, psi=psi, torsion=True, mu_ratio=rho,
+        max_events=3000, t_end=3000.0, stats_from=0.0, load_torque=load,
+    )  # fmt: skip
+    res = simulate_arrays(cfg)
+    ax, tor = audit_balances(res.final["audit"])
+    assert ax <= 1e-9 and tor <= 1e-9, (ax, tor)

@@ -152,6 +152,9 @@ FIGURE_NAMES = {
     "sensitivity_indices",
     "sensitivity_scatter",
     "design_maps",
+    "torque_speed_fig3",
+    "torque_speed_fig4",
+    "torque_speed_prototype",
     "fit_profiles",
 }
 

@@ -48,7 +48,12 @@ RESULT_FILES = (
     "stats/stats_e03.nc",
     "stats/stats_e06.nc",
     "stats/stats_locked.nc",
+    "load/load_fig3.nc",
+    "load/load_fig4.nc",
 )
+#: The pipeline's load curves the checks read, and what is simulated without a results folder.
+LOAD_CURVES = ("load_fig3", "load_fig4")
+LOAD_SIMULATED = {"loads": "0:0.95:8", "overrides": ["ensemble.members=8", "stop.time=8000"]}
 
 
 def check_results_folder(path: str | Path) -> Path:
@@ -157,6 +162,75 @@ class _Source:
         out = (dict(ds.attrs), ds["trend_steady"].values, where)
         self.cache[key] = out
         return out
+
+
+def _load_curve(src: _Source, name: str) -> tuple[dict, str]:
+    """The up branch of a load curve (loads, mean speed and its interval, stall torque) and the
+    largest audit residuals of both branches."""
+    key = f"load:{name}"
+    if key in src.cache:
+        return src.cache[key]
+    path = src.results / "load" / f"{name}.nc" if src.results else None
+    if path is not None and path.exists():
+        ds = open_checked(
+            path, required=("mean_omega", "audit_residual_torsion"), what="load curve"
+        )
+        where = str(path)
+    else:
+        from .loadcurve import parse_loads, to_dataset, torque_speed
+        from .scene import load_scene
+
+        scene = load_scene(SCENE_DIR / f"{name}.yaml", LOAD_SIMULATED["overrides"])
+        curve = torque_speed(scene, parse_loads(LOAD_SIMULATED["loads"]), cores=2)
+        ds = to_dataset(scene, curve, 0.0)
+        where = f"load curve ({name}.yaml, {LOAD_SIMULATED['loads']}, 8 members)"
+    up = ds.sel(branch="up")
+    out = {
+        "loads": ds["load_torque"].values,
+        "mean": up["mean_omega"].values,
+        "low": up["mean_omega_ci95_low"].values,
+        "high": up["mean_omega_ci95_high"].values,
+        "residual": max(
+            float(ds["audit_residual_axial"].max()), float(ds["audit_residual_torsion"].max())
+        ),
+        "stall": float(ds.attrs.get("stall_torque", math.nan)),
+        "e": float(ds.attrs["e"]),
+    }
+    src.cache[key] = (out, where)
+    return out, where
+
+
+def _load_checks(src: _Source) -> list[CheckResult]:
+    """The motor under load (MODEL.md): the energy audit closes, the stall torque respects the
+    momentum bound, and the speed falls (or stays, within its interval) as the load grows."""
+    out = []
+    for name in LOAD_CURVES:
+        c, where = _load_curve(src, name)
+        e = c["e"]
+        out.append(CheckResult(
+            f"e = {e:g}: the energy audit closes to round-off on every load (MODEL.md)",
+            f"largest relative residual {c['residual']:.2g} over both balances, branches, loads",
+            "<= 1e-9", c["residual"] <= 1e-9, where,
+        ))  # fmt: skip
+        stall = c["stall"]
+        top = float(c["loads"][-1])
+        ok = (stall <= 1.0) if math.isfinite(stall) else top < 1.0
+        shown = f"{stall:.4g}" if math.isfinite(stall) else f"not reached up to {top:g}"
+        out.append(CheckResult(
+            f"e = {e:g}: stall torque within the momentum bound (mean N = 1, MODEL.md)",
+            f"stall torque {shown}", "<= 1 (units of the friction torque)", ok, where,
+        ))  # fmt: skip
+        rises = [
+            float(c["loads"][k + 1])
+            for k in range(len(c["loads"]) - 1)
+            if c["low"][k + 1] > c["high"][k]
+        ]
+        out.append(CheckResult(
+            f"e = {e:g}: the mean speed does not rise with the load (up branch)",
+            "rises beyond the 95% intervals at loads " + (", ".join(f"{x:g}" for x in rises) or "none"),
+            "none", not rises, where,
+        ))  # fmt: skip
+    return out
 
 
 def _summary_of(ds) -> dict:
@@ -348,6 +422,7 @@ CHECKS: list[Callable[[_Source], CheckResult | list[CheckResult]]] = [
     _locked_check,
     _threshold_checks,
     _rise_check,
+    _load_checks,
 ]
 
 

@@ -35,6 +35,8 @@ BRANCHES = ("up", "down")
 #: Bootstrap resamples of the members for the derived quantities' intervals (fixed seed).
 BOOTSTRAP = 2000
 BOOTSTRAP_SEED = 20261123
+#: Relative difference of two branches' mean speeds below which they count as one speed.
+MATERIAL = 1e-3
 #: Largest number of loads one curve may ask for.
 MAX_LOADS = 1000
 
@@ -108,12 +110,17 @@ class LoadCurve:
         return self.matrix(branch, "power_out")
 
     def branches_differ(self) -> list[float]:
-        """Loads at which the two branches' 95 % intervals of the mean speed do not overlap."""
+        """Loads at which the two branches hold different speeds: their 95 % intervals of the
+        mean speed do not overlap and the means differ by more than :data:`MATERIAL` of the
+        largest mean speed on the curve (a periodic attractor has a zero-width interval, and a
+        finite window's average still depends on where in the cycle it starts)."""
+        up = [confidence_interval(s.column("mean_omega")) for s in self.branches["up"]]
+        down = [confidence_interval(s.column("mean_omega")) for s in self.branches["down"]]
+        scale = max(abs(m) for m, _, _ in up + down)
         out = []
-        for k, load in enumerate(self.loads):
-            _, lo_u, hi_u = confidence_interval(self.branches["up"][k].column("mean_omega"))
-            _, lo_d, hi_d = confidence_interval(self.branches["down"][k].column("mean_omega"))
-            if hi_u < lo_d or hi_d < lo_u:
+        for load, (m_u, lo_u, hi_u), (m_d, lo_d, hi_d) in zip(self.loads, up, down, strict=True):
+            apart = hi_u < lo_d or hi_d < lo_u
+            if apart and abs(m_u - m_d) > MATERIAL * scale:
                 out.append(float(load))
         return out
 
@@ -395,6 +402,9 @@ def to_dataset(scene: Scene, curve: LoadCurve, wall_time_s: float):
                 ds.attrs[key] = _nan(summary[key])
                 ds.attrs[f"{key}_ci95"] = [_nan(x) for x in summary[f"{key}_ci95"]]
     ds.attrs["branches_differ_at"] = summary.get("branches_differ_at") or "none"
+    if scene.physical is not None:
+        sc = scene.physical.scales()
+        ds.attrs.update({"torque_scale_Nm": sc.torque, "omega_scale_rad_s": sc.omega_scale})
     ds.attrs.update(
         {
             "ensemble_members": int(members.size),
@@ -407,3 +417,116 @@ def to_dataset(scene: Scene, curve: LoadCurve, wall_time_s: float):
         }
     )
     return ds
+
+
+def motor_scene(
+    params,
+    drive_frequency_hz: float,
+    phi0_rad: float,
+    rotor: dict,
+    preload_n: float,
+    members: int,
+    time: float,
+    discard: float,
+    seed: int = 1,
+    name: str = "prototype_load",
+) -> Scene:
+    """A physical scene of a motor for its load curve in SI units: the nondimensional
+    ``params`` (e.g. a fit's) with the drive ``(f, Φ0)`` and the ``rotor``
+    (``m_r_kg``, ``r_g_m``, ``r_c_m``), converted by
+    :meth:`~bouncedisk.params.PhysicalParameters.from_nondimensional`; an ensemble of
+    ``members`` with the params' restitution noise, ``time`` and ``discard`` nondimensional.
+    """
+    from .params import PhysicalParameters
+    from .scene import scene_from_mapping
+
+    phys = PhysicalParameters.from_nondimensional(
+        params, drive_frequency_hz, phi0_rad, rotor["m_r_kg"], rotor["r_g_m"], rotor["r_c_m"],
+        F_preload=preload_n,
+    )  # fmt: skip
+    physical = {k: v for k, v in phys.as_dict().items()}
+    raw = {
+        "name": name,
+        "description": "load characteristic of a motor given by nondimensional parameters",
+        "physical": physical,
+        "effects": ["impacts", "contact", "torsion", "restitution_noise", "load"],
+        "stop": {"time": float(time)},
+        "stats": {"discard": float(discard)},
+        "ensemble": {"members": int(members), "seed": int(seed)},
+    }
+    return scene_from_mapping(raw, f"<{name}>")
+
+
+def readings_from_rest(scene: Scene, loads: Sequence[float], cores: int = 1) -> list[EnsembleStats]:
+    """What a lab reads at each load: the scene's ensemble started from its initial condition
+    (at rest) under that load, each member's mean speed over the scene's stats window
+    (``[initial.t + discard, stop.time]``; INTERFACES.md, a load curve's ``window_s``).
+
+    Unlike :func:`torque_speed` there is no continuation: every reading starts afresh.
+    """
+    from .ensemble import run_ensemble
+
+    t_from, t_end = ensemble_window(scene)
+    cfg = engine_config(scene)
+    out = []
+    for load in loads:
+        run = dataclasses.replace(cfg, load_torque=float(load))
+        members = run_ensemble(run, scene.initial, scene.ensemble.members, t_from, cores=cores)
+        out.append(EnsembleStats(members, scene.stats.discard, t_end - t_from, True, scene.scales))
+    return out
+
+
+def synthetic_load_curve(spec: dict, spec_path: str = "") -> tuple:
+    """A synthetic load curve of the synthetic motor (INTERFACES.md load-curve format).
+
+    ``spec`` is ``workflow/config/synthetic_motor.yaml``: the generating ``parameters`` and
+    ``e_sigma``, the drive, ``rotor``, ``preload_N`` and ``load_curve: {loads_Nm, repeats,
+    window_s, seed}``. Each load is read ``repeats`` times, each reading one ensemble member of the
+    model with restitution noise started from rest (:func:`readings_from_rest`); the CSV holds
+    their mean and standard deviation. Returns ``(DataFrame, sidecar)``.
+    """
+    import pandas as pd
+
+    from .params import Parameters
+
+    lc = spec["load_curve"]
+    p = Parameters(**spec["parameters"], e_sigma=spec["e_sigma"])
+    t_c = p.omega_s / (2.0 * math.pi * spec["drive_frequency_hz"])
+    t0, t1 = (float(x) for x in lc["window_s"])
+    scene = motor_scene(
+        p, spec["drive_frequency_hz"], spec["Phi0_rad"], spec["rotor"], spec["preload_N"],
+        lc["repeats"], t1 / t_c, t0 / t_c, seed=lc["seed"], name="synthetic_load_curve",
+    )  # fmt: skip
+    sc = scene.physical.scales()
+    loads = np.asarray(lc["loads_Nm"], dtype=float)
+    readings = readings_from_rest(scene, loads / sc.torque)
+    speeds = np.stack([r.column("mean_omega") for r in readings]) * sc.omega_scale
+    df = pd.DataFrame(
+        {
+            "torque_Nm": loads,
+            "speed_rad_s": speeds.mean(axis=1),
+            "speed_sd_rad_s": speeds.std(axis=1, ddof=1),
+        }
+    )
+    sidecar = {
+        "source": "SYNTHETIC: generated by bouncedisk from the bouncing-disk model at the "
+        "parameters below (each reading one ensemble member with restitution noise e_sigma, "
+        "started from rest under its load); not a measurement",
+        "synthetic": True,
+        "units": {"torque": "N m", "speed": "rad/s"},
+        "motor": {"drive_frequency_hz": spec["drive_frequency_hz"], "Phi0_rad": spec["Phi0_rad"]},
+        "rotor": dict(spec["rotor"]),
+        "preload_N": spec["preload_N"],
+        "window_s": [t0, t1],
+        "protocol": f"{lc['repeats']} readings per load, each the mean speed over window_s after "
+        "a start from rest; speed_sd_rad_s is their standard deviation",
+        "generating_parameters": {
+            **spec["parameters"],
+            "e_sigma": spec["e_sigma"],
+            "ensemble_seed": lc["seed"],
+        },  # fmt: skip
+        "generator": "workflow/scripts/make_synthetic_load_curve.py ("
+        + (spec_path or "workflow/config/synthetic_motor.yaml")
+        + ")",
+    }
+    return df, sidecar

@@ -310,3 +310,32 @@ class PhysicalParameters:
     def as_dict(self) -> dict:
         """The SI values as a plain mapping."""
         return asdict(self)
+
+    @classmethod
+    def from_nondimensional(
+        cls,
+        p: Parameters,
+        f: float,
+        Phi0: float,
+        m_r: float,
+        r_g: float,
+        r_c: float,
+        F_preload: float = 0.0,
+        g: float = 9.81,
+        load_torque: float = 0.0,
+    ) -> PhysicalParameters:
+        """The motor whose nondimensional parameters are ``p``, given its drive and rotor.
+
+        The inverse of :meth:`to_nondimensional` (MODEL.md "Physical conversion"):
+        ``t_c = ω_s / (2π f)``, ``U0 = g_eff t_c²``, ``R_d = r_eff Φ0 / U0`` and
+        ``μ = R_φ R_d (r_g / r_eff)²`` (eq. 15); ``load_torque`` is in N·m.
+        """
+        g_eff = g + F_preload / m_r
+        t_c = p.omega_s / (2.0 * math.pi * f)
+        u0 = g_eff * t_c * t_c
+        r_eff = 2.0 * r_c / 3.0
+        mu = p.r_phi * (r_eff * Phi0 / u0) * (r_g / r_eff) ** 2
+        return cls(
+            m_r=m_r, r_g=r_g, r_c=r_c, mu=mu, e=p.e, g=g, f=f, U0=u0, Phi0=Phi0, psi=p.psi,
+            F_preload=F_preload, load_torque=load_torque, e_sigma=p.e_sigma,
+        )  # fmt: skip

@@ -24,6 +24,7 @@ from .atomic import atomic_path
 from .datasets import open_checked, open_simulation
 from .figure_registry import FIGURES as DECLARED
 from .figure_registry import FigureDecl
+from .plot_load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
 
 TWO_PI = 2 * math.pi
 COLORS = {"rotor": "#1f77b4", "stator": "#7f7f7f", "fit": "#d62728", "data": "#2ca02c"}
@@ -713,6 +714,7 @@ OPENERS: dict[str, Opener] = {
     "sensitivity_indices": _netcdf("S1", "ST", "noise_share", what="sensitivity indices"),
     "sensitivity_points": _netcdf("x", "regime", what="sensitivity study"),
     "design_maps": _netcdf("x", "map_e", what="design maps"),
+    "load_curve": _netcdf("mean_omega", "power_out", what="load curve"),
 }
 
 

@@ -7,6 +7,7 @@ the file writer; the CLI and the pipeline's scripts call :func:`run_scene`.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 import signal
 import sys
@@ -17,7 +18,7 @@ from pathlib import Path
 
 from .datasets import SimulationWriter
 from .engine import EngineConfig, EngineError, RunResult, iterate, simulate_arrays
-from .engine.driver import Chunk
+from .engine.driver import Chunk, audit_balances
 from .errors import InputError
 from .provenance import base_attrs, new_run_id
 from .records import RunStatus
@@ -57,7 +58,9 @@ def engine_config(scene: Scene) -> EngineConfig:
 def _chunks(scene: Scene) -> Iterator[Chunk]:
     """Chunks from the scene's solver (the exact engine or a comparator)."""
     if scene.solver.method == "exact":
-        return iterate(engine_config(scene), scene.initial)
+        # the energy audit over the whole run (MODEL.md "Power and energy audit")
+        cfg = dataclasses.replace(engine_config(scene), stats_from=scene.initial.t)
+        return iterate(cfg, scene.initial)
     from .solvers import iterate_comparator
 
     return iterate_comparator(scene)
@@ -358,6 +361,10 @@ def _run_attrs(
             "history": f"{attrs['created']}: {command or 'bouncedisk.runner.run_scene'}",
         }
     )
+    if "audit" in final:
+        terms = final["audit"]
+        attrs["audit_residual_axial"], attrs["audit_residual_torsion"] = audit_balances(terms)
+        attrs.update({f"audit_{k}": v for k, v in terms.items()})
     return attrs
 
 

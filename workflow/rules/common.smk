@@ -26,6 +26,7 @@ def _check_config():
     wanted.update({f"bands.scenes[{i}]": s for i, s in enumerate(config["bands"]["scenes"])})
     wanted["continuation.scene"] = config["continuation"]["scene"]
     wanted["stats_cost.scene"] = config["stats_cost"]["scene"]
+    wanted.update({f"load_curves.{k}.scene": v["scene"] for k, v in config["load_curves"].items()})
     for key, name in wanted.items():
         if not Path(scene_path(name)).is_file():
             raise ValueError(
@@ -61,6 +62,12 @@ def _check_config():
             raise ValueError(
                 f"workflow/config/config.yaml: simulations: must include {key!r} (a paper figure)"
             )
+    for key in CHECKED_LOAD_CURVES:
+        if key not in config["load_curves"]:
+            raise ValueError(
+                f"workflow/config/config.yaml: load_curves: must include {key!r} "
+                "(a reproduction check reads it)"
+            )
     if not Path(config["prototype"]["curve"]).is_file():
         raise ValueError(
             f"workflow/config/config.yaml: prototype.curve: no file {config['prototype']['curve']}"
@@ -69,6 +76,8 @@ def _check_config():
 
 # ensemble statistics the reproduction checks read (bouncedisk.checks.STATS_SCENES)
 CHECKED_STATS = ["stats_e03", "stats_e06", "stats_locked"]
+# load curves the reproduction checks read (bouncedisk.checks.LOAD_CURVES)
+CHECKED_LOAD_CURVES = ["load_fig3", "load_fig4"]
 _check_config()
 
 
@@ -84,6 +93,7 @@ def all_targets():
         f"{RES}/reproduction.md",
         f"{RES}/fit/prototype.nc",
         f"{RES}/prototype/synthetic_motor.csv",
+        f"{RES}/prototype/synthetic_motor_load.csv",
         f"{RES}/tables/work_precision.csv",
         f"{RES}/tables/scaling.csv",
         f"{RES}/tables/stats_cost.csv",

@@ -323,6 +323,8 @@ def audit_balances(terms: dict) -> tuple[float, float]:
     """
 
     def rel(lhs: float, *rhs: float) -> float:
+        if math.isnan(lhs) or any(math.isnan(x) for x in rhs):
+            return math.nan
         scale = max(abs(lhs), *(abs(x) for x in rhs))
         return abs(lhs - sum(rhs)) / scale if scale > 0.0 else 0.0
 

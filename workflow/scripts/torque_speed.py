@@ -1,0 +1,18 @@
+"""Adapter: the load characteristic of one scene (`bouncedisk torque-speed`)."""
+
+import time
+
+from bouncedisk.datasets import write_dataset
+from bouncedisk.loadcurve import parse_loads, to_dataset, torque_speed
+from bouncedisk.logutil import log_to
+from bouncedisk.scene import load_scene
+
+with log_to(snakemake.log[0]) as log:
+    scene = load_scene(snakemake.input.scene)
+    loads = parse_loads(snakemake.params.spec["loads"], "workflow/config/config.yaml", "loads")
+    start = time.perf_counter()
+    curve = torque_speed(scene, loads, cores=snakemake.threads)
+    write_dataset(to_dataset(scene, curve, time.perf_counter() - start), snakemake.output[0])
+    s = curve.summary()
+    log.info("%s: stall %s, max power %s at %s", scene.name, s["stall_torque"], s["max_power"],
+             s["max_power_load"])  # fmt: skip

@@ -1,0 +1,31 @@
+"""Adapter: the load characteristic of the fitted prototype motor, in SI units."""
+
+import time
+
+import xarray as xr
+import yaml
+
+from bouncedisk.datasets import write_dataset
+from bouncedisk.loadcurve import motor_scene, parse_loads, to_dataset, torque_speed
+from bouncedisk.logutil import log_to
+from bouncedisk.params import Parameters
+
+with log_to(snakemake.log[0]) as log:
+    spec = snakemake.params.spec
+    motor = yaml.safe_load(open(snakemake.input.motor))
+    with xr.open_dataset(snakemake.input.fit) as fit:
+        fitted = {k: float(fit[k]) for k in ("e", "omega_s", "r_phi", "psi")}
+        e_sigma = float(fit.attrs["e_sigma"])
+    scene = motor_scene(
+        Parameters(**fitted, e_sigma=e_sigma), motor["drive_frequency_hz"], motor["Phi0_rad"],
+        motor["rotor"], motor["preload_N"], spec["members"], spec["time"], spec["discard"],
+    )  # fmt: skip
+    loads = parse_loads(spec["loads"], "workflow/config/config.yaml", "prototype_load.loads")
+    start = time.perf_counter()
+    curve = torque_speed(scene, loads, cores=snakemake.threads)
+    ds = to_dataset(scene, curve, time.perf_counter() - start)
+    ds.attrs["fit_file"] = snakemake.input.fit
+    write_dataset(ds, snakemake.output[0])
+    s = curve.summary()
+    log.info("fitted motor %s: stall %s N*m, max power %s W", fitted, s.get("stall_torque_Nm"),
+             s.get("max_power_W"))  # fmt: skip
