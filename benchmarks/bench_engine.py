@@ -2,9 +2,11 @@
 
 Run:  python benchmarks/bench_engine.py [--events N] [--repeat R]
 
-Targets (issue: exact simulator): >= 1e6 impacts/s axial-only at omega_s = 1.5 on one core, and
-cost per impact at omega_s = 100 at most 3x that at 1.5. All numbers come from this one run, so
-the ratios compare like with like. The first call compiles (or loads the numba cache) and is not
+Targets (issue 23 "Fast feedback"): >= 3e6 impacts/s per core axial-only at omega_s = 1.5 and
+>= 2e6 with torsion and load; (issue: exact simulator) cost per impact at omega_s = 100 at most
+3x that at 1.5. Rates are per CPU second of this process (``time.process_time``: on a shared
+machine wall time measures the neighbours too). All numbers come from this one run, so the
+ratios compare like with like. The first call compiles (or loads the numba cache) and is not
 timed.
 """
 
@@ -19,6 +21,7 @@ from bouncedisk.engine import EngineConfig, simulate_arrays
 CASES = {
     "axial-only": dict(contact=True, torsion=False),
     "full (contact+torsion)": dict(contact=True, torsion=True, r_phi=0.01, psi=0.0),
+    "torsion+load": dict(contact=True, torsion=True, r_phi=0.01, psi=0.0, load_torque=0.3),
 }
 
 
@@ -27,9 +30,9 @@ def rate(w: float, effects: dict, events: int, repeat: int, e: float = 0.3) -> f
     simulate_arrays(EngineConfig(e=e, omega_s=w, max_events=10, **effects))  # warm-up
     best = float("inf")
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         res = simulate_arrays(cfg)
-        best = min(best, time.perf_counter() - t0)
+        best = min(best, time.process_time() - t0)
     assert len(res.events["t"]) == events
     return events / best
 
@@ -51,10 +54,15 @@ def main() -> None:
         results[name] = (r15, r100)
         print(f"{name:<24}{r15:>14,.0f}/s{r100:>14,.0f}/s{r15 / r100:>22.2f}")
     r15, r100 = results["axial-only"]
-    ok1 = r15 >= 1e6
+    ok1 = r15 >= 3e6
     ok2 = r15 / r100 <= 3.0
     print(
-        f"target axial-only >= 1e6 impacts/s at 1.5: {'met' if ok1 else 'NOT met'} ({r15:,.0f}/s)"
+        f"target axial-only >= 3e6 impacts/s at 1.5: {'met' if ok1 else 'NOT met'} ({r15:,.0f}/s)"
+    )
+    rl = results["torsion+load"][0]
+    print(
+        f"target torsion+load >= 2e6 impacts/s at 1.5: {'met' if rl >= 2e6 else 'NOT met'} "
+        f"({rl:,.0f}/s)"
     )
     print(f"target cost(100)/cost(1.5) <= 3: {'met' if ok2 else 'NOT met'} ({r15 / r100:.2f})")
 

@@ -27,6 +27,9 @@ only = sys.argv[2]
 cases = {
     "axial-only, omega_s=1.5": dict(e=0.3, omega_s=1.5),
     "contact+torsion, omega_s=1.5": dict(e=0.6, omega_s=1.5, torsion=True, r_phi=0.01),
+    "torsion+load, omega_s=1.5": dict(
+        e=0.6, omega_s=1.5, torsion=True, r_phi=0.01, load_torque=0.3
+    ),
     "axial-only, omega_s=100": dict(e=0.3, omega_s=100.0),
     "noise+stats (ensemble member)": dict(
         e=0.6, omega_s=1.5, torsion=True, r_phi=0.01, e_sigma=1e-9, stats_from=0.0

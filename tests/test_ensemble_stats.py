@@ -180,6 +180,19 @@ def test_confidence_interval_is_student_t():
     assert confidence_interval([2.0, 2.0, 2.0])[1:] == (2.0, 2.0)
 
 
+@pytest.mark.parametrize("k", [2, 3, 5, 32, 64, 1000])
+@pytest.mark.parametrize("level", [0.9, 0.95, 0.99])
+def test_confidence_interval_is_bit_identical_to_scipy_stats_t(k, level):
+    """The interval's t quantile (scipy.special.stdtrit, light to import) is scipy.stats.t.ppf's
+    to the last bit: the stored statistics do not move."""
+    from scipy import stats as sps
+
+    x = np.random.default_rng(k).normal(90.0, 5.0, k)
+    mean, low, high = confidence_interval(x, level)
+    half = float(sps.t.ppf(0.5 + level / 2.0, k - 1) * np.std(x, ddof=1) / math.sqrt(k))
+    assert (mean, low, high) == (mean, mean - half, mean + half)
+
+
 def test_run_stats_needs_a_time_stop(scene_file):
     f = scene_file(CHAOTIC.replace("stop: {time: 53000.0}", "stop: {impacts: 100}"))
     from bouncedisk.errors import InputError

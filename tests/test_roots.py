@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from bouncedisk.engine.roots import first_root
+from bouncedisk.engine.roots import first_root, inflections
 
 
 def f_eval(f0, c1, c2, a, b, th0, w, tau):
@@ -80,3 +80,35 @@ def test_no_root_is_skipped(f0, c1, c2, a, b, th0, w):
         if before.any():
             assert f[before].min() > -1e-9 * scale
         assert abs(f_eval(f0, c1, c2, a, b, th0, w, r)) < 1e-8 * scale
+
+
+@given(
+    c2=st.floats(-2.0, 0.5),
+    a=st.floats(-3.0, 3.0),
+    b=st.floats(-3.0, 3.0),
+    w=st.floats(0.05, 30.0),
+)
+def test_curvature_is_positive_before_p1_and_negative_before_p2(c2, a, b, w):
+    """The rule first_root_from uses in place of sampling f'': convex before an inflection
+    ``φ + δ ≡ β`` (p1), concave before ``φ + δ ≡ π − β`` (p2), one sign when there is none."""
+    found, delta, beta = inflections(a, b, c2, w)
+
+    def fpp(phi):
+        return 2.0 * c2 - w * w * (a * np.cos(phi) + b * np.sin(phi))
+
+    phis = np.linspace(0.0, 2 * math.pi, 4001)
+    if not found:
+        vals = fpp(phis)
+        scale = abs(2.0 * c2) + w * w * (abs(a) + abs(b)) + 1e-300
+        assert vals.min() >= -1e-12 * scale or vals.max() <= 1e-12 * scale
+        return
+    p1, p2 = beta - delta, math.pi - beta - delta
+    amp = math.hypot(a, b)
+    assert abs(fpp(p1)) <= 1e-9 * w * w * (amp + abs(2 * c2 / (w * w)))
+    assert abs(fpp(p2)) <= 1e-9 * w * w * (amp + abs(2 * c2 / (w * w)))
+    gap = (p2 - p1) % (2 * math.pi)  # p1 -> p2 concave, p2 -> p1 convex
+    if min(gap, 2 * math.pi - gap) < 1e-3:
+        return  # inflections too close together to sample between them
+    inside = p1 + gap * np.linspace(0.05, 0.95, 19)
+    outside = p2 + (2 * math.pi - gap) * np.linspace(0.05, 0.95, 19)
+    assert (fpp(inside) < 0.0).all() and (fpp(outside) > 0.0).all()

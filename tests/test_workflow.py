@@ -100,23 +100,41 @@ def dry_run(config: Path, res: Path, cwd: Path = ROOT) -> subprocess.CompletedPr
     )
 
 
-def test_bad_config_fails_before_any_job(tmp_path):
+def parse_error(config: Path, res: Path, monkeypatch, cwd: Path = ROOT) -> str:
+    """The error that stops the workflow's parse and DAG (what ``snakemake -n`` does before any
+    job), "" when there is none. In this process, through Snakemake's API: a ``snakemake``
+    process per case would spend a second and a half importing Snakemake each time."""
+    from snakemake.api import SnakemakeApi
+    from snakemake.settings.types import ConfigSettings, OutputSettings, ResourceSettings
+
+    monkeypatch.chdir(cwd)  # Snakemake changes into the workdir; pytest changes back
+    try:
+        with SnakemakeApi(OutputSettings()) as api:
+            api.workflow(
+                resource_settings=ResourceSettings(cores=1),
+                config_settings=ConfigSettings(configfiles=[config], config={"results": str(res)}),
+                snakefile=cwd / "Snakefile",
+                workdir=cwd,
+            ).dag()
+    except Exception as ex:  # noqa: BLE001 - any error is the answer
+        return str(ex)
+    return ""
+
+
+def test_bad_config_fails_before_any_job(tmp_path, monkeypatch):
     bad = tmp_path / "bad.yaml"
+    # one case end to end: the snakemake command fails, naming the key
     bad.write_text(SMALL.read_text().replace("scene: regime_map", "scene: no_such_scene"))
     p = dry_run(bad, tmp_path / "r")
     assert p.returncode != 0 and "sweeps.regime_map.scene" in p.stdout + p.stderr
-    bad.write_text(SMALL.read_text().replace("scene: bifurcation", "scene: no_such_scene"))
-    p = dry_run(bad, tmp_path / "r")
-    assert p.returncode != 0 and "continuation.scene" in p.stdout + p.stderr
-    bad.write_text(SMALL.read_text().replace("shards: 3", "shards: -1"))
-    p = dry_run(bad, tmp_path / "r")
-    assert p.returncode != 0 and "shards" in p.stdout + p.stderr
-    bad.write_text(SMALL.read_text().replace("per_omega: 50000", "per_omega: -1"))
-    p = dry_run(bad, tmp_path / "r")
-    assert p.returncode != 0 and "per_omega" in p.stdout + p.stderr
-    bad.write_text(SMALL.read_text().replace("scan: 32", "scan: 4"))
-    p = dry_run(bad, tmp_path / "r")
-    assert p.returncode != 0 and "scan" in p.stdout + p.stderr
+    for old, new, key in (
+        ("scene: bifurcation", "scene: no_such_scene", "continuation.scene"),
+        ("shards: 3", "shards: -1", "shards"),
+        ("per_omega: 50000", "per_omega: -1", "per_omega"),
+        ("scan: 32", "scan: 4", "scan"),
+    ):
+        bad.write_text(SMALL.read_text().replace(old, new))
+        assert key in parse_error(bad, tmp_path / "r", monkeypatch), key
     assert not (tmp_path / "r").exists()
 
 
@@ -180,7 +198,7 @@ def pipeline_copy(tmp_path: Path) -> tuple[Path, Path, str]:
     return copy, table, table.read_text()
 
 
-def test_a_bad_figure_table_names_the_table_and_the_entry(tmp_path):
+def test_a_bad_figure_table_names_the_table_and_the_entry(tmp_path, monkeypatch):
     # a scratch copy of the pipeline, whose figure table is broken one way at a time
     copy, table, good = pipeline_copy(tmp_path)
     entry = "  caption: regime_map\n  category: Studies beyond the paper\n"
@@ -191,9 +209,8 @@ def test_a_bad_figure_table_names_the_table_and_the_entry(tmp_path):
         ("- fig2\n", "must be a mapping"),
     ):
         table.write_text(broken)
-        p = dry_run(SMALL, tmp_path / "r", cwd=copy)
-        out = p.stdout + p.stderr
-        assert p.returncode != 0 and "figures.yaml" in out and message in out, out[-2000:]
+        out = parse_error(SMALL, tmp_path / "r", monkeypatch, cwd=copy)
+        assert "figures.yaml" in out and message in out, out[-2000:]
         assert "config file" not in out and "<unicode string>" not in out
     assert not (tmp_path / "r").exists()
 
@@ -238,33 +255,21 @@ def test_figure_registry_refuses_an_unknown_figure_or_wrong_inputs(tmp_path):
 
 
 @pytest.mark.slow
-def test_interrupted_run_resumes_to_identical_results_and_cores_do_not_matter(tmp_path):
-    a = tmp_path / "one_core"
-    run(a, 1)
-    # nothing to do the second time
-    out = run(a, 1, "--dry-run")
-    assert "Nothing to be done" in out or "nothing to be done" in out.lower()
-    b = tmp_path / "two_cores"
-    p = snake(b, 2, start_new_session=False)
-    start = time.monotonic()
-    while not list(b.rglob("shard-*.nc")) and time.monotonic() - start < 300:
-        assert p.poll() is None, p.communicate()[0][-2000:]
-        time.sleep(0.2)
-    p.send_signal(signal.SIGINT)
-    p.communicate(timeout=300)
-    run(b, 2, "--rerun-incomplete")
-    assert_identical(data_vars(a), data_vars(b))
-
-
-@pytest.mark.slow
-def test_changing_one_scene_reruns_only_what_depends_on_it(tmp_path):
-    res = tmp_path / "r"
+def test_one_run_is_final_reruns_only_what_a_scene_change_affects_and_cores_do_not_matter(tmp_path):
+    """One run of the small pipeline on one core serves three checks (each ran it once before):
+    a second invocation has nothing to do; after one scene changes, the plan reruns only what
+    depends on it; an interrupted two-core run, resumed, gives bit-identical data."""
     scenes = tmp_path / "scenes"
     shutil.copytree(ROOT / "workflow" / "config" / "scenes", scenes)
-    run(res, 2, items=[f"scenes={scenes}"])
+    items = [f"scenes={scenes}"]
+    a = tmp_path / "one_core"
+    run(a, 1, items=items)
+    out = run(a, 1, "--dry-run", items=items)
+    assert "nothing to be done" in out.lower()
     scene = scenes / "fig4.yaml"
-    scene.write_text(scene.read_text().replace("impacts: 300", "impacts: 301"))
-    out = run(res, 2, "--dry-run", items=[f"scenes={scenes}"])
+    original = scene.read_text()
+    scene.write_text(original.replace("impacts: 300", "impacts: 301"))
+    out = run(a, 1, "--dry-run", items=items)
     jobs = [
         line.split()[0]
         for line in out.splitlines()
@@ -272,9 +277,20 @@ def test_changing_one_scene_reruns_only_what_depends_on_it(tmp_path):
     ]
     assert any(j.startswith("simulate") for j in jobs)
     assert not any(j.startswith(("sweep", "clipped", "compile")) for j in jobs), out
+    scene.write_text(original)  # the two-core run below computes what run `a` did
+    b = tmp_path / "two_cores"
+    p = snake(b, 2, items=items, start_new_session=False)
+    start = time.monotonic()
+    while not list(b.rglob("shard-*.nc")) and time.monotonic() - start < 300:
+        assert p.poll() is None, p.communicate()[0][-2000:]
+        time.sleep(0.2)
+    p.send_signal(signal.SIGINT)
+    p.communicate(timeout=300)
+    run(b, 2, "--rerun-incomplete", items=items)
+    assert_identical(data_vars(a), data_vars(b))
 
 
-def test_the_figure_table_is_checked_against_the_registry(tmp_path):
+def test_the_figure_table_is_checked_against_the_registry(tmp_path, monkeypatch):
     # a scratch copy of the pipeline, whose figure table disagrees with the registry one way at a
     # time: the Snakefile fails before any job, naming the table and the entry
     copy, table, good = pipeline_copy(tmp_path)
@@ -296,7 +312,6 @@ def test_the_figure_table_is_checked_against_the_registry(tmp_path):
         ),
     ):
         table.write_text(broken)
-        p = dry_run(SMALL, tmp_path / "r", cwd=copy)
-        out = p.stdout + p.stderr
-        assert p.returncode != 0 and f"figures.yaml: {message}" in out, out[-2000:]
+        out = parse_error(SMALL, tmp_path / "r", monkeypatch, cwd=copy)
+        assert f"figures.yaml: {message}" in out, out[-2000:]
     assert not (tmp_path / "r").exists()

@@ -7,6 +7,9 @@ with status 2; nothing is written then. An interrupted run (Ctrl-C) leaves no ou
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
+import os
 import shlex
 import signal
 import sys
@@ -121,14 +124,20 @@ def _track(args, store, kind: str, outputs=(), params=None, metrics=None) -> Non
     if store is None:
         return
     from . import tracking
+    from .atomic import keep_outputs
 
     command = "bouncedisk " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    flush_stdout()  # the command's own output is complete before its outputs become final
+    kept = keep_outputs()
     try:
         run_id = tracking.log_command_run(
             kind, store, outputs, params=params, metrics=metrics, command=command
         )
+    except KeyboardInterrupt as ex:
+        ex.kept_outputs = kept
+        raise
     except Exception as ex:  # noqa: BLE001 - drivers and REST raise their own types
-        reason = (str(ex).strip().splitlines() or [type(ex).__name__])[0][:200]
+        reason = tracking._one_line(ex)
         raise tracking.TrackingError(
             store.uri, f"recording failed (the outputs were written): {reason}"
         ) from None
@@ -405,15 +414,99 @@ def main(argv: list[str] | None = None) -> int:
         args.words += extra
     elif extra:
         parser.error(f"unrecognized arguments: {' '.join(extra)}")
+    from . import atomic
+
+    stdout, sys.stdout = sys.stdout, _NamedStdout(sys.stdout)
     try:
-        return args.func(args)
+        with atomic.recording_outputs():
+            code, kept = _run_command(args)
+    finally:
+        sys.stdout = stdout
+    if kept:  # interrupted or failed while recording the run: the outputs stay
+        names = ", ".join(str(p) for p in kept)
+        print(f"bouncedisk: the outputs were written and kept: {names}", file=sys.stderr)
+    return code
+
+
+def flush_stdout() -> None:
+    """Flush standard output; a failure (``> /dev/full``) is an ``OSError`` naming ``<stdout>``."""
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        raise
+    except OSError as ex:
+        raise OSError(ex.errno, ex.strerror or str(ex), "<stdout>") from None
+
+
+def _discard_stdout() -> None:
+    """Point standard output at /dev/null: what could not be written raises no second error
+    when Python flushes it at exit."""
+    if getattr(sys.stdout, "_stream", sys.stdout) is not sys.__stdout__:
+        return  # a caller's stream (tests, embedding): theirs to handle
+    with contextlib.suppress(OSError, ValueError, io.UnsupportedOperation):
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.__stdout__.fileno())
+
+
+class _NamedStdout:
+    """Standard output whose write errors name it: ``OSError`` with filename ``<stdout>``."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def __getattr__(self, name: str):
+        return getattr(self._stream, name)
+
+    def _call(self, name: str, *a):
+        try:
+            return getattr(self._stream, name)(*a)
+        except BrokenPipeError:
+            raise
+        except OSError as ex:
+            raise OSError(ex.errno, ex.strerror or str(ex), "<stdout>") from None
+
+    def write(self, text: str) -> int:
+        return self._call("write", text)
+
+    def flush(self) -> None:
+        self._call("flush")
+
+
+def _run_command(args: argparse.Namespace) -> tuple[int, list]:
+    """Run a subcommand; on any failure remove the outputs it wrote (``atomic``).
+
+    Standard output is flushed before the command counts as done, so that a full disk or a
+    closed pipe there is an error too. Returns the exit status and the outputs that were
+    declared final (by tracking) before a failure, to be named to the user.
+    """
+    from . import atomic
+
+    try:
+        code = args.func(args)
+        flush_stdout()
+        return code, []
+    except BaseException as ex:
+        if not isinstance(ex, BrokenPipeError | SystemExit):  # a reader that stopped early: done
+            atomic.remove_outputs()
+        code = _report(ex)
+        kept = getattr(ex, "kept_outputs", [])
+        return code, kept
+
+
+def _report(exc: BaseException) -> int:
+    """Print one line for a failed command; return its exit status (or re-raise)."""
+    try:
+        raise exc
     except InputError as ex:
         print(f"bouncedisk: error: {ex.line()}", file=sys.stderr)
         return EXIT_USER
-    except KeyboardInterrupt:
-        print("bouncedisk: interrupted; no output written", file=sys.stderr)
+    except KeyboardInterrupt as ex:
+        if getattr(ex, "kept_outputs", None):
+            print("bouncedisk: interrupted while recording the run", file=sys.stderr)
+        else:
+            print("bouncedisk: interrupted; no output written", file=sys.stderr)
         return EXIT_INTERRUPT
     except BrokenPipeError:
+        _discard_stdout()
         return 0
     except MemoryError:
         print(
@@ -423,6 +516,8 @@ def main(argv: list[str] | None = None) -> int:
         )
         return EXIT_USER
     except OSError as ex:  # a file the user named cannot be read or written
+        if ex.filename == "<stdout>":
+            _discard_stdout()
         where = f"{ex.filename}: " if ex.filename else ""
         reason = ex.strerror or " ".join(str(ex).split()) or type(ex).__name__
         print(f"bouncedisk: error: {where}{reason}", file=sys.stderr)

@@ -9,6 +9,7 @@ with :func:`write_dataset`, also atomically.
 from __future__ import annotations
 
 import math
+import uuid
 from pathlib import Path
 from typing import Any
 
@@ -125,6 +126,7 @@ class SimulationWriter:
         long_name, units = VARIABLES[name]
         var.long_name = long_name
         var.units = units
+        var.coverage_content_type = coverage_content_type(name, name == dim)
 
     def __enter__(self) -> SimulationWriter:
         self._ctx = atomic_path(self.path, suffix=".nc")
@@ -155,11 +157,8 @@ class SimulationWriter:
             self._var("time", "f8", "time")
             # nondimensional: no CF standard_name/axis "T", which need units of time
             nc["time"].comment = "nondimensional time t/t_c (t_c = sqrt(U0/g_eff), MODEL.md)"
-            if self.t_c is not None:
+            if self.t_c is not None:  # elapsed seconds, no date: not a CF time (cf_time_attrs)
                 self._var("time_s", "f8", "time")
-                nc["time_s"].standard_name = "time"
-                nc["time_s"].axis = "T"
-                nc["time_s"].units = "s"
             for name in ("u_rotor", "v_rotor", "u_stator"):
                 self._var(name, "f8", "time")
             if self.torsion:
@@ -249,14 +248,26 @@ class SimulationWriter:
     def set_attrs(self, attrs: dict[str, Any]) -> None:
         """Set global attributes (call before leaving the block)."""
         assert self._nc is not None
-        self._nc.setncatts({k: _attr_value(v) for k, v in attrs.items()})
+        attrs = {k: _attr_value(v) for k, v in attrs.items()}
+        _file_attrs(attrs)
+        self._nc.setncatts(attrs)
 
     def __exit__(self, exc_type, exc, tb) -> None:
+        # closing flushes the last chunks: on a full disk that is where the write fails, and the
+        # temporary must still be removed (the atomic context sees the error either way)
         if self._nc is not None:
-            self._nc.close()
-            self._nc = None
+            nc, self._nc = self._nc, None
+            try:
+                nc.close()
+            except (OSError, RuntimeError) as ex:
+                if exc is None:
+                    exc_type, exc, tb = type(ex), ex, ex.__traceback__
         assert self._ctx is not None
-        self._ctx.__exit__(exc_type, exc, tb)
+        ctx, self._ctx = self._ctx, None
+        if exc is None:
+            ctx.__exit__(None, None, None)
+        elif not ctx.__exit__(exc_type, exc, tb):
+            raise exc
 
 
 def open_checked(
@@ -282,6 +293,10 @@ def open_checked(
         raise InputError(str(path), "", "file not found")
     if p.is_dir():
         raise InputError(str(path), "", f"is a directory, not a {what} file")
+    if not p.is_file():  # a FIFO or device would block in open() (and ignore SIGTERM there)
+        raise InputError(
+            str(path), "", f"is not a regular file (a pipe or device?), not a {what} file"
+        )
     try:
         if lazy:
             ds = xr.open_dataset(p, engine="netcdf4")
@@ -337,8 +352,29 @@ def events_of(ds: xr.Dataset) -> dict[str, np.ndarray]:
     return out
 
 
+def coverage_content_type(name: str, is_coordinate: bool) -> str:
+    """ACDD-1.3 ``coverage_content_type`` of a variable: coordinates, measured data (names
+    with ``measured``), else model results."""
+    if is_coordinate:
+        return "coordinate"
+    return "physicalMeasurement" if "measured" in name else "modelResult"
+
+
+def cf_time_attrs(attrs: dict) -> None:
+    """Drop ``axis: T`` and ``standard_name: time`` from a variable whose units are not a
+    reference time (``s``, ``1``): CF-1.10 §4.4 gives those to ``UNIT since DATE`` only, and an
+    elapsed time since the start of a run or a measurement has no date."""
+    units = str(attrs.get("units", ""))
+    if " since " not in units:
+        if attrs.get("axis") == "T":
+            del attrs["axis"]
+        if attrs.get("standard_name") == "time":
+            del attrs["standard_name"]
+
+
 def finalize(ds: xr.Dataset) -> xr.Dataset:
-    """Give every variable ``units`` and ``long_name`` (known names) before writing."""
+    """Give every variable ``units``, ``long_name`` (known names) and ACDD
+    ``coverage_content_type``, and the file ``id`` and ``history``, before writing."""
     for name, var in ds.variables.items():
         if name in VARIABLES:
             long_name, units = VARIABLES[name]
@@ -346,8 +382,25 @@ def finalize(ds: xr.Dataset) -> xr.Dataset:
             var.attrs.setdefault("units", units)
         var.attrs.setdefault("units", "1")
         var.attrs.setdefault("long_name", name.replace("_", " "))
+        var.attrs.setdefault(
+            "coverage_content_type", coverage_content_type(str(name), name in ds.coords)
+        )
+        cf_time_attrs(var.attrs)
     ds.attrs = {k: _attr_value(v) for k, v in ds.attrs.items()}
+    _file_attrs(ds.attrs)
     return ds
+
+
+def _file_attrs(attrs: dict) -> None:
+    """ACDD ``id`` (the run id, or a new one) and CF ``history`` (when the writer gave none)."""
+    from . import __version__
+    from .provenance import utc_now
+
+    if "id" not in attrs:
+        attrs["id"] = str(attrs.get("run_id") or f"bouncedisk-{uuid.uuid4().hex}")
+    if not str(attrs.get("history", "")).strip():
+        when = attrs.get("date_created") or utc_now()
+        attrs["history"] = f"{when}: written by bouncedisk {__version__}"
 
 
 def write_dataset(ds: xr.Dataset, path: str | Path) -> None:
@@ -357,5 +410,7 @@ def write_dataset(ds: xr.Dataset, path: str | Path) -> None:
     for name, var in ds.variables.items():
         if var.dtype.kind in "fiu" and var.ndim > 0:
             enc[name] = dict(ENCODING)
+        if name in ds.dims and var.dtype.kind == "f":  # CF §2.5.1: no _FillValue on coordinates
+            enc.setdefault(name, {})["_FillValue"] = None
     with atomic_path(path, suffix=".nc") as tmp:
         ds.to_netcdf(tmp, engine="netcdf4", encoding=enc)

@@ -94,11 +94,14 @@ def check_output_path(
             raise InputError(
                 src, option, f"is the input file {str(inp)!r}; writing there would overwrite it"
             )
+    _check_not_special(out, src, option)
     if out.exists() and not out.is_file():
         raise InputError(src, option, "exists and is not a regular file")
+    # a symbolic link is written through: its target's folder must accept the file
+    dest = Path(os.path.realpath(out)) if out.is_symlink() else out
     # the nearest folder that exists must accept a new file (this also catches read-only file
     # systems and root-owned folders, which os.access misjudges for root)
-    parent = out.parent
+    parent = dest.parent
     while not parent.exists():
         if parent == parent.parent:
             break
@@ -106,7 +109,7 @@ def check_output_path(
     if not parent.is_dir():
         raise InputError(src, option, f"{str(parent)!r} is a file, not a folder")
     try:
-        fd, probe = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".probe", dir=parent)
+        fd, probe = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".probe", dir=parent)
     except OSError as ex:
         reason = ex.strerror or type(ex).__name__
         raise InputError(
@@ -116,6 +119,32 @@ def check_output_path(
     with contextlib.suppress(OSError):
         os.unlink(probe)
     return out
+
+
+#: Folders of devices and process files: never an output (``/dev/stdout``, ``/proc/self/fd/1``).
+SPECIAL_FOLDERS = (Path("/dev"), Path("/proc"))
+
+
+def _link_chain(path: Path, hops: int = 40) -> list[Path]:
+    """``path`` and every path its symbolic links lead through, absolute, in order."""
+    chain = [Path(os.path.abspath(path))]
+    while len(chain) <= hops and chain[-1].is_symlink():
+        nxt = Path(os.readlink(chain[-1]))
+        chain.append(Path(os.path.abspath(chain[-1].parent / nxt)))
+    chain.append(Path(os.path.realpath(path)))
+    return chain
+
+
+def _check_not_special(out: Path, src: str, option: str) -> None:
+    """Refuse a device or process file, given directly or through a symbolic link."""
+    for p in _link_chain(out):
+        if any(p == d or d in p.parents for d in SPECIAL_FOLDERS):
+            raise InputError(
+                src,
+                option,
+                f"is a device or process file ({p}); outputs are written atomically to a "
+                "regular file: give a file name such as out.nc",
+            )
 
 
 class OutputTooLarge(InputError):

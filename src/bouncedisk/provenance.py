@@ -5,6 +5,7 @@ from __future__ import annotations
 import datetime as _dt
 import functools
 import hashlib
+import os
 import platform
 import subprocess
 import uuid
@@ -92,6 +93,9 @@ TAG_GIT_COMMIT = "bouncedisk.git_commit"
 TAG_GIT_DIRTY = "bouncedisk.git_dirty"
 
 
+#: ACDD ``naming_authority`` of the ``id`` attribute (the run id).
+NAMING_AUTHORITY = "bouncedisk"
+
 KEYWORDS = (
     "bouncing disk, ultrasonic motor, piezoelectric motor, impact oscillator, bouncing ball, "
     "restitution, friction, stick-slip, chattering, Zeno, nonsmooth dynamics, event-driven "
@@ -99,8 +103,61 @@ KEYWORDS = (
 )
 
 
+#: Who made the files (ACDD-1.3 creator/institution/publisher attributes): the pipeline config's
+#: ``metadata`` section (the Snakefile exports it as these variables to every job), or these
+#: environment variables for the commands; the defaults say that nobody set them.
+METADATA_ENV = {
+    "creator_name": "BOUNCEDISK_CREATOR_NAME",
+    "creator_email": "BOUNCEDISK_CREATOR_EMAIL",
+    "creator_url": "BOUNCEDISK_CREATOR_URL",
+    "creator_type": "BOUNCEDISK_CREATOR_TYPE",
+    "institution": "BOUNCEDISK_INSTITUTION",
+    "project": "BOUNCEDISK_PROJECT",
+    "license": "BOUNCEDISK_LICENSE",
+    "acknowledgement": "BOUNCEDISK_ACKNOWLEDGEMENT",
+}
+METADATA_DEFAULTS = {
+    "creator_name": "unknown (set metadata.creator_name in the pipeline config or "
+    "BOUNCEDISK_CREATOR_NAME)",
+    "creator_email": "unknown (metadata.creator_email, BOUNCEDISK_CREATOR_EMAIL)",
+    "creator_url": "unknown (metadata.creator_url, BOUNCEDISK_CREATOR_URL)",
+    "creator_type": "person",
+    "institution": "unknown (set metadata.institution in the pipeline config or "
+    "BOUNCEDISK_INSTITUTION)",
+    "project": "bouncedisk: the bouncing-disk model of a piezoelectric ultrasonic motor",
+    "license": "MIT (the bouncedisk package's licence; metadata.license to change)",
+    "acknowledgement": "none given (metadata.acknowledgement, BOUNCEDISK_ACKNOWLEDGEMENT)",
+}
+#: The controlled vocabulary of ``standard_name`` (only ``time`` is used); no version number, so
+#: that checkers use their own copy and never download one.
+STANDARD_NAME_VOCABULARY = "CF Standard Name Table (any version: only 'time' is used)"
+
+
+def metadata() -> dict[str, str]:
+    """The ACDD creator/institution attributes: environment (pipeline config), else defaults."""
+    out = {}
+    for key, env in METADATA_ENV.items():
+        value = os.environ.get(env, "").strip()
+        out[key] = value or METADATA_DEFAULTS[key]
+    out["creator_institution"] = out["institution"]
+    out["publisher_name"] = out["creator_name"]
+    out["publisher_email"] = out["creator_email"]
+    out["publisher_url"] = out["creator_url"]
+    out["publisher_type"] = out["creator_type"]
+    out["publisher_institution"] = out["institution"]
+    return out
+
+
 def base_attrs(title: str, summary: str | None = None) -> dict[str, str]:
-    """CF/ACDD global attributes shared by every file the package writes."""
+    """CF/ACDD global attributes shared by every file the package writes.
+
+    ACDD-1.3's highly recommended and recommended attributes that mean something here: the
+    creator, institution and publisher from :func:`metadata`, dates, ``naming_authority`` and
+    ``processing_level``; ``id`` and ``history`` are added when the file is written
+    (:func:`bouncedisk.datasets.finalize`). Geospatial and time coverage have no meaning for a
+    laboratory rotor in nondimensional time and are left out.
+    """
+    now = utc_now()
     return {
         "Conventions": "CF-1.10, ACDD-1.3",
         "title": title,
@@ -115,6 +172,18 @@ def base_attrs(title: str, summary: str | None = None) -> dict[str, str]:
         "references": REFERENCES,
         "bouncedisk_version": __version__,
         "git_commit": git_commit(),
-        "created": utc_now(),
-        "date_created": utc_now(),
+        "created": now,
+        "date_created": now,
+        "date_modified": now,
+        "date_issued": now,
+        "date_metadata_modified": now,
+        "comment": (
+            "Quantities are nondimensional (units '1') unless their units say otherwise; "
+            "time is in units of t_c = sqrt(U0/g) (MODEL.md, 'Variables and scales')."
+        ),
+        "naming_authority": NAMING_AUTHORITY,
+        "processing_level": "model output (simulated), not measured data",
+        "product_version": __version__,
+        "standard_name_vocabulary": STANDARD_NAME_VOCABULARY,
+        **metadata(),
     }

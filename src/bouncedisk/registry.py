@@ -135,10 +135,36 @@ def _when(ms: int | None) -> str:
     return _dt.datetime.fromtimestamp(ms / 1000, _dt.UTC).strftime("%Y-%m-%d %H:%M:%SZ")
 
 
+def job_of(key: str) -> str:
+    """The pipeline job a snapshot key belongs to: ``simulations/fig4/r_phi`` ->
+    ``simulations/fig4``; ``""`` for a key of the run itself (a tracked command's ``e``)."""
+    return key.rpartition("/")[0]
+
+
+def jobs_of(d: dict) -> set[str]:
+    """The jobs a run's params (or metrics) snapshot holds."""
+    return {job_of(k) for k in d} - {""}
+
+
+def comparable(a: dict, b: dict) -> tuple[dict, dict]:
+    """``a`` and ``b`` cut to the keys of the jobs both runs hold (and the runs' own keys).
+
+    A pipeline run's snapshot holds the jobs of its DAG only: after an invocation that redrew
+    one figure, the other jobs are absent from it, not changed.
+    """
+    common = jobs_of(a) & jobs_of(b) | {""}
+    return (
+        {k: v for k, v in a.items() if job_of(k) in common},
+        {k: v for k, v in b.items() if job_of(k) in common},
+    )
+
+
 def changed_keys(a: dict[str, str] | None, b: dict[str, str]) -> list[str]:
-    """Keys whose values differ between two param dicts (None: everything is new)."""
+    """Keys whose values differ between two param dicts, over the jobs both hold (None:
+    everything is new)."""
     if a is None:
         return []
+    a, b = comparable(a, b)
     return sorted(k for k in set(a) | set(b) if a.get(k) != b.get(k))
 
 
@@ -261,15 +287,29 @@ def diff(runs: Runs, ra, rb) -> dict[str, Any]:
     fb = {k: v.get("sha256") for k, v in runs.manifest(rb).items()}
     ta = {k: ra.data.tags.get(k) for k in COMPARED_TAGS if k in ra.data.tags}
     tb = {k: rb.data.tags.get(k) for k in COMPARED_TAGS if k in rb.data.tags}
+    # only the jobs both runs hold are compared; the others are named, not called changed
+    jobs_a = jobs_of(ra.data.params) | jobs_of(ma)
+    jobs_b = jobs_of(rb.data.params) | jobs_of(mb)
+    common = jobs_a & jobs_b
+    fa = {k: v for k, v in fa.items() if k in fb or _file_job(k) in common}
+    fb = {k: v for k, v in fb.items() if k in fa or _file_job(k) in common}
     return {
         "a": ra.info.run_id,
         "b": rb.info.run_id,
-        "params": _pairs(ra.data.params, rb.data.params),
-        "metrics": _pairs(ma, mb),
+        "params": _pairs(*comparable(ra.data.params, rb.data.params)),
+        "metrics": _pairs(*comparable(ma, mb)),
         "outputs": _pairs(fa, fb),
         "tags": _pairs(ta, tb),
         "pipeline": _pairs(pa, pb),
+        "jobs_only_in_a": sorted(jobs_a - jobs_b),
+        "jobs_only_in_b": sorted(jobs_b - jobs_a),
     }
+
+
+def _file_job(path: str) -> str:
+    """The job key of an output file (``simulations/fig4.nc`` -> ``simulations/fig4``)."""
+    p = Path(path)
+    return str(p.with_suffix("")) if p.suffix else str(p)
 
 
 def format_diff(d: dict[str, Any]) -> str:
@@ -295,6 +335,13 @@ def format_diff(d: dict[str, Any]) -> str:
             lines.append(f"  {k}: {fmt(va)} | {fmt(vb)}")
         if section != "pipeline":
             n += len(items)
+    for key, who, other in (("jobs_only_in_a", "A", "B"), ("jobs_only_in_b", "B", "A")):
+        jobs = d.get(key) or []
+        if jobs:
+            shown = ", ".join(jobs[:8]) + (f", … ({len(jobs) - 8} more)" if len(jobs) > 8 else "")
+            lines.append(
+                f"jobs of {who} that {other} did not run ({len(jobs)}; not compared): {shown}"
+            )
     if n == 0:
-        lines.append("(no params, metrics or outputs differ)")
+        lines.append("(no params, metrics or outputs differ in the jobs both ran)")
     return "\n".join(lines)

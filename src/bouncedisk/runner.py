@@ -16,6 +16,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
+from .atomic import stop_checks
 from .datasets import SimulationWriter
 from .engine import EngineConfig, EngineError, RunResult, iterate, simulate_arrays
 from .engine.driver import Chunk, audit_balances
@@ -153,7 +154,10 @@ def deferred_interrupts() -> Iterator[StopRequest]:
     """During the block, SIGINT and SIGTERM set a flag instead of interrupting the code.
 
     A signal landing inside a netCDF/HDF5 call could leave the library unable to close the file;
-    the run loop calls :meth:`StopRequest.check` between chunks instead.
+    the run loop calls :meth:`StopRequest.check` between chunks instead. A request pending when
+    an output is about to be renamed into place vetoes the rename
+    (:func:`bouncedisk.atomic.stop_checks`), and one that arrived during the block raises
+    ``KeyboardInterrupt`` when it ends: an interrupt is never answered by a normal exit.
     """
     req = StopRequest()
     old = {}
@@ -163,10 +167,13 @@ def deferred_interrupts() -> Iterator[StopRequest]:
     except ValueError:  # not the main thread: the host keeps its handlers
         pass
     try:
-        yield req
+        with stop_checks(req.check):
+            yield req
     finally:
         for sig, handler in old.items():
             signal.signal(sig, handler)
+    if old and req.signum is not None:
+        raise KeyboardInterrupt
 
 
 @dataclass

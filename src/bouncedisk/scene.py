@@ -53,6 +53,9 @@ TOP_KEYS = (
 )
 #: Largest ensemble a scene may ask for (members run one after another on each core).
 MAX_MEMBERS = 100_000
+#: Smallest restitution noise, in units in the last place of ``e``, that can perturb ``e``: below
+#: it ``e + e_sigma * xi`` rounds back to ``e`` for most deviates ``|xi| <~ 2`` (MODEL.md).
+NOISE_MIN_ULPS = 4
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 
 if TYPE_CHECKING:  # the engine (numba) is imported only when a scene is validated
@@ -202,6 +205,8 @@ def read_yaml(path: str | Path) -> dict:
     """Read a YAML mapping, turning every failure into one :class:`InputError` line."""
     p = Path(path)
     src = str(path)
+    if p.exists() and not p.is_dir() and not p.is_file():  # a FIFO would block in open()
+        raise InputError(src, "", "is not a regular file (a pipe or device?), not a scene file")
     try:
         text = p.read_text(encoding="utf-8")
     except FileNotFoundError:
@@ -493,6 +498,15 @@ def _ensemble(src: str, v: Any, effects: frozenset[str], params: Parameters) -> 
     seed = whole_number(src, "ensemble.seed", em.get("seed", 0), minimum=0)
     if seed >= 2**63:
         raise InputError(src, "ensemble.seed", f"must be < 2**63, got {seed}")
+    least = NOISE_MIN_ULPS * math.ulp(params.e)
+    if 0.0 < params.e_sigma < least:
+        raise InputError(
+            src,
+            "parameters.e_sigma",
+            f"{params.e_sigma:.3g} is below {NOISE_MIN_ULPS} ulp of e ({least:.3g}): e + e_sigma*xi "
+            "rounds back to e, so the noise perturbs nothing and every member is the same run; "
+            f"give e_sigma >= {least:.3g} (or 0 for a deterministic run)",
+        )
     if members > 1 and ("restitution_noise" not in effects or params.e_sigma == 0.0):
         raise InputError(
             src,

@@ -27,7 +27,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 import xarray as xr
-from scipy import stats as _sps
+from scipy.special import ndtri, stdtrit
 
 from . import observables as ob
 from .bands import member_speeds
@@ -90,9 +90,9 @@ def _from_ci(
     m = math.nan if mean is None else float(mean) * scale
     lo, hi = (math.nan if v is None else float(v) * scale for v in (ci or (None, None)))
     if members is None:
-        q = float(_sps.norm.ppf(0.5 + LEVEL / 2.0))
+        q = float(ndtri(0.5 + LEVEL / 2.0))
     else:
-        q = float(_sps.t.ppf(0.5 + LEVEL / 2.0, max(1, members - 1)))
+        q = float(stdtrit(max(1, members - 1), 0.5 + LEVEL / 2.0))
     return m, lo, hi, (hi - lo) / (2.0 * q)
 
 
@@ -183,7 +183,7 @@ class MotorModel:
             [math.log10(ob.first_order_trend(t, (total - om[i]) / (k - 1)).tau) for i in range(k)]
         )
         se = math.sqrt((k - 1) / k * float(np.sum((jack - jack.mean()) ** 2)))
-        half = float(_sps.t.ppf(0.5 + LEVEL / 2.0, k - 1)) * se
+        half = float(stdtrit(k - 1, 0.5 + LEVEL / 2.0)) * se
         return full, full - half, full + half, se
 
     def _load(self, point: Mapping[str, float], r: float) -> dict:

@@ -77,6 +77,30 @@ VOLATILE_ATTRS = {
     "title",
     "source",
     "references",
+    # ACDD metadata: dates of this writing, the id (the run id), who made it (not inputs)
+    "date_issued",
+    "date_metadata_modified",
+    "id",
+    "naming_authority",
+    "processing_level",
+    "product_version",
+    "standard_name_vocabulary",
+    "summary",
+    "keywords",
+    "creator_name",
+    "creator_email",
+    "creator_url",
+    "creator_type",
+    "creator_institution",
+    "institution",
+    "project",
+    "license",
+    "acknowledgement",
+    "publisher_name",
+    "publisher_email",
+    "publisher_url",
+    "publisher_type",
+    "publisher_institution",
 }
 # numeric global attributes that are inputs (params), not results (metrics)
 PARAM_ATTRS = {
@@ -127,6 +151,31 @@ KINDS = (
 )
 COPIED = {".png", ".pdf", ".svg", ".md", ".csv", ".json", ".txt", ".html", ".yaml", ".tsv"}
 MAX_PARAM = 500  # characters of a param value kept (MLflow allows 6000)
+#: Schemes of tracking URIs (SQLAlchemy dialects may add ``+driver``); ``file:`` stores are
+#: refused by :func:`preflight`, others (``databricks``, ``nonsense``) here.
+SCHEMES = ("sqlite", "http", "https", "postgresql", "mysql", "mssql", "file")
+SQLITE_SUFFIXES = (".db", ".sqlite", ".sqlite3")
+#: Tables every MLflow SQL store has (MLflow 2 and 3): a SQLite file without ``alembic_version``
+#: is not a store; one missing another of them is damaged (MLflow would re-create the table with
+#: an old schema, i.e. migrate it).
+MLFLOW_TABLES = {
+    "alembic_version",
+    "experiments",
+    "experiment_tags",
+    "runs",
+    "tags",
+    "params",
+    "metrics",
+    "latest_metrics",
+}
+#: Seconds one request to a tracking server may take, retries, and backoff factor (MLflow's
+#: ``MLFLOW_HTTP_REQUEST_*`` variables; the environment wins). MLflow's own defaults are 120 s
+#: and 7 retries with doubling backoff: a stalled server held a command for tens of minutes.
+HTTP_TIMEOUT_S = 10
+HTTP_RETRIES = 1
+HTTP_BACKOFF = 1
+#: Seconds a writer waits for another writer's lock on a SQLite store.
+LOCK_TIMEOUT_S = 300.0
 
 
 class TrackingError(InputError):
@@ -174,8 +223,21 @@ def resolve_store(
     uri = (uri or os.environ.get(ENV_URI) or "").strip()
     if not uri:
         uri = f"sqlite:///{Path(results).resolve() / DB_NAME}"
-    elif "://" not in uri:  # a plain path: a SQLite file
+    elif "://" not in uri:  # a plain path: a SQLite file (a bare word is a mistyped URI)
+        if not (uri.endswith(SQLITE_SUFFIXES) or Path(uri).is_file()):
+            raise TrackingError(
+                uri,
+                "not a tracking URI: give sqlite:///PATH.db, a PATH.db file, http(s)://HOST:PORT "
+                "or a database URI (postgresql://...)",
+            )
         uri = f"sqlite:///{Path(uri).resolve()}"
+    scheme = uri.partition("://")[0].lower().partition("+")[0]
+    if scheme not in SCHEMES:
+        raise TrackingError(
+            uri,
+            f"unknown scheme {scheme + '://'!r}; use one of "
+            + ", ".join(f"{s}://" for s in SCHEMES),
+        )
     store = Store(uri, None, experiment or EXPERIMENT)
     db = store.sqlite_path
     if db is not None:
@@ -214,6 +276,9 @@ def _preflight_sqlite(uri: str, db: Path, create: bool) -> None:
         )
     if db.exists() and db.is_dir():
         raise TrackingError(uri, "is a directory, not a SQLite file")
+    if create and not db.parent.exists() and not db.parent.parent.is_dir():
+        # the store's own folder may be created (results/), not a chain of folders
+        raise TrackingError(uri, f"folder {str(db.parent.parent)!r} does not exist")
     try:
         if create:
             db.parent.mkdir(parents=True, exist_ok=True)
@@ -225,7 +290,22 @@ def _preflight_sqlite(uri: str, db: Path, create: bool) -> None:
                 f"file:{db}?mode={'rw' if create else 'ro'}", uri=True, timeout=30
             )
             try:
-                con.execute("SELECT count(*) FROM sqlite_master").fetchone()
+                tables = {r[0] for r in con.execute("SELECT name FROM sqlite_master")}
+                missing = ", ".join(sorted(MLFLOW_TABLES - tables))
+                if tables and "alembic_version" not in tables:
+                    raise TrackingError(
+                        uri,
+                        "is a SQLite database but not an MLflow tracking store (no MLflow "
+                        "tables); it is left untouched",
+                    )
+                if tables and missing:
+                    raise TrackingError(
+                        uri, f"damaged MLflow tracking store: missing table(s) {missing}"
+                    )
+                if not create and not tables:
+                    raise TrackingError(
+                        uri, "is empty, not an MLflow tracking store (reading never creates one)"
+                    )
                 if create:
                     con.execute("BEGIN IMMEDIATE")
                     con.rollback()
@@ -271,8 +351,12 @@ def _preflight_http(uri: str, timeout: float) -> None:
         raise TrackingError(uri, f"unreachable: {_one_line(reason)}") from None
 
 
+_AUTOFLUSH = re.compile(r"^\(raised as a result of Query-invoked autoflush;[^)]*\)\s*")
+
+
 def _one_line(ex: object) -> str:
-    text = str(ex).strip()
+    """The first meaningful line of an error (SQLAlchemy's autoflush preamble dropped)."""
+    text = _AUTOFLUSH.sub("", str(ex).strip())
     return (text.splitlines()[0] if text else type(ex).__name__)[:200]
 
 
@@ -285,12 +369,18 @@ def _client(store: Store):
     """An MlflowClient on ``store``: no telemetry, no INFO chatter from MLflow's migrations."""
     os.environ.setdefault("MLFLOW_DISABLE_TELEMETRY", "true")
     os.environ.setdefault("DO_NOT_TRACK", "true")
+    # every request to a server has a bounded time (read by MLflow at each request)
+    os.environ.setdefault("MLFLOW_HTTP_REQUEST_TIMEOUT", str(HTTP_TIMEOUT_S))
+    os.environ.setdefault("MLFLOW_HTTP_REQUEST_MAX_RETRIES", str(HTTP_RETRIES))
+    os.environ.setdefault("MLFLOW_HTTP_REQUEST_BACKOFF_FACTOR", str(HTTP_BACKOFF))
     import logging
 
     from mlflow.tracking import MlflowClient  # configures its loggers: quiet them after
 
-    for name in ("mlflow", "alembic"):
-        logging.getLogger(name).setLevel(logging.WARNING)
+    # MLflow logs its failures with tracebacks (tens of lines) before raising them; the caller
+    # reports the exception in one line
+    for name in ("mlflow", "alembic", "sqlalchemy", "urllib3"):
+        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
     return MlflowClient(tracking_uri=store.uri)
 
 
@@ -305,7 +395,17 @@ def store_lock(store: Store) -> Iterator[None]:
 
     db.parent.mkdir(parents=True, exist_ok=True)
     with open(db.parent / f".{db.name}.lock", "a") as fh:
-        fcntl.flock(fh, fcntl.LOCK_EX)
+        deadline = time.monotonic() + LOCK_TIMEOUT_S
+        while True:
+            try:
+                fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                break
+            except BlockingIOError:
+                if time.monotonic() > deadline:
+                    raise TrackingError(
+                        store.uri, f"locked by another writer for over {LOCK_TIMEOUT_S:g} s"
+                    ) from None
+                time.sleep(0.05)
         try:
             yield
         finally:

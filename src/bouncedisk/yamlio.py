@@ -51,6 +51,49 @@ def _construct_float(loader: yaml.SafeLoader, node: yaml.Node) -> float:
 Loader.add_constructor("tag:yaml.org,2002:float", _construct_float)
 
 
+#: Most values a document may hold once its aliases are expanded (a scene has about a hundred).
+MAX_EXPANDED_NODES = 100_000
+
+
+def _expanded_size(node: yaml.Node, source: str) -> int:
+    """Number of values ``node`` holds with every alias expanded, counted without expanding.
+
+    Aliases share one node object, so the count is memoized per node: linear in the file's size
+    even for a "billion laughs" document (nested aliases, each repeating the one before).
+
+    Raises
+    ------
+    InputError
+        The expansion exceeds :data:`MAX_EXPANDED_NODES`.
+    """
+    sizes: dict[int, int] = {}
+    stack: list[tuple[yaml.Node, bool]] = [(node, False)]
+    while stack:
+        n, done = stack.pop()
+        if not done and id(n) in sizes:
+            continue
+        children = []
+        if isinstance(n, yaml.MappingNode):
+            children = [c for kv in n.value for c in kv]
+        elif isinstance(n, yaml.SequenceNode):
+            children = list(n.value)
+        if not done:
+            sizes[id(n)] = -1  # in progress: a recursive alias (`&a [*a]`) counts once
+            stack.append((n, True))
+            stack.extend((c, False) for c in children if id(c) not in sizes)
+            continue
+        total = 1 + sum(max(sizes.get(id(c), 1), 1) for c in children)
+        sizes[id(n)] = total
+        if total > MAX_EXPANDED_NODES:
+            raise InputError(
+                source,
+                "",
+                f"YAML aliases (*name) expand to more than {MAX_EXPANDED_NODES:,} values; a "
+                "scene needs a few hundred: write the values out, or use fewer nested aliases",
+            )
+    return sizes[id(node)]
+
+
 def _check_duplicates(node: yaml.Node, source: str, path: str) -> None:
     """Raise :class:`InputError` naming the first key given twice in one mapping."""
     if isinstance(node, yaml.MappingNode):
@@ -83,13 +126,15 @@ def load(text: str, source: str = "<yaml>", path: str = ""):
     yaml.YAMLError
         Malformed YAML (the caller reports the line).
     InputError
-        A key given twice in one mapping (names the dotted key).
+        A key given twice in one mapping (names the dotted key), or aliases that expand to
+        more than :data:`MAX_EXPANDED_NODES` values.
     """
     loader = Loader(text)
     try:
         node = loader.get_single_node()
         if node is None:
             return None
+        _expanded_size(node, source)  # before any walk of the expanded document
         _check_duplicates(node, source, path)
         return loader.construct_document(node)
     finally:

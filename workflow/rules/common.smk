@@ -1,7 +1,13 @@
 # Shared helpers: paths, config checks that must fail before any job runs.
 import math
+import os
 
 RES = config["results"]
+# who made the files (ACDD creator/institution attributes of every netCDF file): the jobs read
+# them from the environment (bouncedisk.provenance.METADATA_ENV); unset keys keep the defaults
+for _key, _value in (config.get("metadata") or {}).items():
+    if _value:
+        os.environ[f"BOUNCEDISK_{_key.upper()}"] = str(_value)
 # the scene files (config `scenes`, default workflow/config/scenes): one per study
 SCENES = config.get("scenes", "workflow/config/scenes")
 # every result depends on the code that made it: editing the package reruns what it affects

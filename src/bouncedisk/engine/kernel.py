@@ -54,7 +54,7 @@ from .laws import (
     stick_twist_work,
 )
 from .noise import member_key, noisy_restitution
-from .roots import TWO_PI, first_root
+from .roots import TWO_PI, first_root, first_root_from, inflections
 
 
 def _nrt_off() -> dict:
@@ -171,7 +171,7 @@ def _advance(n, th, dphi):
 
 @njit(cache=True)
 def flight_next_impact(
-    u0: float, v0: float, th0: float, ta: float, ga: float, w: float, xtol: float
+    u0: float, v0: float, th0: float, ta: float, ga: float, w: float, xtol: float, infl: tuple
 ) -> tuple[float, int, float, float]:
     """Next impact of a flight (first root of the gap, paper eq. 20).
 
@@ -179,6 +179,8 @@ def flight_next_impact(
     the anchor ``ta >= 0`` after the origin, where the gap is ``ga >= 0``. The rotor cannot hit
     the stator while ``u > 1``, so a flight rising above the band ``|u| <= 1`` is searched only
     while ascending below 1 and after it falls back to ``u = 1`` (MODEL.md "Events").
+    ``infl`` is the gap's :func:`~bouncedisk.engine.roots.inflections` ``(0, −1, −1/2, w)``, the
+    same for every flight of a run (:func:`run_chunk` computes it once).
 
     Returns
     -------
@@ -186,6 +188,7 @@ def flight_next_impact(
         Time of impact after the origin (-1 on failure), whole stator periods added to the
         origin's period count, the impact phase in ``[0, 2π)``, the rotor velocity before impact.
     """
+    fd, dl, bt = infl
     va = v0 - ta
     if ta == 0.0:
         ka = 0
@@ -198,7 +201,7 @@ def flight_next_impact(
         if va > 0.0 and va * va > 2.0 * (1.0 - ua):
             disc = sqrt(va * va - 2.0 * (1.0 - ua))
             t_up = 2.0 * (1.0 - ua) / (va + disc)
-            r = first_root(ga, va, -0.5, 0.0, -1.0, pha, w, t_up, xtol)
+            r = first_root_from(ga, va, -0.5, 0.0, -1.0, pha, w, t_up, xtol, fd, dl, bt)
             if r >= 0.0:
                 k, ph = _advance(ka, pha, w * r)
                 return ta + r, k, ph, va - r
@@ -206,7 +209,8 @@ def flight_next_impact(
             vd = -disc
         else:
             t_bot = va + sqrt(va * va + 2.0 * (ua + 1.0))
-            r = first_root(ga, va, -0.5, 0.0, -1.0, pha, w, t_bot * (1.0 + 1e-12) + 1e-12, xtol)
+            t_max = t_bot * (1.0 + 1e-12) + 1e-12
+            r = first_root_from(ga, va, -0.5, 0.0, -1.0, pha, w, t_max, xtol, fd, dl, bt)
             if r < 0.0:
                 return -1.0, 0, 0.0, 0.0
             k, ph = _advance(ka, pha, w * r)
@@ -218,7 +222,8 @@ def flight_next_impact(
     k2, ph2 = _advance(ka, pha, w * t_dn)
     g2 = 1.0 - sin(ph2)
     t_bot2 = 4.0 / (sqrt(vd * vd + 4.0) - vd)
-    r = first_root(g2, vd, -0.5, 0.0, -1.0, ph2, w, t_bot2 * (1.0 + 1e-12) + 1e-12, xtol)
+    t_max = t_bot2 * (1.0 + 1e-12) + 1e-12
+    r = first_root_from(g2, vd, -0.5, 0.0, -1.0, ph2, w, t_max, xtol, fd, dl, bt)
     if r < 0.0:
         return -1.0, 0, 0.0, 0.0
     k, ph = _advance(k2, ph2, w * r)
@@ -814,7 +819,7 @@ def _contact_end(st, ist, ev, evk, info, prm, clipped, taus, tau_end, n1, th1, s
 
 
 @_on_arrays
-def _flight_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, noise_key):
+def _flight_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, noise_key, infl):
     """A flight and the impact that ends it (MODEL.md "Flight", "Impact").
 
     The first root of the gap (:func:`flight_next_impact`, eq. 20); the flight's outputs
@@ -822,6 +827,7 @@ def _flight_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, n
     this impact's restitution (``restitution_noise``: ``e_k``, :mod:`.noise`) and what follows
     (:func:`_impact`); its event row; then a new flight, contact or a chattering sequence
     (:func:`_enter_contact`). Returns ``ST_CONTINUE`` or the status that ends this call.
+    ``infl``: the gap's inflection data (:func:`flight_next_impact`).
     """
     e = prm[P_E]
     w = prm[P_W]
@@ -829,7 +835,7 @@ def _flight_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, n
     torsion = flg[F_TORSION] != 0
     cap = flg[F_CAP] != 0
     tau, dk, ph, v_minus = flight_next_impact(
-        st[S_U], st[S_V], th, st[S_ANCHOR_TAU], st[S_ANCHOR_GAP], w, xtol
+        st[S_U], st[S_V], th, st[S_ANCHOR_TAU], st[S_ANCHOR_GAP], w, xtol, infl
     )
     if tau < 0.0:
         return _finish(ist, info, ST_NUMERICAL)
@@ -939,6 +945,7 @@ def run_chunk(
     w = prm[P_W]
     noise_key = member_key(flg[F_SEED], flg[F_MEMBER])
     sep = _separation_constants(w)
+    gap_infl = inflections(0.0, -1.0, -0.5, w)  # every flight's gap: u'' = -1, u_s = sin
     info[O_EVENTS:N_OUT] = 0
     if ist[I_MODE] == MODE_DONE:
         _finish(ist, info, ist[I_STATUS])
@@ -955,7 +962,7 @@ def run_chunk(
         t_now = (n * TWO_PI + th) / w
         if ist[I_MODE] == MODE_FLIGHT:
             status = _flight_step(
-                prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, noise_key
+                prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, noise_key, gap_infl
             )
         elif ist[I_UNLOADED]:
             status = _clipped_ride(prm, flg, st, ist, traj, strobe, info, n, th, t_now, sep[1])

@@ -143,6 +143,23 @@ def _interval_root(f0, c1, c2, a, b, th0, s0, k0, w, lo, flo, fplo, hi, fhi, fph
 
 
 @njit(cache=True)
+def inflections(a, b, c2, w):
+    """Where ``f''`` changes sign: ``(found, δ, β)`` (module docstring).
+
+    ``f'' = 2 c2 − w² amp sin(φ + δ)`` with ``amp = hypot(a, b)`` and ``δ = atan2(a, b)``: it
+    vanishes where ``sin(φ + δ) = sin β``, ``β = asin(2 c2 / (w² amp))``. ``found`` is False when
+    ``f''`` keeps its sign (``amp = 0`` or ``|2 c2 / w²| >= amp``). The values depend on
+    ``a, b, c2, w`` only, so a caller searching several roots of one family (a flight's ascent
+    and descent) computes them once.
+    """
+    amp = hypot(a, b)
+    kk = 2.0 * c2 / (w * w)
+    if amp > 0.0 and abs(kk) < amp:
+        return True, atan2(a, b), asin(kk / amp)
+    return False, 0.0, 0.0
+
+
+@njit(cache=True)
 def first_root(f0, c1, c2, a, b, th0, w, t_max, xtol):
     """First ``τ`` in ``(0, t_max]`` where ``f`` reaches zero from above.
 
@@ -167,27 +184,42 @@ def first_root(f0, c1, c2, a, b, th0, w, t_max, xtol):
     """
     if f0 < 0.0:
         return 0.0
+    found, delta, beta = inflections(a, b, c2, w)
+    return first_root_from(f0, c1, c2, a, b, th0, w, t_max, xtol, found, delta, beta)
+
+
+@njit(cache=True)
+def first_root_from(f0, c1, c2, a, b, th0, w, t_max, xtol, found, delta, beta):
+    """:func:`first_root` with the inflection data ``(found, δ, β)`` of :func:`inflections`.
+
+    The search walks the intervals between consecutive inflection points. ``f''`` is positive
+    before an inflection at phase ``φ + δ ≡ β`` (``p1``: ``sin(φ + δ)`` rises through
+    ``sin β``) and negative before one at ``φ + δ ≡ π − β`` (``p2``), so each interval is convex
+    when the next inflection is a ``p1`` and concave when it is a ``p2``, with no evaluation of
+    ``f''``. Without inflections (``found`` False) ``f''`` has one sign, taken at the window's
+    middle.
+    """
+    if f0 < 0.0:
+        return 0.0
     s0 = sin(th0)
     k0 = cos(th0)
-    amp = hypot(a, b)
-    kk = 2.0 * c2 / (w * w)
     per = TWO_PI / w
     p1 = inf
     p2 = inf
-    if amp > 0.0 and abs(kk) < amp:
-        delta = atan2(a, b)
-        beta = asin(kk / amp)
+    if found:
         p1 = mod_two_pi(beta - delta - th0) / w
         p2 = mod_two_pi(pi - beta - delta - th0) / w
     lo = 0.0
-    flo, fplo, _fpp = hev(f0, c1, c2, a, b, th0, s0, k0, w, 0.0)
     flo = f0
+    fplo = c1 + w * (b * k0 - a * s0)  # f'(0) (hev at τ = 0 has no trigonometry left)
     while True:
         hi = t_max
         if p1 < hi:
             hi = p1
         if p2 < hi:
             hi = p2
+        convex = p1 < p2  # the next inflection is a p1 (only read when found and p1 != p2)
+        tie = p1 == p2
         if hi == p1:
             p1 += per
         if hi == p2:
@@ -197,9 +229,11 @@ def first_root(f0, c1, c2, a, b, th0, w, t_max, xtol):
                 return -1.0
             continue
         fhi, fphi, _fpp = hev(f0, c1, c2, a, b, th0, s0, k0, w, hi)
-        _fm, _fpm, fppm = hev(f0, c1, c2, a, b, th0, s0, k0, w, 0.5 * (lo + hi))
+        if not found or tie:
+            _fm, _fpm, fppm = hev(f0, c1, c2, a, b, th0, s0, k0, w, 0.5 * (lo + hi))
+            convex = fppm > 0.0
         r = _interval_root(
-            f0, c1, c2, a, b, th0, s0, k0, w, lo, flo, fplo, hi, fhi, fphi, fppm > 0.0, xtol
+            f0, c1, c2, a, b, th0, s0, k0, w, lo, flo, fplo, hi, fhi, fphi, convex, xtol
         )
         if r >= 0.0:
             return r
