@@ -1,8 +1,12 @@
 # bouncedisk pipeline: every figure of the paper, and the studies around it, from raw outputs.
 # Run from the project root:  snakemake --cores 2     (see README.md, "Rebuilding the figures")
+import sys
 from pathlib import Path
 
 from snakemake.utils import min_version, validate
+
+from bouncedisk.errors import InputError
+from bouncedisk.sensitivity_config import study_settings
 
 min_version("8.0")
 
@@ -10,6 +14,12 @@ min_version("8.0")
 configfile: "workflow/config/config.yaml"
 
 
+# the sensitivity study's ranges and sizes: one line naming the field, exit 2, before the schema
+try:
+    SENSITIVITY = study_settings(config)
+except InputError as _ex:
+    print(f"bouncedisk: error: {_ex.line()}", file=sys.stderr)
+    sys.exit(2)
 validate(config, "workflow/schemas/config.schema.yaml")
 
 
@@ -21,6 +31,7 @@ include: "workflow/rules/load.smk"
 include: "workflow/rules/analyse.smk"
 include: "workflow/rules/fit.smk"
 include: "workflow/rules/accuracy.smk"
+include: "workflow/rules/sensitivity.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/check.smk"
 include: "workflow/rules/tracking.smk"

@@ -30,6 +30,7 @@ def targets(res: Path) -> list[str]:
         "poincare/poincare_e06.nc",
         "figures/fig3_trajectory_e03.png",
         "studies/clipped_vs_bouncing.nc",
+        "sensitivity/points.nc",
     ]
     return [str(res / n) for n in names]
 
@@ -137,6 +138,21 @@ def test_bad_config_fails_before_any_job(tmp_path, monkeypatch):
     assert not (tmp_path / "r").exists()
 
 
+def test_bad_sensitivity_ranges_or_sizes_are_one_line_exit_2_before_any_job(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    for old, new, field in (
+        ("e: [0.1, 0.9]", "e: [0.9, 0.1]", "sensitivity_study.ranges.e"),
+        ("base_samples: 8,", "base_samples: 12,", "sensitivity_study.sizes.small.base_samples"),
+    ):
+        assert old in SMALL.read_text()
+        bad.write_text(SMALL.read_text().replace(old, new, 1))
+        p = dry_run(bad, tmp_path / "r")
+        lines = p.stderr.strip().splitlines()
+        assert p.returncode == 2 and len(lines) == 1, p.stdout[-1000:] + p.stderr[-1000:]
+        assert lines[0].startswith("bouncedisk: error: pipeline config: " + field), lines
+    assert not (tmp_path / "r").exists()
+
+
 # results/figures/<name>.pdf and .png: what README, `bouncedisk check` and the report point at
 FIGURE_NAMES = {
     "fig2_schematic",
@@ -151,6 +167,12 @@ FIGURE_NAMES = {
     "work_precision",
     "scaling",
     "stats_cost",
+    "sensitivity_indices",
+    "sensitivity_scatter",
+    "design_maps",
+    "torque_speed_fig3",
+    "torque_speed_fig4",
+    "torque_speed_prototype",
     "fit_profiles",
 }
 

@@ -39,6 +39,20 @@ def _member_omega(scene: Scene, member: int, e_sigma: float, seed: int) -> np.nd
     return res.traj[:, [TrajColumn.T, TrajColumn.OMEGA]]
 
 
+def member_speeds(
+    scene: Scene, members: int, seed: int, e_sigma: float = DEFAULT_E_SIGMA, cores: int = 1
+) -> tuple[np.ndarray, np.ndarray]:
+    """``Ω(t)`` of members ``0 … members−1`` on the scene's trajectory grid.
+
+    Returns ``(t, om)``: the times every member reached and the speeds, shape (member, time).
+    Members use the scene's restitution noise, or ``e_sigma`` when it has none.
+    """
+    with ThreadPoolExecutor(max_workers=max(1, cores)) as pool:
+        runs = list(pool.map(lambda m: _member_omega(scene, m, e_sigma, seed), range(members)))
+    n = min(len(r) for r in runs)
+    return runs[0][:n, 0], np.stack([r[:n, 1] for r in runs])
+
+
 def _band_dataset(t: np.ndarray, om: np.ndarray) -> xr.Dataset:
     """Band variables of member speeds ``om`` (member, time): mean with a Student-t 95 %
     interval, 2.5/97.5 percentiles, and each member's first-order trend."""
@@ -103,11 +117,7 @@ def omega_band(
     if members < 2:
         raise InputError(scene.source, "members", f"a band needs at least 2 members, got {members}")
     start = time.perf_counter()
-    with ThreadPoolExecutor(max_workers=max(1, cores)) as pool:
-        runs = list(pool.map(lambda m: _member_omega(scene, m, e_sigma, seed), range(members)))
-    n = min(len(r) for r in runs)
-    t = runs[0][:n, 0]
-    om = np.stack([r[:n, 1] for r in runs])  # (member, time)
+    t, om = member_speeds(scene, members, seed, e_sigma, cores)
     ds = _band_dataset(t, om)
     mean = ds["omega_mean"].values
     mean_trend = ob.first_order_trend(t, mean)

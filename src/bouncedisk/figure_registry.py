@@ -52,5 +52,10 @@ FIGURES: dict[str, FigureDecl] = {
     "work_precision": FigureDecl("fig_work_precision", {"table": "csv"}),
     "scaling": FigureDecl("fig_scaling", {"table": "csv"}),
     "stats_cost": FigureDecl("fig_stats_cost", {"table": "csv", "singles": "csv"}),
+    "sensitivity_indices": FigureDecl(
+        "fig_sensitivity_indices", {"indices": "sensitivity_indices"}
+    ),
+    "sensitivity_scatter": FigureDecl("fig_sensitivity_scatter", {"points": "sensitivity_points"}),
+    "design_maps": FigureDecl("fig_design_maps", {"maps": "design_maps"}),
     "torque_speed": FigureDecl("fig_torque_speed", {"curve": "load_curve"}),
 }

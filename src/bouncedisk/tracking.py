@@ -127,6 +127,8 @@ PARAM_ATTRS = {
     "n_shards",
     "transient_events",
     "max_events",
+    "base_samples",
+    "total_points",
 }
 PARAM_PREFIXES = ("initial_", "physical_", "ensemble_", "stop_")
 # what a nested run's kind is, from its rule's name (figures first, then the first prefix that
@@ -144,6 +146,7 @@ KINDS = (
     ("clipped", "study"),
     ("work_precision", "study"),
     ("scaling", "study"),
+    ("sensitivity", "study"),
     ("synthetic", "data"),
 )
 COPIED = {".png", ".pdf", ".svg", ".md", ".csv", ".json", ".txt", ".html", ".yaml", ".tsv"}
