@@ -237,8 +237,11 @@ def test_first_zero_and_peak_closed_forms():
     assert first_zero(loads, 2.0 - 3.0 * loads) == pytest.approx(2.0 / 3.0)
     assert math.isnan(first_zero(loads, 1.0 + loads))
     assert first_zero(loads, -1.0 - loads) == 0.0
-    p, at = peak(loads, 5.0 - 20.0 * (loads - 0.437) ** 2)
-    assert p == pytest.approx(5.0) and at == pytest.approx(0.437)
+    p, at = peak(loads, 5.0 - 20.0 * (loads - 0.4) ** 2)
+    assert p == pytest.approx(5.0) and at == pytest.approx(0.4)
+    # a collapse past the peak: no parabola overshooting the samples
+    p, at = peak(np.array([0.0, 0.4, 0.8, 1.2]), np.array([0.0, 17.8, 34.4, -387.5]))
+    assert (p, at) == (34.4, 0.8)
 
 
 def _stats_scene(**over):

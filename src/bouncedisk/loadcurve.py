@@ -149,18 +149,14 @@ def first_zero(loads: np.ndarray, speed: np.ndarray) -> float:
 
 
 def peak(loads: np.ndarray, power: np.ndarray) -> tuple[float, float]:
-    """Maximum of ``power`` over ``loads`` and where: the parabola through the largest sample
-    and its neighbours (on an evenly or unevenly spaced grid), or the end sample."""
+    """The largest sampled ``power`` and its load.
+
+    No interpolation: where the speed collapses just past the peak (a stall), a parabola through
+    the largest sample and its neighbours overshoots every sample several-fold, so the grid of
+    loads sets the resolution (ask for more loads near the peak to refine it).
+    """
     k = int(np.nanargmax(power))
-    if k == 0 or k == len(loads) - 1:
-        return float(power[k]), float(loads[k])
-    x = loads[k - 1 : k + 2]
-    y = power[k - 1 : k + 2]
-    a, b, c = np.polyfit(x - x[1], y, 2)
-    if a >= 0.0:
-        return float(power[k]), float(loads[k])
-    xv = -b / (2.0 * a)
-    return float(c - b * b / (4.0 * a)), float(x[1] + xv)
+    return float(power[k]), float(loads[k])
 
 
 def derived(loads: np.ndarray, speed: np.ndarray, power: np.ndarray) -> dict:
