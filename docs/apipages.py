@@ -45,7 +45,7 @@ def _block(title: str, names: list[str], template: str) -> list[str]:
     if not names:
         return []
     lines = [title, "-" * len(title), "", ".. autosummary::", "   :toctree: generated/"]
-    lines += [f"   :template: {template}", ""]
+    lines += [f"   :template: autosummary/{template}", ""]
     lines += [f"   {name}" for name in names]
     return lines + [""]
 
