@@ -24,11 +24,15 @@ PER_RUN_ATTRS = frozenset(
     {
         "created",  # UTC timestamp of writing
         "date_created",  # ACDD copy of `created`
+        "date_modified",  # ACDD: also the time of writing
+        "date_issued",
+        "date_metadata_modified",
         "history",  # command line and timestamp
         "run_id",  # <scene>-<scene hash>-<random>
         "source_run_id",  # run_id of the simulation a derived file was made from
         "shard_run_ids",  # run_ids of the shards a combined sweep was joined from
         "wall_time_s",  # measured wall time
+        "cpu_time_s",  # measured CPU time (sensitivity shards and maps)
     }
 )
 RUN_ID_ATTRS = ("run_id", "source_run_id", "shard_run_ids")
