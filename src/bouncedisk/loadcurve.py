@@ -290,6 +290,25 @@ def torque_speed(
     ``τ_L``, increasing), swept by continuation (module docstring). Members run on ``cores``
     threads, each sweeping its own chain; the numbers do not depend on ``cores``.
 
+    Parameters
+    ----------
+    scene : Scene
+        With ``torsion``, ``stop.time``, ``stats.discard`` and an ensemble: every load runs
+        ``stop.time − initial.t`` and averages after ``discard``.
+    loads : sequence of float
+        Load torques ``τ_L >= 0`` in units of ``μ m_r g_eff r_eff``, increasing.
+    cores : int
+        Threads the members run on.
+    branches : sequence of str
+        ``("up", "down")`` or ``("up",)``: the sweeps to run (:data:`BRANCHES`).
+    on_member, should_stop : callable, optional
+        Progress ``on_member(done, total)``; ``should_stop()`` polled between chunks.
+
+    Returns
+    -------
+    LoadCurve
+        Per branch and load the ensemble's :class:`~bouncedisk.stats.EnsembleStats`.
+
     Raises
     ------
     InputError
