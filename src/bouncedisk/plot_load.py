@@ -60,7 +60,12 @@ def fig_torque_speed(ds: xr.Dataset) -> Figure:
         ax.set_ylabel(label)
     _mark(axes[0], ds, "stall_torque", kt, None, "stall torque")
     _mark(
-        axes[1], ds, "max_power_load", kt, ds.attrs.get("max_power", np.nan) * kp, "max. power at load"
+        axes[1],
+        ds,
+        "max_power_load",
+        kt,
+        ds.attrs.get("max_power", np.nan) * kp,
+        "max. power at load",
     )
     axes[0].legend(fontsize=8, loc="upper right")
     axes[2].set_xlabel(xlab)
