@@ -33,6 +33,8 @@ PER_RUN_ATTRS = frozenset(
         "shard_run_ids",  # run_ids of the shards a combined sweep was joined from
         "wall_time_s",  # measured wall time
         "cpu_time_s",  # measured CPU time (sensitivity shards and maps)
+        "cpu_s_per_point",  # the sensitivity study's measured cost
+        "id",  # ACDD id: the run id, or a random one for a file made without a run
     }
 )
 RUN_ID_ATTRS = ("run_id", "source_run_id", "shard_run_ids")
