@@ -149,7 +149,7 @@ def test_scene_members_as_text_is_refused():
 
     from bouncedisk.scene import _ensemble
 
-    noisy = (frozenset({"restitution_noise"}), SimpleNamespace(e_sigma=0.03))
+    noisy = (frozenset({"restitution_noise"}), SimpleNamespace(e=0.5, e_sigma=0.03))
     assert _ensemble("s.yaml", {"members": 3}, *noisy).members == 3
     with pytest.raises(InputError, match="ensemble.members"):
         _ensemble("s.yaml", {"members": "3"}, *noisy)

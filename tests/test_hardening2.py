@@ -721,7 +721,7 @@ def every_kind(tmp_path_factory):
         files["fit"] = d / "fit.nc"
         curve = ROOT / "data" / "prototype" / "synthetic_motor.csv"
         argv = ["fit", str(curve), "-o", str(files["fit"]), "-q", "--seed", "1"]
-        argv += ["--scan", "8", "--zoom", "0", "--bootstrap", "2", "--members", "4"]
+        argv += ["--scan", "8", "--zoom", "0", "--bootstrap", "40", "--members", "4"]
         assert main(argv) == 0
     finally:
         for k, v in old.items():
