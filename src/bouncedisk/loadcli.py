@@ -4,12 +4,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import shlex
-import sys
 import time
 
 from .errors import InputError
-from .statscli import _progress, available_cores
+from .statscli import _progress, available_cores, write_with_history
 
 #: Loads of a curve when ``--loads`` is not given: from no load to the momentum bound
 #: ``τ_L = 1`` (MODEL.md "The motor under load"), in units of the scene's load torque.
@@ -43,7 +41,6 @@ def _g(x) -> str:
 
 def torque_speed_command(args: argparse.Namespace) -> dict:
     """Run ``bouncedisk torque-speed``; returns the printed summary."""
-    from .datasets import write_dataset
     from .loadcurve import parse_loads, to_dataset, torque_speed
     from .outputs import check_output_path
     from .runner import deferred_interrupts
@@ -72,10 +69,7 @@ def torque_speed_command(args: argparse.Namespace) -> dict:
         )
         wall = time.perf_counter() - start
         if args.output:
-            ds = to_dataset(scene, curve, wall)
-            command = "bouncedisk " + " ".join(shlex.quote(x) for x in sys.argv[1:])
-            ds.attrs["history"] = f"{ds.attrs['created']}: {command}"
-            write_dataset(ds, args.output)
+            write_with_history(to_dataset(scene, curve, wall), args.output)
     summary = curve.summary()
     if args.json:
         print(json.dumps(summary))

@@ -83,9 +83,17 @@ def _row(name: str, value, ci) -> str:
     return f"{name:>18}: {value:.6g}  95% CI [{ci[0]:.6g}, {ci[1]:.6g}]"
 
 
+def write_with_history(ds, path) -> None:
+    """Write a command's dataset atomically, its ``history`` the command line that made it."""
+    from .datasets import write_dataset
+
+    command = "bouncedisk " + " ".join(shlex.quote(x) for x in sys.argv[1:])
+    ds.attrs["history"] = f"{ds.attrs['created']}: {command}"
+    write_dataset(ds, path)
+
+
 def stats_command(args: argparse.Namespace) -> dict:
     """Run ``bouncedisk stats`` (see :mod:`bouncedisk.stats`); returns the printed summary."""
-    from .datasets import write_dataset
     from .outputs import check_output_path
     from .runner import deferred_interrupts
     from .scene import load_scene
@@ -108,10 +116,7 @@ def stats_command(args: argparse.Namespace) -> dict:
         )
         wall = time.perf_counter() - start
         if args.output:
-            ds = to_dataset(scene, result, wall)
-            command = "bouncedisk " + " ".join(shlex.quote(x) for x in sys.argv[1:])
-            ds.attrs["history"] = f"{ds.attrs['created']}: {command}"
-            write_dataset(ds, args.output)
+            write_with_history(to_dataset(scene, result, wall), args.output)
     summary = result.summary()
     if args.json:
         print(json.dumps(summary))
