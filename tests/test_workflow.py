@@ -174,6 +174,8 @@ FIGURE_NAMES = {
     "torque_speed_fig4",
     "torque_speed_prototype",
     "fit_profiles",
+    "fit_load",
+    "fit_identifiability",
 }
 
 

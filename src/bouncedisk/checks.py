@@ -50,6 +50,7 @@ RESULT_FILES = (
     "stats/stats_locked.nc",
     "load/load_fig3.nc",
     "load/load_fig4.nc",
+    "fit/prototype.nc",
 )
 #: The pipeline's load curves the checks read, and what is simulated without a results folder.
 LOAD_CURVES = ("load_fig3", "load_fig4")
@@ -416,6 +417,52 @@ def _rise_check(src: _Source) -> CheckResult:
     )
 
 
+#: The pipeline's joint fit of the prototype (run-up and load curve), read by :func:`_fit_checks`.
+FIT_FILE = "fit/prototype.nc"
+#: Fewest readings of the load curve within the fitted members' 95 % band (13 readings: 11).
+FIT_IN_BAND = 0.8
+
+
+def _fit_checks(src: _Source) -> list[CheckResult]:
+    """The joint fit (issue 20): the model fitted to the run-up and the load curve together
+    reproduces the load curve and pins every parameter. Read from the pipeline's fit file; a run
+    without ``--results`` has no fit to read (a fit takes minutes) and skips it."""
+    if src.results is None:
+        return []
+    path = src.results / FIT_FILE
+    if not path.is_file():
+        raise InputError(str(path), "", "missing: the results folder lacks the prototype's fit")
+    ds = open_checked(path, required=("load_speed_measured", "interval_low"), what="fit")
+    y = ds["load_speed_measured"].values
+    inside = (y >= ds["load_speed_band_low"].values) & (y <= ds["load_speed_band_high"].values)
+    frac = float(np.mean(inside))
+    a = ds.attrs
+    both = list(ds["data_set"].values).index("both")
+    ids = ds["interval_identified"].values[both]
+    names = [str(n) for n in ds["parameter"].values]
+    lo, hi = ds["interval_low"].values[both], ds["interval_high"].values[both]
+    from .fitting.model import BOUNDS
+
+    inner = [bool(BOUNDS[n][0] < lo[j] and hi[j] < BOUNDS[n][1]) for j, n in enumerate(names)]
+    return [
+        CheckResult(
+            "the model fitted to the run-up and the load curve together reproduces the load "
+            "curve (issue 20)",
+            f"{100 * frac:.0f}% of {len(y)} readings within the fitted members' 95% band; joint "
+            f"chi2 {a['chi2']:.4g} on {a['n_statistics']} statistics (p = {a['chi2_p_value']:.2g})",
+            f">= {100 * FIT_IN_BAND:.0f}% within the band, fit adequate (p > 1e-3)",
+            frac >= FIT_IN_BAND and bool(a["fit_adequate"]), str(path),
+        ),
+        CheckResult(
+            "the run-up and the load curve together identify the motor: every parameter has a "
+            "two-sided 95% interval inside its search range (issue 20)",
+            ", ".join(f"{n} [{lo[j]:.4g}, {hi[j]:.4g}]" for j, n in enumerate(names)),
+            "identified and strictly inside the search range, each",
+            bool(np.all(ids)) and all(inner), str(path),
+        ),
+    ]  # fmt: skip
+
+
 CHECKS: list[Callable[[_Source], CheckResult | list[CheckResult]]] = [
     _period_check,
     _chaos_check,
@@ -423,6 +470,7 @@ CHECKS: list[Callable[[_Source], CheckResult | list[CheckResult]]] = [
     _threshold_checks,
     _rise_check,
     _load_checks,
+    _fit_checks,
 ]
 
 

@@ -349,6 +349,14 @@ def _add_fit(sub) -> None:
         "fitted together (README, 'Fitting')",
     )
     p.add_argument("-o", "--output", required=True, help="fit netCDF file to write")
+    p.add_argument(
+        "--load",
+        nargs="+",
+        default=[],
+        metavar="LOAD.csv",
+        help="load curves of the same motor (torque_Nm, speed_rad_s[, speed_sd_rad_s] and a "
+        "sidecar with the rotor and window_s), fitted jointly with the run-ups",
+    )
     p.add_argument("--sidecar", help="YAML sidecar of every curve (default: CURVE with .yaml)")
     p.add_argument("--seed", default="12345", help="random seed, >= 0 (default: %(default)s)")
     p.add_argument(

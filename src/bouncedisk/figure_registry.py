@@ -44,6 +44,8 @@ FIGURES: dict[str, FigureDecl] = {
     "trajectory": FigureDecl("fig_trajectory", {"sim": "simulation", "band": "band"}),
     "fig5": FigureDecl("_fig5_with_fit", {"curve": "curve", "fit": "fit"}),
     "fit_profiles": FigureDecl("fig_fit_profiles", {"fit": "fit"}),
+    "fit_load": FigureDecl("fig_fit_load", {"fit": "fit"}),
+    "fit_identifiability": FigureDecl("fig_fit_identifiability", {"fit": "fit"}),
     "poincare": FigureDecl("_poincare_labelled", {"maps": "poincare_map"}, params=("labels",)),
     "bifurcation": FigureDecl("fig_bifurcation", {"up": "branch", "down": "branch"}),
     "regime_map": FigureDecl("fig_regime_map", {"sweep": "regime_sweep"}),

@@ -472,20 +472,26 @@ def motor_scene(
     return scene_from_mapping(raw, f"<{name}>")
 
 
-def readings_from_rest(scene: Scene, loads: Sequence[float], cores: int = 1) -> list[EnsembleStats]:
+def readings_from_rest(
+    scene: Scene, loads: Sequence[float], cores: int = 1, independent: bool = False
+) -> list[EnsembleStats]:
     """What a lab reads at each load: the scene's ensemble started from its initial condition
     (at rest) under that load, each member's mean speed over the scene's stats window
     (``[initial.t + discard, stop.time]``; INTERFACES.md, a load curve's ``window_s``).
 
-    Unlike :func:`torque_speed` there is no continuation: every reading starts afresh.
+    Unlike :func:`torque_speed` there is no continuation: every reading starts afresh. Member
+    ``m`` uses the noise stream ``(seed, m)`` at every load (common random numbers), or with
+    ``independent`` the stream ``(seed + j + 1, m)`` at the ``j``-th load: separate runs, as a
+    lab's readings at different loads are.
     """
     from .ensemble import run_ensemble
 
     t_from, t_end = ensemble_window(scene)
     cfg = engine_config(scene)
     out = []
-    for load in loads:
-        run = dataclasses.replace(cfg, load_torque=float(load))
+    for j, load in enumerate(loads):
+        seed = cfg.seed + j + 1 if independent else cfg.seed
+        run = dataclasses.replace(cfg, load_torque=float(load), seed=seed)
         members = run_ensemble(run, scene.initial, scene.ensemble.members, t_from, cores=cores)
         out.append(EnsembleStats(members, scene.stats.discard, t_end - t_from, True, scene.scales))
     return out
@@ -497,8 +503,10 @@ def synthetic_load_curve(spec: dict, spec_path: str = "") -> tuple:
     ``spec`` is ``workflow/config/synthetic_motor.yaml``: the generating ``parameters`` and
     ``e_sigma``, the drive, ``rotor``, ``preload_N`` and ``load_curve: {loads_Nm, repeats,
     window_s, seed}``. Each load is read ``repeats`` times, each reading one ensemble member of the
-    model with restitution noise started from rest (:func:`readings_from_rest`); the CSV holds
-    their mean and standard deviation. Returns ``(DataFrame, sidecar)``.
+    model with restitution noise started from rest, on noise streams of its own at every load
+    (:func:`readings_from_rest` with ``independent``: a lab's readings are separate runs); the
+    CSV holds their mean and standard deviation, the sidecar ``repeats``. Returns
+    ``(DataFrame, sidecar)``.
     """
     import pandas as pd
 
@@ -514,7 +522,7 @@ def synthetic_load_curve(spec: dict, spec_path: str = "") -> tuple:
     )  # fmt: skip
     sc = scene.physical.scales()
     loads = np.asarray(lc["loads_Nm"], dtype=float)
-    readings = readings_from_rest(scene, loads / sc.torque)
+    readings = readings_from_rest(scene, loads / sc.torque, independent=True)
     speeds = np.stack([r.column("mean_omega") for r in readings]) * sc.omega_scale
     df = pd.DataFrame(
         {
@@ -533,12 +541,15 @@ def synthetic_load_curve(spec: dict, spec_path: str = "") -> tuple:
         "rotor": dict(spec["rotor"]),
         "preload_N": spec["preload_N"],
         "window_s": [t0, t1],
+        "repeats": int(lc["repeats"]),
         "protocol": f"{lc['repeats']} readings per load, each the mean speed over window_s after "
-        "a start from rest; speed_sd_rad_s is their standard deviation",
+        "a start from rest (separate runs at every load); speed_rad_s is their mean, "
+        "speed_sd_rad_s their standard deviation",
         "generating_parameters": {
             **spec["parameters"],
             "e_sigma": spec["e_sigma"],
             "ensemble_seed": lc["seed"],
+            "load_seeds": "ensemble_seed + j + 1 at the j-th load (j from 0)",
         },  # fmt: skip
         "generator": "workflow/scripts/make_synthetic_load_curve.py ("
         + (spec_path or "workflow/config/synthetic_motor.yaml")

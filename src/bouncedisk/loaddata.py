@@ -11,6 +11,7 @@ sidecar (same stem, ``.yaml``) holds the drive as a run-up's does, the rotor and
     rotor: {m_r_kg: 0.01, r_g_m: 0.004, r_c_m: 0.002}
     preload_N: 0.77                  # optional (a spring preload acts as extra gravity)
     window_s: [0.06, 0.12]           # each reading: mean speed over [t0, t1] after a start from rest
+    repeats: 5                       # optional: readings averaged per row (default 1)
     protocol: "5 repeats per load"   # informative
 
 The torque scale ``μ m_r g_eff r_eff`` follows from the rotor and the fitted ``R_φ``
@@ -35,7 +36,7 @@ COLUMNS = ("torque_Nm", "speed_rad_s")
 OPTIONAL_COLUMNS = ("speed_sd_rad_s",)
 SIDECAR_KEYS = (
     "source", "synthetic", "units", "motor", "rotor", "preload_N", "window_s", "protocol",
-    "description", "generating_parameters", "generator",
+    "description", "generating_parameters", "generator", "repeats",
 )  # fmt: skip
 ROTOR_KEYS = ("m_r_kg", "r_g_m", "r_c_m")
 MIN_LOADS = 3
@@ -90,6 +91,9 @@ def _sidecar(path: Path) -> dict:
     t1 = number(src, "window_s[1]", win[1], positive=True)
     if not t1 > t0:
         raise InputError(src, "window_s", f"must have t1 > t0, got {win}")
+    rep = data.get("repeats", 1)
+    if isinstance(rep, bool) or not isinstance(rep, int) or rep < 1:
+        raise InputError(src, "repeats", f"must be a whole number >= 1, got {rep!r}")
     if not isinstance(data.get("synthetic", False), bool):
         raise InputError(src, "synthetic", f"must be true or false, got {data['synthetic']!r}")
     return data

@@ -24,6 +24,7 @@ from .atomic import atomic_path
 from .datasets import open_checked, open_simulation
 from .figure_registry import FIGURES as DECLARED
 from .figure_registry import FigureDecl
+from .plot_fit_load import fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
 from .plot_load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
 
 TWO_PI = 2 * math.pi

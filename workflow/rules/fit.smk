@@ -23,10 +23,12 @@ rule synthetic_curve:
 
 
 rule fit_prototype:
-    """Fit the model to the prototype curve: results/fit/prototype.nc."""
+    """Fit the model to the prototype's run-up and load curve jointly: results/fit/prototype.nc."""
     input:
         code=CODE,
         curve=config["prototype"]["curve"],
+        load=config["prototype"]["load_curve"],
+        load_sidecar=str(Path(config["prototype"]["load_curve"]).with_suffix(".yaml")),
         compiled=rules.compile_engine.output,
     output:
         f"{RES}/fit/prototype.nc",

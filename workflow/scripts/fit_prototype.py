@@ -1,8 +1,9 @@
-"""Adapter: fit the model to the prototype velocity-time curve."""
+"""Adapter: fit the model to the prototype's velocity-time curve and load curve jointly."""
 
 from bouncedisk.curves import read_curve
 from bouncedisk.datasets import write_dataset
 from bouncedisk.fitting import FitSettings, fit_curve, fit_dataset, summary_text
+from bouncedisk.loaddata import read_load_curve
 from bouncedisk.logutil import log_to
 
 with log_to(snakemake.log[0]) as log:
@@ -14,7 +15,8 @@ with log_to(snakemake.log[0]) as log:
         **snakemake.params.search,  # scan, zoom: the fit's defaults unless the config sets them
         cores=snakemake.threads,
     )
-    fit = fit_curve(curve, settings, progress=log.info)
+    load = read_load_curve(snakemake.input.load)
+    fit = fit_curve(curve, settings, progress=log.info, load=[load])
     ds = fit_dataset(fit)
     write_dataset(ds, snakemake.output[0])
     log.info("\n%s", summary_text(ds))

@@ -28,8 +28,11 @@ def _int_option(text, name: str, low: int, high: int) -> int:
     return value
 
 
-def check_output(output: str, curves: list[str], sidecar: str | None) -> Path:
-    """The output path: a new or replaceable file in a writable folder, not an input."""
+def check_output(
+    output: str, curves: list[str], sidecar: str | None, loads: list[str] = ()
+) -> Path:
+    """The output path: a new or replaceable file in a writable folder, not an input (a curve,
+    a load curve or a sidecar)."""
     out = Path(output)
     if out.is_dir():
         raise InputError(str(out), "-o", "is a directory; give a file name such as fit.nc")
@@ -40,6 +43,7 @@ def check_output(output: str, curves: list[str], sidecar: str | None) -> Path:
         raise InputError(str(out), "-o", f"folder {str(parent)!r} is not writable")
     inputs = [Path(c) for c in curves]
     inputs += [Path(sidecar)] if sidecar else [Path(c).with_suffix(".yaml") for c in curves]
+    inputs += [q for c in loads for q in (Path(c), Path(c).with_suffix(".yaml"))]
     for p in inputs:
         if out.resolve() == p.resolve():
             raise InputError(str(out), "-o", "is an input file; give another output name")
@@ -69,7 +73,8 @@ def validate(args) -> dict:
     opts = {"seed": seed, "bootstrap": boot, "members": members, **search}
     if getattr(args, "e_sigma", None) is not None:
         opts["e_sigma"] = _e_sigma_option(args.e_sigma)
-    check_output(args.output, list(args.curve), args.sidecar)
+    loads = list(getattr(args, "load", None) or [])
+    check_output(args.output, list(args.curve), args.sidecar, loads)
     if cores is None:
         from ..statscli import available_cores
 
@@ -113,9 +118,27 @@ def fit_command(args) -> None:
     c = curves[0]
     runs = f"{len(curves)} run-ups of " if len(curves) > 1 else ""
     progress(f"{runs}{len(c.time)} samples over {c.time[-1] - c.time[0]:.6g} s")
+    loads = read_loads(getattr(args, "load", None) or [], seen, progress)
     settings = FitSettings(**opts)
-    fit = fit_curve(curves, settings, progress)
+    fit = fit_curve(curves, settings, progress, load=loads)
     ds = fit_dataset(fit)
     write_dataset(ds, args.output)
     if not args.quiet:
         print(summary_text(ds))
+
+
+def read_loads(paths: list[str], seen: dict, progress) -> list:
+    """Read and check the load curves (:func:`bouncedisk.loaddata.read_load_curve`): each file
+    once, none of them a run-up."""
+    from ..loaddata import read_load_curve
+
+    out = []
+    for path in paths:
+        key = Path(path).resolve()
+        if key in seen:
+            raise InputError(str(path), "--load", f"is the same file as {seen[key]}: give each "
+                             "curve once")  # fmt: skip
+        seen[key] = str(path)
+        progress(f"reading load curve {path}")
+        out.append(read_load_curve(path))
+    return out

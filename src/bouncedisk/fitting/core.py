@@ -18,8 +18,10 @@ from scipy import stats as _sps
 
 from ..curves import MotorCurve
 from ..errors import InputError
+from ..loaddata import LoadCurveData
 from ..observables import first_order_trend
 from .basins import Basin, choose, list_basins
+from .joint import LoadFit, load_consistent, load_part, load_result
 from .model import MODEL_E_SIGMA, EnsembleSpec, member_records, param_names, physical, uniform_grid
 from .objective import Objective
 from .runs import check_runs, mean_curve
@@ -220,6 +222,7 @@ class FitResult:
     wall_time_s: float
     settings: FitSettings
     runs: tuple[MotorCurve, ...]  # every run-up, as fitted (one run: the curve)
+    load: LoadFit | None = None  # the load curves' part (joint fit), None for run-ups only
 
     @property
     def theta(self) -> dict[str, float]:
@@ -272,9 +275,11 @@ def fit_curve(
     curve: MotorCurve | Sequence[MotorCurve],
     settings: FitSettings | None = None,
     progress: Callable[[str], None] | None = None,
+    load: Sequence[LoadCurveData] | None = None,
 ) -> FitResult:
     """Fit the model to ``curve``, or jointly to several run-ups of one motor (module docstring,
-    :mod:`.runs`). Deterministic for a given seed."""
+    :mod:`.runs`) and, with ``load``, to its load curves too (:mod:`.loadpart`). Deterministic
+    for a given seed."""
     start = _time.perf_counter()
     runs, fitted, note = prepare_runs(curve)
     s = (settings or FitSettings()).for_runs(len(runs))
@@ -283,17 +288,28 @@ def fit_curve(
     layout, records, target = data_layout(runs)
     boot = bootstrap_stats(layout, records, s.bootstrap, s.seed)
     spec = EnsembleSpec(e_sigma=s.e_sigma, seed=s.seed, cores=max(1, s.cores))
+    part = load_part(list(load or []), fitted, spec)
     obj = Objective(fitted, param_names(fitted), layout, target, spec, s.members,
-                    cov=provisional_cov(target, boot), runs=len(runs))  # fmt: skip
+                    cov=provisional_cov(target, boot), runs=len(runs), load=part,
+                    parts="both" if part is not None else "runup")  # fmt: skip
     best = search(obj, s.search_settings(), progress)
-    thr = birge(best.chi2, len(target), len(obj.names))
+    thr = birge(best.chi2, obj.n_stats, len(obj.names))
     if progress is not None and thr > THRESHOLD:
-        progress(f"chi2 {best.chi2:.4g} on {len(target)} statistics: intervals widened "
+        progress(f"chi2 {best.chi2:.4g} on {obj.n_stats} statistics: intervals widened "
                  f"(delta chi2 {thr:.4g} instead of {THRESHOLD:.3f})")  # fmt: skip
-    extra = scan_acceptable(obj, s.global_members)
+    extra_runup = extra = scan_acceptable(obj, s.global_members)
     if progress is not None:
         progress(f"scan: {len(extra)} points reproduce the data's statistics within its "
                  "bootstrap scales")  # fmt: skip
+    if part is not None:
+        # judged under the joint metric on `members` members (logged: the profiles' widening
+        # sees them), not by one cheap run-up member
+        agree = load_consistent(obj, extra_runup, s.global_members)
+        obj.map(lambda x: obj.chi2(x, s.members), list(agree))
+        extra = None
+        if progress is not None:
+            progress(f"scan: {len(agree)} of them agree with the load curve too; evaluated "
+                     f"on {s.members} members")  # fmt: skip
     profiles, jac, corr, sd = all_profiles(obj, best.x, s.members, s.profile and list(s.profile),
                                            progress, thr, extra)  # fmt: skip
     final = obj.best(s.members)  # a profile may have found a better point
@@ -301,11 +317,11 @@ def fit_curve(
     if progress is not None and len(basins) > 1:
         progress(f"{len(basins)} basins within delta chi2 {thr:.3g} of the best: the data do not "
                  "single one out; the estimate is the lowest chi2 (basins.choose)")  # fmt: skip
-    if not adequate(final.chi2, len(target)):
+    if not adequate(final.chi2, obj.n_stats):
         # the best point found does not reproduce the data: nothing is identified by it
         profiles = [dataclasses.replace(p, identified=False) for p in profiles]
         if progress is not None:
-            progress(f"chi2 {final.chi2:.4g} on {len(target)} statistics (p < {ADEQUATE_P:g}): "
+            progress(f"chi2 {final.chi2:.4g} on {obj.n_stats} statistics (p < {ADEQUATE_P:g}): "
                      "the fit does not reproduce the data; no parameter reported identified")  # fmt: skip
     comb_sd, comb_vec = combinations(jac, obj.span)
     ens = obj.ensemble(final.x, s.pilot_members)
@@ -314,6 +330,9 @@ def fit_curve(
     step = max(1, len(layout.t) // 300)
     tm = first_order_trend(layout.t[::step], band["mean"][::step])
     td = first_order_trend(layout.t[::step], records.mean(axis=0)[::step])
+    load_fit = None
+    if part is not None:
+        load_fit = load_result(obj, final.x, s, profiles, extra_runup, progress)
     return FitResult(
         names=obj.names, x=final.x, chi2=final.chi2, profiles=profiles, correlation=corr,
         local_sd=sd, comb_sd=comb_sd, comb_vectors=comb_vec, target=target,
@@ -322,5 +341,5 @@ def fit_curve(
         trend_ci=(tuple(np.percentile(boot[:, 0], [2.5, 97.5])),
                   tuple(np.exp(np.percentile(boot[:, 1], [2.5, 97.5])))),
         physical=physical(theta, fitted), basins=basins, curve=fitted, note=note, evaluations=len(obj.cache),
-        wall_time_s=_time.perf_counter() - start, settings=s, runs=tuple(runs),
+        wall_time_s=_time.perf_counter() - start, settings=s, runs=tuple(runs), load=load_fit,
     )  # fmt: skip

@@ -13,6 +13,11 @@ by ``C / M``, and the model's mean has the Monte-Carlo error ``C / K``:
 its value near the optimum (regularized, :func:`.statistics.regularized_cov`). The members'
 noise streams are fixed (common random numbers), so ``χ²`` is deterministic for a seed.
 
+With load curves (:mod:`.loadpart`) the objective is the joint ``χ²`` of both experiments, the
+run-ups' plus the load curves' (independent: the covariance is block-diagonal). ``parts`` selects
+which data the objective sees — ``"runup"``, ``"load"`` or ``"both"`` — so the intervals from each
+data set alone come from the same cached evaluations (:func:`.core.identifiability`).
+
 Round-off cannot move it (README, "Reproducible"): every point is first put on a lattice of
 :data:`SNAP_DECIMALS` decimals (:func:`snap`; an optimizer's step that differs in the last bits
 between BLAS kernels lands on the same lattice point), the members' statistics are reduced in a
@@ -31,6 +36,7 @@ import numpy as np
 from ..curves import MotorCurve
 from . import detlinalg
 from .basins import rank_key
+from .loadpart import LoadPart, members_for
 from .model import BOUNDS, EnsembleSpec, member_records
 from .statistics import EnsembleStats, Layout, record_stats
 
@@ -56,6 +62,7 @@ class Evaluation:
     x: np.ndarray
     members: int
     chi2: float
+    parts: str = "runup"  # the data the objective saw (Objective.parts)
 
 
 @dataclass
@@ -78,6 +85,10 @@ class Objective:
         Members per evaluation ``K`` (changeable between stages).
     runs : int
         Run-ups ``M`` whose mean statistics ``target`` is.
+    load : LoadPart or None
+        The load curves' part of the likelihood (:mod:`.loadpart`); ``None``: run-ups only.
+    parts : str
+        The data the objective sees: ``"runup"``, ``"load"`` or ``"both"``.
     """
 
     curve: MotorCurve
@@ -92,6 +103,8 @@ class Objective:
     on_eval: Callable[[int], None] | None = None
     points_parallel: bool = False
     runs: int = 1
+    load: LoadPart | None = None
+    parts: str = "runup"
 
     def __post_init__(self):
         b = np.array([BOUNDS[n] for n in self.names])
@@ -132,11 +145,24 @@ class Objective:
                 self.on_eval(len(self.cache))
         return self.cache[key]
 
+    @property
+    def n_stats(self) -> int:
+        """Residuals of the data the objective sees now (``parts``)."""
+        n = len(self.target) if self.parts != "load" else 0
+        return n + (self.load.n if self.load is not None and self.parts != "runup" else 0)
+
     def residuals(self, x: np.ndarray, members: int | None = None) -> np.ndarray:
-        """Whitened residuals ``L⁻¹ (μ(x) − s_d) / sqrt(1/M + 1/K)`` (``C = L Lᵀ``)."""
+        """Whitened residuals ``L⁻¹ (μ(x) − s_d) / sqrt(1/M + 1/K)`` (``C = L Lᵀ``) of the
+        run-ups, then the load curves' (:meth:`.loadpart.LoadPart.residuals`), per ``parts``."""
         k = members or self.members
-        d = self.ensemble(x, k).mean - self.target
-        return detlinalg.matvec(self._white, d) / math.sqrt(1.0 / self.runs + 1.0 / k)
+        out = []
+        if self.parts != "load":
+            d = self.ensemble(x, k).mean - self.target
+            out.append(detlinalg.matvec(self._white, d) / math.sqrt(1.0 / self.runs + 1.0 / k))
+        if self.load is not None and self.parts != "runup":
+            x = snap(x)
+            out.append(self.load.residuals(self.theta(x), x, members_for(k), self.points_parallel))
+        return out[0] if len(out) == 1 else np.concatenate(out)
 
     def chi2(self, x: np.ndarray, members: int | None = None) -> float:
         """``χ²`` at ``x``; every call is logged (the search never returns a worse point)."""
@@ -145,7 +171,7 @@ class Objective:
         value = detlinalg.dot(r, r)
         if not math.isfinite(value):
             value = 1e300
-        self.log.append(Evaluation(x.copy(), members or self.members, value))
+        self.log.append(Evaluation(x.copy(), members or self.members, value, self.parts))
         return value
 
     def robust(self, x: np.ndarray, members: int | None = None) -> float:

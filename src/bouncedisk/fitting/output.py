@@ -223,6 +223,10 @@ def fit_dataset(fit: FitResult) -> xr.Dataset:
             "units": "rad/s", "long_name": "R_phi Phi0 / t_c (from the known Phi0)"})  # fmt: skip
     ds.attrs.update(base_attrs(f"bouncedisk fit to {path}"))
     ds.attrs.update(_global_attrs(fit, paths, not_identified))
+    if fit.load is not None:
+        from .load_output import load_dataset
+
+        ds = ds.merge(load_dataset(fit), combine_attrs="no_conflicts")
     check = residual_check(ds)
     ds.attrs.update(residual_outside_fraction=check["outside_fraction"],
                     residual_longest_run_s=check["longest_run_s"],
@@ -233,6 +237,7 @@ def fit_dataset(fit: FitResult) -> xr.Dataset:
 def _global_attrs(fit: FitResult, paths: list[str], not_identified: list[str]) -> dict:
     th = fit.physical
     sha = ", ".join(sha256_file(p) for p in paths)
+    n_stats = len(STATS) + (fit.load.n if fit.load is not None else 0)  # the joint fit's readings
     return {
         "run_id": new_run_id("fit", sha), "scene_name": "fit",
         "status": "completed", "e": th["e"], "omega_s": th["omega_s"], "r_phi": th["r_phi"],
@@ -251,9 +256,9 @@ def _global_attrs(fit: FitResult, paths: list[str], not_identified: list[str]) -
         "grouped within 5% of every search range; the estimate is the basin with the lowest chi2 "
         "(10 significant digits, ties to the smaller point); more than one basin: the data do not "
         "single one out",
-        "chi2": fit.chi2, "n_statistics": len(STATS),
-        "chi2_p_value": float(chi2_dist.sf(fit.chi2, len(STATS))),
-        "fit_adequate": int(adequate(fit.chi2, len(STATS))), "evaluations": fit.evaluations,
+        "chi2": fit.chi2, "n_statistics": n_stats,
+        "chi2_p_value": float(chi2_dist.sf(fit.chi2, n_stats)),
+        "fit_adequate": int(adequate(fit.chi2, n_stats)), "evaluations": fit.evaluations,
         "ensemble_members": fit.settings.members, "band_members": fit.settings.band_members,
         "e_sigma": fit.settings.e_sigma, "seed": fit.settings.seed,
         "n_bootstrap": fit.settings.bootstrap, "scan_points": fit.settings.scan,
@@ -302,6 +307,10 @@ def summary_text(ds: xr.Dataset) -> str:
         lines.append(f"  residual outside the 95% band: {100 * a['residual_outside_fraction']:.1f} % "
                      f"of the samples, longest run {a['residual_longest_run_s']:.3g} s"
                      + ("" if a.get("residual_within_band", 1) else "  <- systematic excursion"))  # fmt: skip
+    if "interval_low" in ds:
+        from .load_output import identifiability_lines
+
+        lines.extend(identifiability_lines(ds))
     if a.get("work_note", "none") != "none":
         lines.append(f"  note: {a['work_note']}")
     return "\n".join(lines)

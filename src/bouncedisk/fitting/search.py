@@ -35,7 +35,8 @@ from scipy.stats import qmc
 
 from .basins import rank_key
 from .basins import ranked as rank_order
-from .objective import Evaluation, Objective
+from .loadpart import LOAD_PILOT
+from .objective import Evaluation, Objective, snap
 from .statistics import regularized_cov, stat_floor
 
 #: Allowed sizes of the scan and of the zoom around each centre (``bouncedisk fit --scan/--zoom``,
@@ -214,9 +215,74 @@ def _scan(
 
 
 def measure_cov(obj: Objective, x: np.ndarray, members: int) -> np.ndarray:
-    """Regularized across-member covariance of the statistics at ``x`` (``members`` members)."""
+    """Regularized across-member covariance of the statistics at ``x`` (``members`` members).
+
+    With load curves the load part's covariance ``C_L`` is measured at ``x`` too (its
+    :data:`.loadpart.LOAD_PILOT` members) and held from now on.
+    """
     ens = obj.ensemble(x, members)
+    if obj.load is not None:
+        xs = snap(x)
+        obj.load.set_cov(obj.load.values(obj.theta(xs), xs, LOAD_PILOT))
     return regularized_cov(ens.cov, stat_floor(obj.target))
+
+
+def joint_candidates(
+    obj: Objective, ranked: list[Evaluation], s: SearchSettings
+) -> list[np.ndarray]:
+    """The scan points to refine: with load curves, every distinct scan point that reproduces
+    the run-ups (:func:`.uncertainty.scan_acceptable`), its ``R_φ`` moved to the load curve's
+    torque scale (:func:`load_matched`) and re-ranked by the joint ``χ²`` on the scan's ensemble
+    size — the run-ups leave a valley of points that reproduce them, the load curve picks along
+    it; without load curves, the best ``s.candidates`` distinct scan points."""
+    if obj.load is None:
+        return [ev.x for ev in _distinct(ranked, obj.span, s.candidates)]
+    from .uncertainty import scan_acceptable
+
+    ok = {tuple(x) for x in scan_acceptable(obj, s.global_members)}
+    pool = [ev.x for ev in _distinct([ev for ev in ranked if tuple(ev.x) in ok], obj.span, len(ok))]
+    pool = pool or [ev.x for ev in _distinct(ranked, obj.span, s.candidates)]
+    moved = obj.map(lambda x: load_matched(obj, x), pool)
+    scores = obj.map(lambda x: obj.chi2(x, s.global_members), moved)
+    return [moved[i] for i in rank_order(scores, moved)[: s.candidates]]
+
+
+def load_matched(obj: Objective, x: np.ndarray) -> np.ndarray:
+    """``x`` with ``log10 R_φ`` moved so the load curves' torque scale matches the data's.
+
+    MODEL.md's scaling: at fixed ``(e, ω_s, ψ)`` the speed in rad/s does not depend on ``R_φ``
+    (``x = R_φ Ω`` is what evolves, and ``R_φ Φ0 / t_c`` converts ``Ω``), while the torque scale
+    ``μ m_r g_eff r_eff`` is proportional to it; apart from the run-up transient inside the window,
+    a reading at torque ``T`` under ``s R_φ`` is the reading at ``T / s`` under ``R_φ``. One
+    member's readings at ``x`` (interpolated, extrapolated linearly) give every ``s``; the best on a
+    grid of ``s`` in ``[1/3, 3]`` is taken. For ranking candidates only: the likelihood itself is
+    always the exact one.
+    """
+    part, names = obj.load, obj.names
+    if "log10_r_phi" not in names:
+        return x
+    xs = snap(x)
+    v = part.mean(obj.theta(xs), xs, 1, obj.points_parallel)
+    sigma = np.sqrt(part.data_var())
+    best, best_loss = 1.0, np.inf
+    for s in np.exp(np.linspace(-np.log(3.0), np.log(3.0), 121)):
+        pred = np.concatenate([_extrapolated(t / s, t, v[sl]) for t, sl in part.slices()])
+        loss = float(np.sum(((pred - part.y) / sigma) ** 2))
+        if loss < best_loss:
+            best, best_loss = s, loss
+    out = xs.copy()
+    j = names.index("log10_r_phi")
+    out[j] = np.clip(out[j] + np.log10(best), obj.lo[j], obj.hi[j])
+    return snap(out)
+
+
+def _extrapolated(t_new: np.ndarray, t: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``v(t)`` at ``t_new``: linear between the samples, continued by the end segments."""
+    out = np.interp(t_new, t, v)
+    lo, hi = t_new < t[0], t_new > t[-1]
+    out[lo] = v[0] + (t_new[lo] - t[0]) * (v[1] - v[0]) / (t[1] - t[0])
+    out[hi] = v[-1] + (t_new[hi] - t[-1]) * (v[-1] - v[-2]) / (t[-1] - t[-2])
+    return out
 
 
 def local_stage(
@@ -252,22 +318,49 @@ def search(
     obj: Objective, s: SearchSettings, progress: Callable[[str], None] | None = None
 ) -> Evaluation:
     """The whole search (module docstring); returns the best logged point at ``s.members``."""
+    parts, obj.parts = obj.parts, "runup"  # the scan fits the run-ups (module docstring)
     ranked = global_stage(obj, s, progress)
+    obj.parts = parts
     obj.set_cov(measure_cov(obj, ranked[0].x, s.pilot_members))
     # one member per scan point is noisy where the model is chaotic: re-rank the best distinct
     # scan points on `members` members under the model's covariance, measured at the best of them
-    cands = [ev.x for ev in _distinct(ranked, obj.span, s.candidates)]
+    cands = joint_candidates(obj, ranked, s)
+    if obj.load is not None:
+        _say(progress, f"load curve read at the distinct scan points that reproduce the run-ups, "
+                       f"R_phi matched to its torque scale; the best {len(cands)} by the joint "
+                       "chi2 go on")  # fmt: skip
     scores = obj.map(lambda x: obj.chi2(x, s.members), cands)
     obj.set_cov(measure_cov(obj, cands[rank_order(scores, cands)[0]], s.pilot_members))
     scores = [obj.chi2(x, s.members) for x in cands]
     starts = [cands[i] for i in rank_order(scores, cands)[: s.starts]]
+    if obj.load is not None:
+        # the joint valley is narrow in (e, omega_s): one start per distinct (e, omega_s)
+        starts = _distinct_axial(obj, [cands[i] for i in rank_order(scores, cands)], JOINT_STARTS)
     _say(progress, f"pilot: model covariance from {s.pilot_members} members; {len(cands)} scan "
                    f"points re-ranked on {s.members} members, best chi2 {min(scores):.4g}")  # fmt: skip
     # the starts themselves, then each refined (never worse than the best start)
-    best = local_stage(obj, starts, s.members, s.local_nfev, progress)
+    # joint: more starts (distinct in (e, omega_s)), each refined half as long, then polished
+    nfev = s.local_nfev if obj.load is None else max(4, s.local_nfev // 2)
+    best = local_stage(obj, starts, s.members, nfev, progress)
     obj.set_cov(measure_cov(obj, best.x, s.pilot_members))
     best = local_stage(obj, [best.x], s.members, max(8, s.local_nfev // 3), progress)
     return best
+
+
+#: Local-search starts of a joint fit, distinct in ``(e, omega_s)`` (:func:`_distinct_axial`).
+JOINT_STARTS = 6
+
+
+def _distinct_axial(obj: Objective, ranked: list[np.ndarray], k: int) -> list[np.ndarray]:
+    """The best ``k`` points at least 3 % of the range apart in ``e`` or ``omega_s``."""
+    ax = [obj.names.index("e"), obj.names.index("omega_s")]
+    out: list[np.ndarray] = []
+    for x in ranked:
+        if all(np.max(np.abs(x[ax] - o[ax]) / obj.span[ax]) > 0.03 for o in out):
+            out.append(x)
+        if len(out) == k:
+            break
+    return out
 
 
 def _distinct(ranked: list[Evaluation], span: np.ndarray, k: int) -> list[Evaluation]:

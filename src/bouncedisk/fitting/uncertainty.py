@@ -25,6 +25,8 @@ from .objective import Objective, snap
 
 #: Δχ² of a 95 % profile interval (one parameter).
 THRESHOLD = float(chi2_dist.ppf(0.95, 1))
+#: Smallest first step of a profile, as a fraction of the search range (the local sd otherwise).
+MIN_STEP = 0.002
 
 
 @dataclass
@@ -124,14 +126,25 @@ def profile(
 ) -> Profile:  # fmt: skip
     """Profile likelihood of coordinate ``j`` about the estimate ``x0`` (module docstring)."""
     chi0 = obj.chi2(x0, members)
-    step = float(np.clip(sd if np.isfinite(sd) else np.inf, 0.01 * obj.span[j], 0.2 * obj.span[j]))
+    step = float(
+        np.clip(sd if np.isfinite(sd) else np.inf, MIN_STEP * obj.span[j], 0.2 * obj.span[j])
+    )
     lo = _side(obj, x0, j, -1.0, step, chi0, members, jac, max_steps, thr)
     hi = _side(obj, x0, j, +1.0, step, chi0, members, jac, max_steps, thr)
     pts = lo[::-1] + [(float(x0[j]), chi0, x0.copy())] + hi
     values = np.array([p[0] for p in pts])
     chis = np.array([p[1] for p in pts])
     points = np.array([p[2] for p in pts])
-    return Profile(obj.names[j], values, chis, points, *_interval(values, chis, obj, j, thr), thr)
+    low, high, open_low, open_high, identified = _interval(values, chis, obj, j, thr)
+    if np.isfinite(sd) and sd > 0:
+        # never narrower than the local quadratic's interval ±sqrt(thr)·sd: the members'
+        # Monte-Carlo noise makes a re-optimized profile point err upward only (a worse
+        # optimum found), which narrows the interval; the curvature smooths over it
+        half = float(np.sqrt(thr) * sd)
+        low = max(float(obj.lo[j]), min(low, float(x0[j]) - half))
+        high = min(float(obj.hi[j]), max(high, float(x0[j]) + half))
+    return Profile(obj.names[j], values, chis, points, low, high, open_low, open_high,
+                   identified, thr)  # fmt: skip
 
 
 def _interval(values, chis, obj, j, thr=THRESHOLD):
@@ -141,8 +154,10 @@ def _interval(values, chis, obj, j, thr=THRESHOLD):
     below = chis - base <= thr
 
     def crossing(k_in, k_out):
-        a, b = chis[k_in] - base, chis[k_out] - base
-        f = (thr - a) / (b - a) if b != a else 0.0
+        # linear in sqrt(Δχ²): exact for a quadratic profile, so a coarse step past the
+        # threshold does not shrink the interval (linear in Δχ² would, by up to sqrt(b/thr))
+        a, b = np.sqrt(max(chis[k_in] - base, 0.0)), np.sqrt(max(chis[k_out] - base, 0.0))
+        f = (np.sqrt(thr) - a) / (b - a) if b != a else 0.0
         return float(values[k_in] + f * (values[k_out] - values[k_in]))
 
     k = k0
@@ -247,13 +262,13 @@ def birge(chi2_min: float, n_stats: int, n_params: int) -> float:
 def scan_acceptable(obj: Objective, members: int) -> np.ndarray:
     """Scan points that reproduce the data's statistics within the data's own scales.
 
-    The scan's cheap evaluations (``members`` members, ``χ²`` under the provisional metric: the
+    The scan's cheap evaluations of the run-ups (``members`` members, ``χ²`` under the provisional metric: the
     data's block-bootstrap spread, at least a few % of each statistic) whose ``χ²`` is within the
     (``χ²/dof``-scaled) 95 % threshold of the scan's best, or below twice the 95 % point of
     ``χ²(n_stats)`` (one model realization against the data's: twice the variance). Distinct basins in this set mean the
     curve does not single out one of them.
     """
-    evs = [ev for ev in obj.log if ev.members == members]
+    evs = [ev for ev in obj.log if ev.members == members and ev.parts == "runup"]
     if not evs:
         return np.empty((0, len(obj.names)))
     chis = np.array([ev.chi2 for ev in evs])

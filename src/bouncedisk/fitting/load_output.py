@@ -1,0 +1,147 @@
+"""The joint fit's share of the fit file: measured and fitted load curves, identifiability.
+
+Added to the fit file (INTERFACES.md) when load curves were fitted (``bouncedisk fit … --load``):
+on the dimension ``reading`` (every reading of every load curve, curve by curve) the load torque
+``load_torque`` (N·m), ``load_speed_measured`` with its spread ``load_speed_sd`` and the standard
+deviation the likelihood gave it ``load_speed_sigma`` (:mod:`.loadpart`), the fitted model's
+``load_speed_fitted`` (ensemble mean) with the 95 % interval of that mean
+(``load_speed_fitted_low/high``) and its members' 2.5–97.5 % band (``load_speed_band_low/high``);
+and on ``(data_set, parameter)`` the 95 % interval of every search coordinate from the run-ups
+alone, the load curves alone and both (``interval_low``, ``interval_high``,
+``interval_identified``): which data pins which parameter.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from ..provenance import sha256_file
+from .core import FitResult
+from .loadpart import LOAD_BAND, LOAD_MEMBERS
+
+#: Data sets of the identifiability table, in order: (key of ``LoadFit.intervals``, label).
+DATA_SETS = (("runup", "run-ups"), ("load", "load curve"), ("both", "both"))
+#: Generating parameters a synthetic data set's sidecar states (the truth the figure marks).
+TRUTH_KEYS = ("e", "r_phi", "psi", "omega_s")
+
+
+def _readings(fit: FitResult) -> dict:
+    """Per-reading variables (module docstring)."""
+    lf = fit.load
+    torque = np.concatenate([d.torque for d in lf.curves])
+    sd = np.concatenate([d.speed_sd if d.speed_sd is not None else np.full(len(d.torque), np.nan)
+                         for d in lf.curves])  # fmt: skip
+    which = np.concatenate([np.full(len(d.torque), k) for k, d in enumerate(lf.curves)])
+    b = lf.band
+
+    def var(v, long_name):
+        return ("reading", np.asarray(v, float), {"units": "rad/s", "long_name": long_name})
+
+    return {
+        "load_torque": ("reading", torque, {"units": "N m", "long_name": "load torque"}),
+        "load_curve_index": ("reading", which.astype(np.int32), {"units": "1", "long_name":
+                             "which load curve the reading is from (order of --load)"}),
+        "load_speed_measured": var(np.concatenate([d.speed for d in lf.curves]),
+                                   "measured mean rotor speed over the window after a start from rest"),
+        "load_speed_sd": var(sd, "spread of repeated readings (the data's; nan: not given)"),
+        "load_speed_sigma": var(np.sqrt(lf.data_var), "standard deviation of the reading in the "
+                                "likelihood: max(spread, model members' sd) / sqrt(repeats)"),
+        "load_speed_fitted": var(b["mean"], "fitted model's ensemble mean of the reading"),
+        "load_speed_fitted_low": var(b["low"], "lower end of the 95% interval of that mean"),
+        "load_speed_fitted_high": var(b["high"], "upper end of the 95% interval of that mean"),
+        "load_speed_band_low": var(b["p025"], "2.5th percentile of the fitted model's members"),
+        "load_speed_band_high": var(b["p975"], "97.5th percentile of the fitted model's members"),
+    }  # fmt: skip
+
+
+def _intervals(fit: FitResult) -> dict:
+    """The identifiability table on ``(data_set, parameter)`` (search coordinates)."""
+    iv = fit.load.intervals
+    names = fit.names
+
+    def table(field):
+        rows = []
+        for key, _ in DATA_SETS:
+            prof = {p.name: p for p in iv[key]}
+            rows.append([getattr(prof[n], field) if n in prof else np.nan for n in names])
+        return np.array(rows, dtype=float)
+
+    dims = ("data_set", "parameter")
+    return {
+        "interval_low": (dims, table("ci_low"), {"units": "1", "long_name": "lower end of the "
+                         "95% interval of each search coordinate from each data set"}),
+        "interval_high": (dims, table("ci_high"), {"units": "1", "long_name": "upper end of the "
+                          "95% interval of each search coordinate from each data set"}),
+        "interval_identified": (dims, table("identified").astype(np.int8), {"units": "1",
+                                "long_name": "1: the profile is not flat over the search range"}),
+    }  # fmt: skip
+
+
+def truth(fit: FitResult) -> dict[str, float]:
+    """Generating parameters stated by a synthetic load curve's sidecar (empty otherwise)."""
+    for d in fit.load.curves:
+        gen = d.sidecar.get("generating_parameters") if d.synthetic else None
+        if isinstance(gen, dict) and all(k in gen for k in TRUTH_KEYS):
+            return {k: float(gen[k]) for k in TRUTH_KEYS}
+    return {}
+
+
+def load_dataset(fit: FitResult) -> xr.Dataset:
+    """The variables and attributes the joint fit adds to the fit file (module docstring)."""
+    lf = fit.load
+    n = len(lf.band["mean"])
+    ds = xr.Dataset(
+        {**_readings(fit), **_intervals(fit)},
+        coords={
+            "reading": ("reading", np.arange(n)),
+            "data_set": ("data_set", [label for _, label in DATA_SETS]),
+        },  # fmt: skip
+    )
+    ds.attrs.update(
+        load_curve_file=", ".join(d.path for d in lf.curves),
+        load_curve_sha256=", ".join(sha256_file(d.path) for d in lf.curves),
+        chi2_load=lf.chi2,
+        n_load_readings=lf.n,
+        load_window_s=", ".join(f"[{d.window_s[0]:g}, {d.window_s[1]:g}]" for d in lf.curves),
+        load_members=LOAD_MEMBERS,
+        load_band_members=LOAD_BAND,
+        identifiability="interval_*: 95% profile intervals of every search coordinate from the "
+        "run-ups alone, the load curves alone and both, on the same evaluations; the run-ups' "
+        "alone are widened to the scan's acceptable points, as a run-up fit's are",
+    )
+    for k, v in truth(fit).items():
+        ds.attrs[f"generating_{k}"] = v
+    return ds
+
+
+def identifiability_lines(ds: xr.Dataset) -> list[str]:
+    """The summary's lines for a joint fit: the load part's ``χ²`` and the identifiability
+    table (search coordinates; ``*``: the profile is flat, not identified)."""
+    a = ds.attrs
+    lines = [f"  load curve: chi2 {a['chi2_load']:.4g} on {a['n_load_readings']} readings "
+             f"({a['load_curve_file']})",
+             "  95% intervals by data set (search coordinates; * not identified):"]  # fmt: skip
+    names = [str(n) for n in ds["parameter"].values]
+    for j, name in enumerate(names):
+        cells = []
+        for k, label in enumerate(str(s) for s in ds["data_set"].values):
+            lo, hi = (float(ds[v].values[k, j]) for v in ("interval_low", "interval_high"))
+            flag = "" if ds["interval_identified"].values[k, j] else "*"
+            cells.append(f"{label} [{lo:.4g}, {hi:.4g}]{flag}")
+        truth = truth_coordinate(a, name)
+        lines.append(f"    {name:>12}: " + "; ".join(cells)
+                     + (f"  (generating {truth:.4g})" if truth is not None else ""))  # fmt: skip
+    return lines
+
+
+def truth_coordinate(attrs: dict, name: str) -> float | None:
+    """The generating value of search coordinate ``name`` from a fit file's ``generating_*``
+    attributes (``log10_r_phi`` from ``generating_r_phi``); ``None`` when not stated."""
+    import math
+
+    if name.startswith("log10_"):
+        v = attrs.get(f"generating_{name[6:]}")
+        return math.log10(v) if v is not None and v > 0 else None
+    v = attrs.get(f"generating_{name}")
+    return float(v) if v is not None else None

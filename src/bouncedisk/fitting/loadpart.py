@@ -1,0 +1,233 @@
+"""The load curve's share of the joint likelihood: readings from rest under each load.
+
+A measured load curve (:mod:`bouncedisk.loaddata`, INTERFACES.md) holds at every load torque
+``T_j`` (N·m) the mean rotor speed ``y_j`` (rad/s) over ``window_s = [t0, t1]`` after a start
+from rest under that load. At a parameter point ``θ = (e, ω_s, R_φ, ψ)`` the model predicts it
+exactly (MODEL.md "The motor under load", "Physical conversion"): with the drive ``(f, Φ0)`` and
+the rotor known, ``t_c = ω_s / (2π f)``, the speed scale ``R_φ Φ0 / t_c`` and the torque scale
+``μ m_r g_eff r_eff`` (:meth:`bouncedisk.params.PhysicalParameters.scales`) turn ``T_j`` into the
+nondimensional ``τ_L`` and the window into ``[t0, t1] / t_c``; member ``m`` runs the engine from
+rest in contact at ``t = 0`` under ``τ_L`` with restitution noise on its own stream and reads
+``∫Ω dt`` over the window (the kernel's exact integral, no sampling).
+
+The residual of the load part is ``μ(θ) − y`` with ``μ`` the mean of ``K`` members, whose
+covariance is the data's own spread plus the model's Monte-Carlo error:
+
+    Σ = D + C_L / K,   D_j = max(s_j², C_L,jj) / n_rep,
+
+``C_L`` the members' covariance across loads (common random numbers: member ``m`` uses the same
+noise stream at every load, so its readings are correlated), ``s_j`` the data's spread of
+repeated readings (``speed_sd_rad_s``) and ``n_rep`` the readings averaged per load (sidecar
+``repeats``, default 1: each row one reading). ``C_L`` is held at its value near the optimum, as
+the run-ups' ``C`` (:mod:`.objective`); the readings of different loads are independent runs in
+the lab, so ``D`` is diagonal. The joint ``χ²`` is the run-ups' plus this part's (independent
+experiments: block-diagonal covariance).
+"""
+
+from __future__ import annotations
+
+import math
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..engine import EngineConfig, InitialState
+from ..engine.driver import iterate
+from ..loaddata import LoadCurveData
+from ..params import Parameters, PhysicalParameters
+from . import detlinalg
+
+#: Members per evaluation of the load part (local search, profiles); the scan uses one.
+LOAD_MEMBERS = 4
+#: Members measuring the load part's covariance ``C_L`` (the pilot).
+LOAD_PILOT = 16
+#: Members of the fitted load curve's band.
+LOAD_BAND = 16
+#: Load members run on the streams ``(seed, LOAD_STREAM + m)``, apart from the run-ups' ``(seed, m)``.
+LOAD_STREAM = 1_000_000
+#: Resolution floor of a reading's standard deviation, as a fraction of the largest |speed|.
+LOAD_FLOOR = 1e-3
+#: Event budget of one reading (a start from rest to the window's end).
+MAX_EVENTS = 50_000_000
+
+
+@dataclass(frozen=True)
+class LoadItem:
+    """One reading to predict: its curve's constants and its load torque (N·m)."""
+
+    data: LoadCurveData
+    torque_nm: float
+
+
+def items_of(curves: list[LoadCurveData]) -> list[LoadItem]:
+    """Every reading of every load curve, curve by curve, in increasing torque."""
+    return [LoadItem(d, float(t)) for d in curves for t in d.torque]
+
+
+def motor_scales(theta: dict[str, float], data: LoadCurveData) -> tuple[float, float, float]:
+    """``(t_c [s], speed scale [rad/s], torque scale [N·m])`` of a parameter point for a motor
+    (MODEL.md "Physical conversion"; the torque scale ``μ m_r g_eff r_eff`` of "The motor under
+    load"), by :meth:`~bouncedisk.params.PhysicalParameters.from_nondimensional`."""
+    p = Parameters(e=theta["e"], omega_s=theta["omega_s"], r_phi=10.0 ** theta["log10_r_phi"],
+                   psi=theta["psi"])  # fmt: skip
+    r = data.rotor
+    phys = PhysicalParameters.from_nondimensional(
+        p, data.drive_frequency_hz, data.phi0_rad, r["m_r_kg"], r["r_g_m"], r["r_c_m"],
+        F_preload=data.preload_n,
+    )  # fmt: skip
+    sc = phys.scales()
+    return sc.t_c, sc.omega_scale, sc.torque
+
+
+def reading(
+    theta: dict[str, float], item: LoadItem, member: int, e_sigma: float, seed: int
+) -> float:
+    """One member's mean speed (rad/s) over the item's window after a start from rest under its
+    load (module docstring)."""
+    t_c, speed, torque = motor_scales(theta, item.data)
+    t0, t1 = (w / t_c for w in item.data.window_s)
+    cfg = EngineConfig(
+        e=theta["e"], omega_s=theta["omega_s"], r_phi=10.0 ** theta["log10_r_phi"],
+        psi=theta["psi"], contact=True, torsion=True, t_end=t1, max_events=MAX_EVENTS,
+        e_sigma=e_sigma, seed=seed, member=LOAD_STREAM + member, stats_from=t0,
+        load_torque=item.torque_nm / torque,
+    )  # fmt: skip
+    gen = iterate(cfg, InitialState(t=0.0, omega=0.0))
+    while True:
+        try:
+            next(gen)
+        except StopIteration as stop:
+            _, final = stop.value
+            break
+    return final["omega_integral"] / (t1 - t0) * speed
+
+
+@dataclass
+class LoadPart:
+    """The load curves' residuals at a parameter point (module docstring), with a cache.
+
+    Parameters
+    ----------
+    curves : list of LoadCurveData
+        The measured load curves (one or more, of the run-ups' motor).
+    e_sigma, seed : float, int
+        Restitution noise and seed of the members (the run-ups' ``EnsembleSpec``).
+    members : int
+        Members per evaluation ``K`` (the scan evaluates with one).
+    cores : int
+        Threads running the readings of one evaluation.
+    """
+
+    curves: list[LoadCurveData]
+    e_sigma: float
+    seed: int
+    members: int = LOAD_MEMBERS
+    cores: int = 1
+    cache: dict = field(default_factory=dict)
+    cov_model: np.ndarray | None = None
+    _white: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.items = items_of(self.curves)
+        self.y = np.concatenate([d.speed for d in self.curves])
+        sd = [d.speed_sd if d.speed_sd is not None else np.full(len(d.torque), np.nan)
+              for d in self.curves]  # fmt: skip
+        self.sd = np.concatenate(sd)
+        self.repeats = np.concatenate([np.full(len(d.torque), _repeats(d)) for d in self.curves])
+        self.floor = LOAD_FLOOR * max(float(np.max(np.abs(self.y))), 1e-12)
+
+    def slices(self) -> list[tuple[np.ndarray, slice]]:
+        """Every curve's torques (N·m) and where its readings sit in the flattened vectors."""
+        out, k = [], 0
+        for d in self.curves:
+            out.append((d.torque, slice(k, k + len(d.torque))))
+            k += len(d.torque)
+        return out
+
+    @property
+    def n(self) -> int:
+        """Readings fitted."""
+        return len(self.y)
+
+    def values(
+        self, theta: dict[str, float], x: np.ndarray, k: int, serial: bool = False
+    ) -> np.ndarray:
+        """Readings ``(k, n)`` of members ``0 … k−1`` at ``x`` (cached; a larger cached set is
+        reused, its first ``k`` members being the same streams)."""
+        key = tuple(x)
+        have = self.cache.get(key)
+        if have is None or len(have) < k:
+            start = 0 if have is None else len(have)
+            tasks = [(m, it) for m in range(start, k) for it in self.items]
+
+            def one(task):
+                return reading(theta, task[1], task[0], self.e_sigma, self.seed)
+
+            if serial or self.cores <= 1 or len(tasks) < 2:
+                flat = [one(t) for t in tasks]
+            else:
+                with ThreadPoolExecutor(max_workers=self.cores) as pool:
+                    flat = list(pool.map(one, tasks))
+            new = np.array(flat, float).reshape(k - start, self.n)
+            have = new if have is None else np.vstack([have, new])
+            self.cache[key] = have
+        return have[:k]
+
+    def set_cov(self, values: np.ndarray) -> None:
+        """Hold the members' covariance across loads at that of ``values`` ``(K, n)``,
+        shrunk toward its diagonal (as the run-ups', :func:`.statistics.regularized_cov`)."""
+        from .statistics import EnsembleStats, regularized_cov
+
+        ens = EnsembleStats.from_values(values)
+        self.cov_model = regularized_cov(ens.cov, np.full(self.n, self.floor))
+        self._white = {}
+
+    def data_var(self) -> np.ndarray:
+        """``D``: the data's variance of each reading (module docstring)."""
+        model = np.diag(self.cov_model) if self.cov_model is not None else np.zeros(self.n)
+        spread = np.where(np.isfinite(self.sd), self.sd**2, model)
+        return np.maximum(np.maximum(spread, model), self.floor**2) / self.repeats
+
+    def whitener(self, k: int) -> np.ndarray:
+        """``L⁻¹`` with ``L Lᵀ = D + C_L / k`` (BLAS-free, :mod:`.detlinalg`)."""
+        if k not in self._white:
+            c = self.cov_model if self.cov_model is not None else np.zeros((self.n, self.n))
+            sigma = np.diag(self.data_var()) + c / k
+            self._white[k] = detlinalg.lower_inverse(detlinalg.cholesky(sigma))
+        return self._white[k]
+
+    def mean(
+        self, theta: dict[str, float], x: np.ndarray, k: int, serial: bool = False
+    ) -> np.ndarray:
+        """Mean reading of ``k`` members, summed in member order (the same bits everywhere)."""
+        return np.add.reduce(self.values(theta, x, k, serial), axis=0) / k
+
+    def residuals(
+        self, theta: dict[str, float], x: np.ndarray, k: int, serial: bool = False
+    ) -> np.ndarray:
+        """Whitened residuals ``L⁻¹ (μ(θ) − y)``."""
+        return detlinalg.matvec(self.whitener(k), self.mean(theta, x, k, serial) - self.y)
+
+
+def _repeats(d: LoadCurveData) -> int:
+    """Readings averaged per load (sidecar ``repeats``; 1: each row one reading)."""
+    return int(d.sidecar.get("repeats", 1))
+
+
+def members_for(k: int) -> int:
+    """Load members for an evaluation of the run-ups with ``k`` members: one in the scan,
+    :data:`LOAD_MEMBERS` otherwise (never more than ``k``)."""
+    return max(1, min(k, LOAD_MEMBERS))
+
+
+def band(part: LoadPart, theta: dict[str, float], x: np.ndarray, members: int = LOAD_BAND) -> dict:
+    """The fitted model's load curve: mean of ``members`` members, the 95 % interval of the mean
+    (Student) and the members' 2.5–97.5 % band, at every measured load."""
+    from scipy.special import stdtrit
+
+    v = part.values(theta, x, members)
+    mean = np.add.reduce(v, axis=0) / members
+    half = stdtrit(members - 1, 0.975) * v.std(axis=0, ddof=1) / math.sqrt(members)
+    lo, hi = np.percentile(v, [2.5, 97.5], axis=0)
+    return {"mean": mean, "low": mean - half, "high": mean + half, "p025": lo, "p975": hi}

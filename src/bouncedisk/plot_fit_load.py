@@ -1,0 +1,119 @@
+"""Figures of a joint fit (run-ups and load curves, :mod:`bouncedisk.fitting.loadpart`): the
+measured load curve against the fitted model's band with the residuals (a companion of Fig. 5),
+and which data pins which parameter (the identifiability intervals)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import xarray as xr
+from matplotlib.figure import Figure
+
+#: Colours and labels of the data sets in the identifiability figure (file's ``data_set`` order).
+DATA_SET_STYLE = {"run-ups": "C0", "load curve": "C1", "both": "k"}
+#: Display of every search coordinate: (label, transform to the displayed value).
+COORDINATES = {
+    "e": ("e", lambda v: v),
+    "log10_r_phi": (r"$\log_{10} R_\varphi$", lambda v: v),
+    "psi": (r"$\psi$ [rad]", lambda v: v),
+    "omega_s": (r"$\omega_s$", lambda v: v),
+    "log10_speed_scale": ("log10 speed scale", lambda v: v),
+}
+
+
+def _need_load(fit: xr.Dataset, what: str) -> None:
+    if "load_speed_measured" not in fit:
+        raise ValueError(f"{what}: the fit file has no load curve (fit with --load)")
+
+
+def fig_fit_load(fit: xr.Dataset) -> Figure:
+    """The measured load curve and the jointly fitted model (companion of Fig. 5).
+
+    Top: every reading (mean speed over the window after a start from rest) with the error bar
+    the likelihood gave it, the fitted model's ensemble mean with the 95 % interval of that mean
+    (band) and its members' 2.5–97.5 % range (light band). Bottom: the residuals (measured minus
+    fitted mean) with the members' band about zero.
+    """
+    _need_load(fit, "fit_load")
+    fig = Figure(figsize=(6.4, 6.0), layout="constrained")
+    ax, rax = fig.subplots(2, 1, sharex=True, height_ratios=[2.2, 1.0])
+    t = fit["load_torque"].values * 1e3  # mN·m
+    order = np.argsort(t, kind="stable")
+    t = t[order]
+
+    def v(name):
+        return fit[name].values[order]
+
+    mean = v("load_speed_fitted")
+    ax.fill_between(t, v("load_speed_band_low"), v("load_speed_band_high"), color="C0", alpha=0.15,
+                    lw=0, label="fitted model: members' 95% range")  # fmt: skip
+    ax.fill_between(t, v("load_speed_fitted_low"), v("load_speed_fitted_high"), color="C0",
+                    alpha=0.45, lw=0, label="fitted model: 95% interval of the mean")  # fmt: skip
+    ax.plot(t, mean, color="C0", lw=1.2)
+    ax.errorbar(t, v("load_speed_measured"), yerr=v("load_speed_sigma"), fmt="o", ms=4, color="k",
+                capsize=2, label="measured (±1 sd in the likelihood)")  # fmt: skip
+    ax.axhline(0.0, color="0.6", lw=0.6)
+    ax.set_ylabel("mean speed [rad/s]")
+    ax.legend(fontsize=8, loc="upper right")
+    a = fit.attrs
+    ax.set_title(f"load curve: chi2 {a.get('chi2_load', math.nan):.3g} on "
+                 f"{a.get('n_load_readings', len(t))} readings (joint fit)", fontsize=9)  # fmt: skip
+    rax.fill_between(t, v("load_speed_band_low") - mean, v("load_speed_band_high") - mean,
+                     color="C0", alpha=0.15, lw=0)  # fmt: skip
+    rax.errorbar(t, v("load_speed_measured") - mean, yerr=v("load_speed_sigma"), fmt="o", ms=4,
+                 color="k", capsize=2)  # fmt: skip
+    rax.axhline(0.0, color="C0", lw=1.0)
+    rax.set_xlabel("load torque [mN·m]")
+    rax.set_ylabel("measured − fitted [rad/s]")
+    return fig
+
+
+def fig_fit_identifiability(fit: xr.Dataset) -> Figure:
+    """Which data pins which parameter: per search coordinate, its 95 % interval from the
+    run-ups alone, the load curves alone and both (bars over the search range), the estimate
+    (dot) and, for synthetic data, the generating value (dashed line). A hatched bar is a flat
+    profile: not identified by that data set.
+    """
+    _need_load(fit, "fit_identifiability")
+    from .fitting.load_output import truth_coordinate
+    from .fitting.model import BOUNDS
+
+    names = [str(n) for n in fit["parameter"].values]
+    sets = [str(s) for s in fit["data_set"].values]
+    fig = Figure(figsize=(6.4, 1.0 + 1.15 * len(names)), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(len(names), 1))
+    for j, (ax, name) in enumerate(zip(axes, names, strict=True)):
+        label, fn = COORDINATES.get(name, (name, lambda x: x))
+        lo_b, hi_b = BOUNDS[name]
+        for k, ds_name in enumerate(sets):
+            lo = fn(float(fit["interval_low"].values[k, j]))
+            hi = fn(float(fit["interval_high"].values[k, j]))
+            ok = bool(fit["interval_identified"].values[k, j])
+            y = len(sets) - 1 - k
+            ax.barh(y, hi - lo, left=lo, height=0.6, color=DATA_SET_STYLE.get(ds_name, "0.5"),
+                    alpha=0.8 if ok else 0.3, hatch=None if ok else "//", edgecolor="k", lw=0.5)  # fmt: skip
+        est = _estimate(fit, name)
+        if est is not None:
+            ax.plot(
+                [fn(est)] * len(sets), range(len(sets)), "o", color="w", mec="k", ms=4, zorder=3
+            )
+        truth = truth_coordinate(fit.attrs, name)
+        if truth is not None:
+            ax.axvline(fn(truth), color="C3", ls="--", lw=1.2, label="generating value")
+        ax.set_xlim(fn(lo_b), fn(hi_b))
+        ax.set_yticks(range(len(sets)), sets[::-1], fontsize=8)
+        ax.set_xlabel(label, labelpad=1)
+        if j == 0 and truth is not None:
+            ax.legend(fontsize=8, loc="upper right")
+    axes[0].set_title("95% intervals by data set (hatched: not identified); the search range "
+                      "is the axis", fontsize=9)  # fmt: skip
+    return fig
+
+
+def _estimate(fit: xr.Dataset, name: str) -> float | None:
+    """The fit's estimate of search coordinate ``name`` (from the public scalar variables)."""
+    if name.startswith("log10_"):
+        pub = name[6:]
+        return math.log10(float(fit[pub])) if pub in fit else None
+    return float(fit[name]) if name in fit else None

@@ -1,0 +1,297 @@
+"""The joint fit of run-ups and load curves (issue 20): the load part of the likelihood, the
+command's checks, the fit file and its figures, and recovery at three parameter sets."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from bouncedisk.cli import main
+from bouncedisk.curves import read_curve, write_curve
+from bouncedisk.engine import EngineConfig, InitialState
+from bouncedisk.ensemble import run_member
+from bouncedisk.fitting import FitSettings, fit_curve, fit_dataset, summary_text, synthesize_curve
+from bouncedisk.fitting import loadpart as lp
+from bouncedisk.fitting.model import BOUNDS
+from bouncedisk.loadcurve import synthetic_load_curve
+from bouncedisk.loaddata import read_load_curve
+
+F_HZ, PHI0, SPAN, DT, SIGMA = 15000.0, 3.0e-4, 0.06, 2.5e-5, 0.05
+ROTOR = {"m_r_kg": 0.01, "r_g_m": 0.004, "r_c_m": 0.002}
+PRELOAD = 0.77
+#: The recovery cases of tests/test_fitting.py, with the load range (fractions of the torque
+#: scale mu m_r g_eff r_eff) from no load to past stall: measured with 2 members, window
+#: [0.03, 0.06] s, the periodic and near-boundary rotors ride the stator up to ~0.95, the chaotic
+#: one stalls near 0.45.
+CASES = {
+    "periodic": ({"e": 0.31, "r_phi": 0.0041, "psi": 0.25, "omega_s": 1.37}, 1.05),
+    "chaotic_reinjection": ({"e": 0.62, "r_phi": 0.0027, "psi": -0.35, "omega_s": 1.48}, 0.6),
+    "near_boundary": ({"e": 0.33, "r_phi": 0.0052, "psi": 0.7, "omega_s": 1.40}, 1.05),
+}
+NAMES = ("e", "r_phi", "psi", "omega_s")
+
+
+def torque_scale(true: dict) -> float:
+    """``μ m_r g_eff r_eff`` of the test motor at ``true`` (N·m)."""
+    theta = {"e": true["e"], "log10_r_phi": math.log10(true["r_phi"]), "psi": true["psi"],
+             "omega_s": true["omega_s"]}  # fmt: skip
+    data = _fake_load_data()
+    return lp.motor_scales(theta, data)[2]
+
+
+def _fake_load_data(window=(0.03, 0.06)):
+    from bouncedisk.loaddata import LoadCurveData
+
+    return LoadCurveData(torque=np.array([0.0, 1e-4, 2e-4]), speed=np.zeros(3), speed_sd=None,
+                         drive_frequency_hz=F_HZ, phi0_rad=PHI0, rotor=ROTOR, preload_n=PRELOAD,
+                         window_s=window, synthetic=True, path="<test>")  # fmt: skip
+
+
+def make_data(
+    folder: Path, true: dict, top: float, loads: int = 10, seed: int = 3, repeats: int = 5
+):
+    """A synthetic run-up (one member plus noise) and load curve of the test motor."""
+    run = folder / "run.csv"
+    df = synthesize_curve(true, F_HZ, PHI0, SPAN, DT, SIGMA, seed, member=0)
+    write_curve(df, run, {"source": "test", "synthetic": True, "units": {"time": "s", "omega": "rad/s"},
+                          "motor": {"drive_frequency_hz": F_HZ, "Phi0_rad": PHI0}})  # fmt: skip
+    spec = {
+        "parameters": dict(true), "e_sigma": 0.03, "drive_frequency_hz": F_HZ, "Phi0_rad": PHI0,
+        "rotor": ROTOR, "preload_N": PRELOAD,
+        "load_curve": {"loads_Nm": list(np.linspace(0.0, top, loads) * torque_scale(true)),
+                       "repeats": repeats, "window_s": [0.03, 0.06], "seed": seed + 40},
+    }  # fmt: skip
+    ldf, side = synthetic_load_curve(spec)
+    load = folder / "load.csv"
+    write_curve(ldf, load, side)
+    return run, load
+
+
+# ------------------------------------------------------------------ the load part, exactly
+
+
+def test_torque_scale_is_the_closed_form():
+    """``μ m_r g_eff r_eff = R_φ m_r r_g² Φ0 / t_c²`` (MODEL.md eqs. 2, 15: g_eff cancels), the
+    speed scale ``R_φ Φ0 / t_c``, ``t_c = ω_s / 2πf``."""
+    theta = {"e": 0.4, "log10_r_phi": -2.3, "psi": 0.1, "omega_s": 1.9}
+    t_c, speed, torque = lp.motor_scales(theta, _fake_load_data())
+    r = 10**-2.3
+    assert t_c == pytest.approx(1.9 / (2 * math.pi * F_HZ), rel=1e-14)
+    assert speed == pytest.approx(r * PHI0 / t_c, rel=1e-14)
+    assert torque == pytest.approx(
+        r * ROTOR["m_r_kg"] * ROTOR["r_g_m"] ** 2 * PHI0 / t_c**2, rel=1e-12
+    )
+
+
+def test_a_reading_is_the_members_window_mean():
+    """:func:`loadpart.reading` is the ensemble reducer's mean speed over the window of the same
+    member under the same load, in rad/s (two routes through the engine)."""
+    theta = {"e": 0.55, "log10_r_phi": math.log10(0.002), "psi": 0.4, "omega_s": 1.7}
+    data = _fake_load_data((0.01, 0.02))
+    item = lp.LoadItem(data, 1.2e-4)
+    t_c, speed, torque = lp.motor_scales(theta, data)
+    got = lp.reading(theta, item, 3, 0.03, 17)
+    cfg = EngineConfig(e=0.55, omega_s=1.7, r_phi=0.002, psi=0.4, contact=True, torsion=True,
+                       t_end=0.02 / t_c, max_events=10**8, e_sigma=0.03, seed=17,
+                       load_torque=1.2e-4 / torque)  # fmt: skip
+    stats, _, _ = run_member(cfg, InitialState(t=0.0, omega=0.0), lp.LOAD_STREAM + 3, 0.01 / t_c)
+    assert got == pytest.approx(stats.mean_omega * speed, rel=1e-12)
+    # under a load past stall the rotor is driven backwards
+    assert lp.reading(theta, lp.LoadItem(data, 3.0 * torque), 0, 0.03, 17) < 0
+
+
+def test_load_residuals_are_the_whitened_difference(tmp_path):
+    """``L⁻¹(μ − y)`` with ``L Lᵀ = D + C_L/K`` (module docstring), against numpy's Cholesky; ``D``
+    uses the data's spread over sqrt(repeats), never below the members' spread."""
+    true, top = CASES["chaotic_reinjection"]
+    _, load = make_data(tmp_path, true, top, loads=4, repeats=5)
+    data = read_load_curve(load)
+    part = lp.LoadPart([data], 0.03, 5)
+    theta = {"e": true["e"], "log10_r_phi": math.log10(true["r_phi"]), "psi": true["psi"],
+             "omega_s": true["omega_s"]}  # fmt: skip
+    x = np.array([theta["e"], theta["log10_r_phi"], theta["psi"], theta["omega_s"]])
+    part.set_cov(part.values(theta, x, 8))
+    c = part.cov_model
+    d = np.maximum(np.maximum(data.speed_sd**2, np.diag(c)), part.floor**2) / 5
+    np.testing.assert_allclose(part.data_var(), d, rtol=1e-14)
+    sigma = np.diag(d) + c / 4
+    want = np.linalg.solve(np.linalg.cholesky(sigma), part.mean(theta, x, 4) - data.speed)
+    np.testing.assert_allclose(part.residuals(theta, x, 4), want, rtol=1e-10, atol=1e-12)
+    # the first k members of a larger cached set are the same streams
+    np.testing.assert_array_equal(part.values(theta, x, 3), part.values(theta, x, 8)[:3])
+
+
+# ------------------------------------------------------------------ the command's checks
+
+
+@pytest.fixture(scope="module")
+def data_dir(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("joint")
+    true, top = CASES["chaotic_reinjection"]
+    make_data(folder, true, top, loads=6)
+    return folder
+
+
+def _copy_load(src: Path, dst: Path, edit=None) -> Path:
+    import yaml
+
+    side = yaml.safe_load(src.with_suffix(".yaml").read_text())
+    if edit:
+        edit(side)
+    dst.write_text(src.read_text())
+    dst.with_suffix(".yaml").write_text(yaml.safe_dump(side))
+    return dst
+
+
+@pytest.mark.parametrize(
+    "edit,field",
+    [
+        (lambda s: s["motor"].update(drive_frequency_hz=20000.0), "motor.drive_frequency_hz"),
+        (lambda s: s["motor"].update(Phi0_rad=1e-4), "motor.Phi0_rad"),
+        (lambda s: s.update(repeats=0), "repeats"),
+        (lambda s: s.update(repeats="five"), "repeats"),
+        (lambda s: s["rotor"].pop("r_g_m"), "rotor.r_g_m"),
+    ],
+)
+def test_a_load_curve_that_disagrees_is_one_line_and_no_file(
+    data_dir, tmp_path, capsys, edit, field
+):
+    bad = _copy_load(data_dir / "load.csv", tmp_path / "bad.csv", edit)
+    out = tmp_path / "fit.nc"
+    code = main(
+        ["fit", str(data_dir / "run.csv"), "--load", str(bad), "-o", str(out), "--scan", "8"]
+    )
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and err[-1].startswith("bouncedisk: error: ") and field in err[-1], err
+    assert not out.exists()
+
+
+def test_load_curve_errors_before_work(data_dir, tmp_path, capsys):
+    out = tmp_path / "fit.nc"
+    cases = [
+        (["--load", str(tmp_path / "none.csv")], "file not found"),
+        (["--load", str(data_dir / "load.csv"), str(data_dir / "load.csv")], "same file"),
+        (["--load", str(data_dir / "run.csv")], "same file"),
+    ]
+    for extra, text in cases:
+        code = main(["fit", str(data_dir / "run.csv"), *extra, "-o", str(out)])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert code == 2 and text in err[-1], (extra, err)
+        assert not out.exists()
+    # the output may not overwrite a load curve (nor its sidecar)
+    target = _copy_load(data_dir / "load.csv", tmp_path / "l.csv")
+    for o in (target, target.with_suffix(".yaml")):
+        code = main(["fit", str(data_dir / "run.csv"), "--load", str(target), "-o", str(o)])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert code == 2 and "input file" in err[-1], err
+
+
+def test_run_ups_without_phi0_cannot_take_a_load_curve(data_dir, tmp_path, capsys):
+    import yaml
+
+    side = yaml.safe_load((data_dir / "run.yaml").read_text())
+    side["motor"].pop("Phi0_rad")
+    run = tmp_path / "run.csv"
+    run.write_text((data_dir / "run.csv").read_text())
+    run.with_suffix(".yaml").write_text(yaml.safe_dump(side))
+    code = main(["fit", str(run), "--load", str(data_dir / "load.csv"), "-o", str(tmp_path / "f.nc"),
+                 "--scan", "8", "--zoom", "0", "-q"])  # fmt: skip
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and "Phi0_rad" in err[-1] and not (tmp_path / "f.nc").exists()
+
+
+# ------------------------------------------------------------------ a small joint fit, whole
+
+TINY = FitSettings(seed=5, scan=16, zoom=4, zoom_centres=2, members=4, pilot_members=8,
+                   band_members=8, local_nfev=4, bootstrap=40, cores=2)  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def tiny_fit(data_dir):
+    curve = read_curve(data_dir / "run.csv")
+    load = read_load_curve(data_dir / "load.csv")
+    return fit_curve(curve, TINY, load=[load])
+
+
+def test_the_fit_file_holds_the_load_curves_and_the_identifiability_table(tiny_fit, tmp_path):
+    from bouncedisk.datasets import write_dataset
+
+    ds = fit_dataset(tiny_fit)
+    path = tmp_path / "fit.nc"
+    write_dataset(ds, path)
+    back = xr.open_dataset(path)
+    n = back.sizes["reading"]
+    assert n == 6 and back.attrs["n_load_readings"] == 6
+    assert back.attrs["n_statistics"] == 11 + 6  # the run-up's statistics and the readings
+    assert list(back["data_set"].values) == ["run-ups", "load curve", "both"]
+    assert back["interval_low"].shape == (3, 4)
+    np.testing.assert_array_less(back["load_speed_fitted_low"].values,
+                                 back["load_speed_fitted_high"].values)  # fmt: skip
+    lo, hi = back["interval_low"].values, back["interval_high"].values
+    assert np.all(lo <= hi)
+    # the joint intervals are the parameters' own (ci_low/ci_high), in search coordinates
+    for j, name in enumerate(back["parameter"].values):
+        pub = "r_phi" if name == "log10_r_phi" else str(name)
+        f = (lambda v: 10**v) if name == "log10_r_phi" else (lambda v: v)
+        assert f(lo[2, j]) == pytest.approx(back[pub].attrs["ci_low"], rel=1e-12)
+        assert f(hi[2, j]) == pytest.approx(back[pub].attrs["ci_high"], rel=1e-12)
+        assert BOUNDS[str(name)][0] <= lo[2, j] and hi[2, j] <= BOUNDS[str(name)][1]
+    # the generating parameters of the synthetic load curve are stated for the figure
+    assert back.attrs["generating_e"] == CASES["chaotic_reinjection"][0]["e"]
+    text = summary_text(back)
+    assert "load curve: chi2" in text and "95% intervals by data set" in text
+
+
+def test_joint_chi2_is_the_sum_of_the_parts(tiny_fit):
+    """Independent experiments: the joint ``χ²`` at the estimate is the run-ups' plus the load
+    curve's, and the load part's ``χ²`` is reported."""
+    lf = tiny_fit.load
+    assert lf.chi2 > 0 and lf.n == 6
+    assert tiny_fit.chi2 >= lf.chi2
+
+
+def test_joint_figures_draw(tiny_fit, tmp_path):
+    from bouncedisk.plotting import FIGURES
+
+    ds = fit_dataset(tiny_fit)
+    for name in ("fit_load", "fit_identifiability"):
+        fig = FIGURES[name].draw(ds)
+        assert len(fig.axes) >= 2
+        fig.savefig(tmp_path / f"{name}.png", dpi=50)
+        assert (tmp_path / f"{name}.png").stat().st_size > 5000
+
+
+def test_joint_figures_refuse_a_run_up_fit(tiny_fit):
+    from bouncedisk.plotting import FIGURES
+
+    ds = fit_dataset(tiny_fit).drop_vars(["load_speed_measured"])
+    with pytest.raises(ValueError, match="no load curve"):
+        FIGURES["fit_load"].draw(ds)
+
+
+# ------------------------------------------------------------------ recovery
+
+RECOVERY = FitSettings(seed=1, scan=64, zoom=8, zoom_centres=4, cores=2)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", list(CASES))
+def test_joint_recovery(tmp_path, case):
+    """Model-generated run-up and load curve at three parameter sets: every joint interval holds
+    the generating value; the widths by data set are printed (the issue's table)."""
+    true, top = CASES[case]
+    run, load = make_data(tmp_path, true, top, loads=10, seed=3)
+    fit = fit_curve(read_curve(run), RECOVERY, load=[read_load_curve(load)])
+    ds = fit_dataset(fit)
+    print(f"\nJOINT RECOVERY {case}: chi2 {ds.attrs['chi2']:.4g} on {ds.attrs['n_statistics']} "
+          f"(load {ds.attrs['chi2_load']:.4g}), wall {ds.attrs['wall_time_s']:.1f} s")  # fmt: skip
+    print("\n".join(summary_text(ds).splitlines()[-6:]))
+    names = [str(n) for n in ds["parameter"].values]
+    for j, name in enumerate(names):
+        t = math.log10(true["r_phi"]) if name == "log10_r_phi" else true[name]
+        lo, hi = ds["interval_low"].values[2, j], ds["interval_high"].values[2, j]
+        assert lo <= t <= hi, (name, t, lo, hi)
