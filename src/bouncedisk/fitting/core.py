@@ -21,7 +21,7 @@ from ..errors import InputError
 from ..loaddata import LoadCurveData
 from ..observables import first_order_trend
 from .basins import Basin, choose, list_basins
-from .joint import LoadFit, load_consistent, load_part, load_result
+from .joint import LoadFit, joint_consistent, load_part, load_result
 from .model import MODEL_E_SIGMA, EnsembleSpec, member_records, param_names, physical, uniform_grid
 from .objective import Objective
 from .runs import check_runs, mean_curve
@@ -302,14 +302,10 @@ def fit_curve(
         progress(f"scan: {len(extra)} points reproduce the data's statistics within its "
                  "bootstrap scales")  # fmt: skip
     if part is not None:
-        # judged under the joint metric on `members` members (logged: the profiles' widening
-        # sees them), not by one cheap run-up member
-        agree = load_consistent(obj, extra_runup, s.global_members)
-        obj.map(lambda x: obj.chi2(x, s.members), list(agree))
-        extra = None
+        extra = joint_consistent(obj, s.global_members)
         if progress is not None:
-            progress(f"scan: {len(agree)} of them agree with the load curve too; evaluated "
-                     f"on {s.members} members")  # fmt: skip
+            progress(f"scan: {len(extra)} of the joint candidates reproduce the run-ups and the "
+                     "load curve together (one member against the data)")  # fmt: skip
     profiles, jac, corr, sd = all_profiles(obj, best.x, s.members, s.profile and list(s.profile),
                                            progress, thr, extra)  # fmt: skip
     final = obj.best(s.members)  # a profile may have found a better point

@@ -54,33 +54,16 @@ def load_part(
     return LoadPart(curves, spec.e_sigma, spec.seed, cores=spec.cores)
 
 
-#: Scan points judged against the load curves when the joint fit widens its intervals.
-LOAD_CHECKED = 96
-
-
-def load_consistent(obj: Objective, points: np.ndarray, members: int) -> np.ndarray:
-    """Of the scan's acceptable points (by the run-ups, :func:`.uncertainty.scan_acceptable`),
-    those whose load curves agree too: one member per load against the data, ``χ²_L`` below the
-    95 % point of ``χ²(n_L)`` (the metric holds the data's and one member's variance). The best
-    :data:`LOAD_CHECKED` points at least 5 % of a range apart are read (each costs a run per load).
-    """
-    if not len(points):
-        return points
-    keep: list[np.ndarray] = []
-    for x in points:
-        if all(np.max(np.abs(x - k) / obj.span) > 0.05 for k in keep):
-            keep.append(x)
-        if len(keep) == LOAD_CHECKED:
-            break
-    parts, obj.parts = obj.parts, "load"
-    try:
-        chis = obj.map(lambda x: obj.chi2_now(x, members), keep)
-    finally:
-        obj.parts = parts
-    limit = float(_sps.chi2.ppf(0.95, obj.load.n))
-    return np.array([x for x, c in zip(keep, chis, strict=True) if c <= limit]).reshape(
-        -1, len(obj.names)
-    )
+def joint_consistent(obj: Objective, members: int) -> np.ndarray:
+    """The joint candidates (:func:`.search.joint_candidates`: scan points that reproduce the
+    run-ups, as they are and with ``R_φ`` moved to the load curve's torque scale) that reproduce
+    both data sets: ``χ²`` on ``members`` members (one realization against the data: twice the
+    variance) below twice the 95 % point of ``χ²(n)``, as :func:`.uncertainty.scan_acceptable`
+    judges the run-ups' scan. Every basin among them widens the joint intervals."""
+    limit = 2.0 * float(_sps.chi2.ppf(0.95, obj.n_stats))
+    pts = {tuple(ev.x): ev.x for ev in obj.log
+           if ev.members == members and ev.parts == "both" and ev.chi2 <= limit}  # fmt: skip
+    return np.array(list(pts.values())).reshape(-1, len(obj.names))
 
 
 def identifiability(

@@ -46,8 +46,10 @@ LOAD_PILOT = 16
 LOAD_BAND = 16
 #: Load members run on the streams ``(seed, LOAD_STREAM + m)``, apart from the run-ups' ``(seed, m)``.
 LOAD_STREAM = 1_000_000
-#: Resolution floor of a reading's standard deviation, as a fraction of the largest |speed|.
-LOAD_FLOOR = 1e-3
+#: Resolution floor of a reading's standard deviation, as a fraction of the largest |speed|: a
+#: periodic motor's readings repeat exactly (members and repeats identical), and a reading is not
+#: known better than a tachometer resolves it.
+LOAD_FLOOR = 1e-2
 #: Event budget of one reading (a start from rest to the window's end).
 MAX_EVENTS = 50_000_000
 

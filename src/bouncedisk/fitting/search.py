@@ -231,9 +231,9 @@ def joint_candidates(
     obj: Objective, ranked: list[Evaluation], s: SearchSettings
 ) -> list[np.ndarray]:
     """The scan points to refine: with load curves, every distinct scan point that reproduces
-    the run-ups (:func:`.uncertainty.scan_acceptable`), its ``R_φ`` moved to the load curve's
-    torque scale (:func:`load_matched`) and re-ranked by the joint ``χ²`` on the scan's ensemble
-    size — the run-ups leave a valley of points that reproduce them, the load curve picks along
+    the run-ups (:func:`.uncertainty.scan_acceptable`), as it is and with its ``R_φ`` moved to the
+    load curve's torque scale (:func:`load_matched`), re-ranked by the joint ``χ²`` on the scan's
+    ensemble size — the run-ups leave a valley of points that reproduce them, the load curve picks along
     it; without load curves, the best ``s.candidates`` distinct scan points."""
     if obj.load is None:
         return [ev.x for ev in _distinct(ranked, obj.span, s.candidates)]
@@ -242,9 +242,10 @@ def joint_candidates(
     ok = {tuple(x) for x in scan_acceptable(obj, s.global_members)}
     pool = [ev.x for ev in _distinct([ev for ev in ranked if tuple(ev.x) in ok], obj.span, len(ok))]
     pool = pool or [ev.x for ev in _distinct(ranked, obj.span, s.candidates)]
-    moved = obj.map(lambda x: load_matched(obj, x), pool)
-    scores = obj.map(lambda x: obj.chi2(x, s.global_members), moved)
-    return [moved[i] for i in rank_order(scores, moved)[: s.candidates]]
+    # each point as the run-ups matched it and with R_phi moved to the load curve's torque scale
+    pool = pool + obj.map(lambda x: load_matched(obj, x), pool)
+    scores = obj.map(lambda x: obj.chi2(x, s.global_members), pool)
+    return [pool[i] for i in rank_order(scores, pool)[: s.candidates]]
 
 
 def load_matched(obj: Objective, x: np.ndarray) -> np.ndarray:
