@@ -897,7 +897,10 @@ def test_item18_every_file_kind_is_cf_clean_and_carries_acdd(every_kind, monkeyp
         # a fit holds measured data and its time is in seconds: the file says so
         assert attrs["processing_level"].startswith("measured" if kind == "fit" else "model")
         assert ("time is in seconds" in attrs["comment"]) == (kind == "fit")
-        if kind in SECONDS:
+        if kind == "fit":  # the shipped curve: 0.12 s sampled every 20 µs
+            assert attrs["time_coverage_duration"] == "PT0.12S"
+            assert attrs["time_coverage_resolution"] == "PT0.00002S"
+        elif kind in SECONDS:
             assert attrs["time_coverage_duration"].startswith("PT"), attrs
             assert attrs["time_coverage_resolution"].startswith("PT"), attrs
         for name, var in nc.variables.items():

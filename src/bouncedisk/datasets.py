@@ -418,8 +418,10 @@ def _file_attrs(attrs: dict) -> None:
 
 
 def iso_seconds(x: float) -> str:
-    """An ISO 8601 duration of ``x`` seconds (``PT0.00002S``: positional, shortest repr)."""
-    return f"PT{np.format_float_positional(float(x), trim='-')}S"
+    """An ISO 8601 duration of ``x`` seconds to 10 significant digits (``PT0.00002S``: the
+    differences of sample times carry their round-off, 0.11999999999999511 for 0.12)."""
+    text = np.format_float_positional(float(x), precision=10, fractional=False, trim="-")
+    return f"PT{text}S"
 
 
 def time_coverage(duration_s: float, resolution_s: float) -> dict[str, str]:
