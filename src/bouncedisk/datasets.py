@@ -470,7 +470,8 @@ def labels_to_cf(ds: xr.Dataset) -> xr.Dataset:
     coordinate variable ``X(X)``: the dimension becomes ``X_index``, without a coordinate
     variable, and ``X(X_index)`` is a string-valued auxiliary coordinate (§6.1, "Labels") that
     the data variables name in ``coordinates``. xarray reads ``X`` back as a coordinate
-    (``ds.sel(X=...)`` works); :func:`labels_from_cf` also restores the dimension's name.
+    (``ds.set_xindex("X")`` makes it selectable); :func:`labels_from_cf` restores ``X`` as the
+    dimension and its index.
 
     Raises
     ------
