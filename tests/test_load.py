@@ -16,6 +16,7 @@ from hypothesis import strategies as st
 from scipy.integrate import quad, solve_ivp
 
 from bouncedisk.cli import main
+from bouncedisk.datasets import open_checked
 from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
 from bouncedisk.engine import laws as L
 from bouncedisk.engine.driver import audit_balances
@@ -358,7 +359,7 @@ def test_torque_speed_command_writes_a_curve_file(scene_file, tmp_path, capsys):
     assert main(args) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["loads"] == [0.0, 0.3, 0.9]
-    ds = xr.open_dataset(out)
+    ds = open_checked(out)  # the labels "branch" are a CF label on "branch_index" in the file
     assert ds.mean_omega.dims == ("branch", "load_torque")
     assert list(ds.branch.values) == ["up", "down"]
     assert np.allclose(ds.mean_omega.sel(branch="up").values, summary["mean_omega"])

@@ -250,6 +250,9 @@ class SimulationWriter:
         assert self._nc is not None
         attrs = {k: _attr_value(v) for k, v in attrs.items()}
         _file_attrs(attrs)
+        if self.t_c is not None and self.trajectory and self.n_traj >= 2:  # samples in seconds
+            t = self._nc["time_s"]
+            attrs.update(time_coverage(t[self.n_traj - 1] - t[0], t[1] - t[0]))
         self._nc.setncatts(attrs)
 
     def __exit__(self, exc_type, exc, tb) -> None:
@@ -280,7 +283,8 @@ def open_checked(
     """Open a netCDF file fully into memory, validating that it is readable and complete.
 
     With ``lazy`` the data stay on disk (memory stays flat whatever the file's size: a summary
-    of a 4 GB file reads its header only); the caller closes the Dataset.
+    of a 4 GB file reads its header only); the caller closes the Dataset. String labels stored
+    as CF labels are the index of their dimension again (:func:`labels_from_cf`).
 
     Raises
     ------
@@ -308,6 +312,10 @@ def open_checked(
         raise InputError(
             str(path), "", f"not a readable netCDF file (truncated or corrupt?): {reason}"
         ) from None
+    restored = labels_from_cf(ds)
+    if restored is not ds:  # closing the restored dataset closes the file (lazy)
+        restored.set_close(ds.close)
+        ds = restored
     for name in required:
         if name not in ds.variables:
             ds.close()
@@ -374,7 +382,8 @@ def cf_time_attrs(attrs: dict) -> None:
 
 def finalize(ds: xr.Dataset) -> xr.Dataset:
     """Give every variable ``units``, ``long_name`` (known names) and ACDD
-    ``coverage_content_type``, and the file ``id`` and ``history``, before writing."""
+    ``coverage_content_type``, and the file ``id``, dates, ``history`` and (time in seconds)
+    time coverage, before writing."""
     for name, var in ds.variables.items():
         if name in VARIABLES:
             long_name, units = VARIABLES[name]
@@ -388,24 +397,111 @@ def finalize(ds: xr.Dataset) -> xr.Dataset:
         cf_time_attrs(var.attrs)
     ds.attrs = {k: _attr_value(v) for k, v in ds.attrs.items()}
     _file_attrs(ds.attrs)
+    for key, value in _time_coverage_of(ds).items():
+        ds.attrs.setdefault(key, value)
     return ds
 
 
 def _file_attrs(attrs: dict) -> None:
-    """ACDD ``id`` (the run id, or a new one) and CF ``history`` (when the writer gave none)."""
+    """ACDD ``id`` (the run id, or a new one), the dates (now, for a file joined from parts
+    whose dates differ) and CF ``history`` (when the writer gave none)."""
     from . import __version__
-    from .provenance import utc_now
+    from .provenance import DATE_ATTRS, utc_now
 
     if "id" not in attrs:
         attrs["id"] = str(attrs.get("run_id") or f"bouncedisk-{uuid.uuid4().hex}")
+    now = utc_now()
+    for key in DATE_ATTRS:
+        attrs.setdefault(key, attrs.get("date_created", now))
     if not str(attrs.get("history", "")).strip():
-        when = attrs.get("date_created") or utc_now()
-        attrs["history"] = f"{when}: written by bouncedisk {__version__}"
+        attrs["history"] = f"{attrs['date_created']}: written by bouncedisk {__version__}"
+
+
+def iso_seconds(x: float) -> str:
+    """An ISO 8601 duration of ``x`` seconds to 10 significant digits (``PT0.00002S``: the
+    differences of sample times carry their round-off, 0.11999999999999511 for 0.12)."""
+    text = np.format_float_positional(float(x), precision=10, fractional=False, trim="-")
+    return f"PT{text}S"
+
+
+def time_coverage(duration_s: float, resolution_s: float) -> dict[str, str]:
+    """ACDD-1.3 ``time_coverage_duration`` and ``time_coverage_resolution`` of samples in
+    seconds (their span and spacing); the start and end are dates, which an elapsed time from
+    an undated start has not."""
+    return {
+        "time_coverage_duration": iso_seconds(duration_s),
+        "time_coverage_resolution": iso_seconds(resolution_s),
+    }
+
+
+#: Coordinates in seconds whose span is a file's time coverage (a fit's measured ``time``, a
+#: physical scene's ``time_s``), the first found.
+SECONDS_AXES = ("time", "time_s")
+
+
+def _time_coverage_of(ds: xr.Dataset) -> dict[str, str]:
+    """:func:`time_coverage` of the first of :data:`SECONDS_AXES` in seconds with two samples
+    or more (resolution: the median spacing); empty if there is none."""
+    for name in SECONDS_AXES:
+        if name in ds.variables and ds[name].attrs.get("units") == "s" and ds[name].ndim == 1:
+            t = ds[name].values.astype(float)
+            t = t[np.isfinite(t)]
+            if t.size >= 2:
+                return time_coverage(t.max() - t.min(), float(np.median(np.diff(t))))
+    return {}
+
+
+#: Suffix of the dimension of string labels in a file (``branch`` labels ``branch_index``).
+LABEL_DIM_SUFFIX = "_index"
+
+
+def _is_text(var: xr.Variable) -> bool:
+    """Whether a variable holds strings (numpy text, or objects that are all ``str``)."""
+    if var.dtype.kind in "US":
+        return True
+    return var.dtype.kind == "O" and all(isinstance(v, str) for v in np.ravel(var.values))
+
+
+def labels_to_cf(ds: xr.Dataset) -> xr.Dataset:
+    """Store string-valued dimension coordinates as CF labels, for writing.
+
+    CF-1.10 §1.3 defines a coordinate variable as numeric and monotonic, so the strings that
+    label a dimension ``X`` (a load curve's ``branch``, a fit's ``parameter``) cannot be the
+    coordinate variable ``X(X)``: the dimension becomes ``X_index``, without a coordinate
+    variable, and ``X(X_index)`` is a string-valued auxiliary coordinate (§6.1, "Labels") that
+    the data variables name in ``coordinates``. xarray reads ``X`` back as a coordinate
+    (``ds.set_xindex("X")`` makes it selectable); :func:`labels_from_cf` restores ``X`` as the
+    dimension and its index.
+
+    Raises
+    ------
+    ValueError
+        When the dataset already has a dimension of a label dimension's name.
+    """
+    names = [str(d) for d in ds.dims if d in ds.coords and _is_text(ds[d].variable)]
+    clash = [n + LABEL_DIM_SUFFIX for n in names if n + LABEL_DIM_SUFFIX in ds.dims]
+    if clash:
+        raise ValueError(f"cannot store string labels: dimensions {clash} already exist")
+    if not names:
+        return ds
+    return ds.drop_indexes(names).rename_dims({n: n + LABEL_DIM_SUFFIX for n in names})
+
+
+def labels_from_cf(ds: xr.Dataset) -> xr.Dataset:
+    """Labels stored by :func:`labels_to_cf` as ``X(X_index)``, back as the dimension ``X``
+    with its index (files written before have ``X(X)`` and are returned as they are)."""
+    for dim in [str(d) for d in ds.dims if str(d).endswith(LABEL_DIM_SUFFIX)]:
+        name = dim[: -len(LABEL_DIM_SUFFIX)]
+        if name in ds.variables and ds[name].dims == (dim,) and name not in ds.dims:
+            if _is_text(ds[name].variable):
+                ds = ds.set_coords(name).swap_dims({dim: name})
+    return ds
 
 
 def write_dataset(ds: xr.Dataset, path: str | Path) -> None:
-    """Write an xarray Dataset to netCDF (zlib-compressed numeric variables), atomically."""
-    ds = finalize(ds)
+    """Write an xarray Dataset to netCDF (zlib-compressed numeric variables), atomically;
+    string-valued dimension coordinates are stored as CF labels (:func:`labels_to_cf`)."""
+    ds = labels_to_cf(finalize(ds))
     enc = {}
     for name, var in ds.variables.items():
         if var.dtype.kind in "fiu" and var.ndim > 0:

@@ -128,9 +128,14 @@ METADATA_DEFAULTS = {
     "license": "MIT (the bouncedisk package's licence; metadata.license to change)",
     "acknowledgement": "none given (metadata.acknowledgement, BOUNCEDISK_ACKNOWLEDGEMENT)",
 }
-#: The controlled vocabulary of ``standard_name`` (only ``time`` is used); no version number, so
-#: that checkers use their own copy and never download one.
-STANDARD_NAME_VOCABULARY = "CF Standard Name Table (any version: only 'time' is used)"
+#: The controlled vocabulary of ``standard_name``: no variable has one (the table names no
+#: quantity of a bouncing rotor, and a nondimensional or undated time is not CF's ``time``); no
+#: version number, so that checkers use their own copy and never download one.
+STANDARD_NAME_VOCABULARY = (
+    "CF Standard Name Table (none used: no standard name fits these quantities)"
+)
+#: The dates of a file (``created`` of INTERFACES.md and ACDD-1.3's), all the time of writing.
+DATE_ATTRS = ("created", "date_created", "date_modified", "date_issued", "date_metadata_modified")
 
 
 def metadata() -> dict[str, str]:
@@ -148,14 +153,34 @@ def metadata() -> dict[str, str]:
     return out
 
 
-def base_attrs(title: str, summary: str | None = None) -> dict[str, str]:
-    """CF/ACDD global attributes shared by every file the package writes.
+#: ACDD ``processing_level`` and CF/ACDD ``comment`` of model output (the default) and of a
+#: file that holds measured data with the model fitted to it (a fit).
+PROCESSING = {
+    "model": (
+        "model output (simulated), not measured data",
+        "Quantities are nondimensional (units '1') unless their units say otherwise; "
+        "time is in units of t_c = sqrt(U0/g) (MODEL.md, 'Variables and scales').",
+    ),
+    "fit": (
+        "measured run-ups (omega_measured: their mean) and the model fitted to them (simulated)",
+        "Variables named *measured* are the measured data (coverage_content_type "
+        "physicalMeasurement), the others model results; time is in seconds from the start "
+        "of the measured run-up, the fitted parameters nondimensional (MODEL.md).",
+    ),
+}
+
+
+def base_attrs(title: str, summary: str | None = None, kind: str = "model") -> dict[str, str]:
+    """CF/ACDD global attributes shared by every file the package writes; ``kind`` (a key of
+    :data:`PROCESSING`) sets ``processing_level`` and ``comment``.
 
     ACDD-1.3's highly recommended and recommended attributes that mean something here: the
     creator, institution and publisher from :func:`metadata`, dates, ``naming_authority`` and
-    ``processing_level``; ``id`` and ``history`` are added when the file is written
-    (:func:`bouncedisk.datasets.finalize`). Geospatial and time coverage have no meaning for a
-    laboratory rotor in nondimensional time and are left out.
+    ``processing_level``; ``id``, ``history`` (and the dates, for a file joined from parts
+    written at different times) are added when the file is written
+    (:func:`bouncedisk.datasets.finalize`), and the time coverage's duration and resolution
+    when its time is in seconds. Geospatial coverage, and the start and end of the time
+    coverage (dates), have no meaning for a laboratory rotor in nondimensional or undated time.
     """
     now = utc_now()
     return {
@@ -172,17 +197,10 @@ def base_attrs(title: str, summary: str | None = None) -> dict[str, str]:
         "references": REFERENCES,
         "bouncedisk_version": __version__,
         "git_commit": git_commit(),
-        "created": now,
-        "date_created": now,
-        "date_modified": now,
-        "date_issued": now,
-        "date_metadata_modified": now,
-        "comment": (
-            "Quantities are nondimensional (units '1') unless their units say otherwise; "
-            "time is in units of t_c = sqrt(U0/g) (MODEL.md, 'Variables and scales')."
-        ),
+        **dict.fromkeys(DATE_ATTRS, now),
+        "comment": PROCESSING[kind][1],
         "naming_authority": NAMING_AUTHORITY,
-        "processing_level": "model output (simulated), not measured data",
+        "processing_level": PROCESSING[kind][0],
         "product_version": __version__,
         "standard_name_vocabulary": STANDARD_NAME_VOCABULARY,
         **metadata(),

@@ -221,7 +221,7 @@ def fit_dataset(fit: FitResult) -> xr.Dataset:
     if "speed_scale" not in ds:
         ds["speed_scale"] = xr.DataArray(fit.physical["speed_scale"], attrs={
             "units": "rad/s", "long_name": "R_phi Phi0 / t_c (from the known Phi0)"})  # fmt: skip
-    ds.attrs.update(base_attrs(f"bouncedisk fit to {path}"))
+    ds.attrs.update(base_attrs(f"bouncedisk fit to {path}", kind="fit"))
     ds.attrs.update(_global_attrs(fit, paths, not_identified))
     if fit.load is not None:
         from .load_output import load_dataset
