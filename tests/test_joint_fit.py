@@ -272,27 +272,3 @@ def test_joint_figures_refuse_a_run_up_fit(tiny_fit):
     ds = fit_dataset(tiny_fit).drop_vars(["load_speed_measured"])
     with pytest.raises(ValueError, match="no load curve"):
         FIGURES["fit_load"].draw(ds)
-
-
-# ------------------------------------------------------------------ recovery
-
-RECOVERY = FitSettings(seed=1, scan=64, zoom=8, zoom_centres=4, cores=2)
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("case", list(CASES))
-def test_joint_recovery(tmp_path, case):
-    """Model-generated run-up and load curve at three parameter sets: every joint interval holds
-    the generating value; the widths by data set are printed (the issue's table)."""
-    true, top = CASES[case]
-    run, load = make_data(tmp_path, true, top, loads=10, seed=3)
-    fit = fit_curve(read_curve(run), RECOVERY, load=[read_load_curve(load)])
-    ds = fit_dataset(fit)
-    print(f"\nJOINT RECOVERY {case}: chi2 {ds.attrs['chi2']:.4g} on {ds.attrs['n_statistics']} "
-          f"(load {ds.attrs['chi2_load']:.4g}), wall {ds.attrs['wall_time_s']:.1f} s")  # fmt: skip
-    print("\n".join(summary_text(ds).splitlines()[-6:]))
-    names = [str(n) for n in ds["parameter"].values]
-    for j, name in enumerate(names):
-        t = math.log10(true["r_phi"]) if name == "log10_r_phi" else true[name]
-        lo, hi = ds["interval_low"].values[2, j], ds["interval_high"].values[2, j]
-        assert lo <= t <= hi, (name, t, lo, hi)

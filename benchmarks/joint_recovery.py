@@ -1,0 +1,73 @@
+"""Recovery of the joint fit (issue 20) on model-generated data at the three parameter sets of
+``tests/test_fitting.py`` (periodic, near the period doubling, chaotic with chatter reinjection):
+for each, a synthetic run-up and load curve (``tests/test_joint_fit.py``'s ``make_data``), the
+joint fit, and its identifiability table against the generating values.
+
+Run:  python benchmarks/joint_recovery.py [--scan N] [--zoom N] [CASE ...]
+
+Prints, per case, the fit's summary lines and whether every joint interval holds the generating
+value, then one JSON line with the interval widths by data set. Not a test: a fit per case takes
+minutes, and the issue's criterion is not met yet (see the closing note of issue 20).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import json
+import math
+import tempfile
+from pathlib import Path
+
+from bouncedisk.curves import read_curve
+from bouncedisk.fitting import FitSettings, fit_curve, fit_dataset, summary_text
+from bouncedisk.loaddata import read_load_curve
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _cases_module():
+    spec = importlib.util.spec_from_file_location(
+        "joint_cases", ROOT / "tests" / "test_joint_fit.py"
+    )
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def recover(case: str, scan: int, zoom: int) -> dict:
+    """Fit one case; its intervals by data set and whether the joint ones hold the truth."""
+    cases = _cases_module()
+    true, top = cases.CASES[case]
+    with tempfile.TemporaryDirectory() as tmp:
+        run, load = cases.make_data(Path(tmp), true, top, loads=10, seed=3)
+        settings = FitSettings(seed=1, scan=scan, zoom=zoom, zoom_centres=4, cores=2)
+        ds = fit_dataset(fit_curve(read_curve(run), settings, load=[read_load_curve(load)]))
+    print(f"\n{case}: chi2 {ds.attrs['chi2']:.4g} on {ds.attrs['n_statistics']}, "
+          f"wall {ds.attrs['wall_time_s']:.1f} s")  # fmt: skip
+    print("\n".join(summary_text(ds).splitlines()[-6:]))
+    out = {"chi2": ds.attrs["chi2"], "widths": {}, "holds": {}}
+    for j, name in enumerate(str(n) for n in ds["parameter"].values):
+        t = math.log10(true["r_phi"]) if name == "log10_r_phi" else true[name]
+        lo, hi = ds["interval_low"].values[:, j], ds["interval_high"].values[:, j]
+        out["widths"][name] = dict(
+            zip(("run-ups", "load", "both"), (hi - lo).round(4).tolist(), strict=True)
+        )
+        out["holds"][name] = bool(lo[2] <= t <= hi[2])
+    print(f"every joint interval holds the generating value: {all(out['holds'].values())}")
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument(
+        "cases", nargs="*", default=["periodic", "near_boundary", "chaotic_reinjection"]
+    )
+    ap.add_argument("--scan", type=int, default=64)
+    ap.add_argument("--zoom", type=int, default=8)
+    args = ap.parse_args()
+    print(json.dumps({c: recover(c, args.scan, args.zoom) for c in args.cases}))
+
+
+if __name__ == "__main__":
+    main()
