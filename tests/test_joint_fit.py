@@ -241,8 +241,16 @@ def test_the_fit_file_holds_the_load_curves_and_the_identifiability_table(tiny_f
         assert f(lo[2, j]) == pytest.approx(back[pub].attrs["ci_low"], rel=1e-12)
         assert f(hi[2, j]) == pytest.approx(back[pub].attrs["ci_high"], rel=1e-12)
         assert BOUNDS[str(name)][0] <= lo[2, j] and hi[2, j] <= BOUNDS[str(name)][1]
-    # the generating parameters of the synthetic load curve are stated for the figure
-    assert back.attrs["generating_e"] == CASES["chaotic_reinjection"][0]["e"]
+    # the generating parameters of the synthetic load curve are stated for the figure, in
+    # search coordinates beside the search range
+    true = CASES["chaotic_reinjection"][0]
+    assert back.attrs["generating_e"] == true["e"]
+    gen = dict(zip(back["parameter"].values, back["generating_value"].values, strict=True))
+    assert gen["log10_r_phi"] == pytest.approx(math.log10(true["r_phi"]), rel=1e-15)
+    assert gen["omega_s"] == true["omega_s"] and gen["psi"] == true["psi"]
+    assert [back["search_low"].values[j] for j in range(4)] == [
+        BOUNDS[str(n)][0] for n in back["parameter"].values
+    ]
     text = summary_text(back)
     assert "load curve: chi2" in text and "95% intervals by data set" in text
 

@@ -432,7 +432,9 @@ def _fit_checks(src: _Source) -> list[CheckResult]:
     path = src.results / FIT_FILE
     if not path.is_file():
         raise InputError(str(path), "", "missing: the results folder lacks the prototype's fit")
-    ds = open_checked(path, required=("load_speed_measured", "interval_low"), what="fit")
+    ds = open_checked(
+        path, required=("load_speed_measured", "interval_low", "search_low"), what="fit"
+    )
     y = ds["load_speed_measured"].values
     inside = (y >= ds["load_speed_band_low"].values) & (y <= ds["load_speed_band_high"].values)
     frac = float(np.mean(inside))
@@ -441,9 +443,8 @@ def _fit_checks(src: _Source) -> list[CheckResult]:
     ids = ds["interval_identified"].values[both]
     names = [str(n) for n in ds["parameter"].values]
     lo, hi = ds["interval_low"].values[both], ds["interval_high"].values[both]
-    from .fitting.model import BOUNDS
-
-    inner = [bool(BOUNDS[n][0] < lo[j] and hi[j] < BOUNDS[n][1]) for j, n in enumerate(names)]
+    s_lo, s_hi = ds["search_low"].values, ds["search_high"].values
+    inner = [bool(s_lo[j] < lo[j] and hi[j] < s_hi[j]) for j in range(len(names))]
     return [
         CheckResult(
             "the model fitted to the run-up and the load curve together reproduces the load "

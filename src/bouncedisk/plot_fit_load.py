@@ -76,16 +76,13 @@ def fig_fit_identifiability(fit: xr.Dataset) -> Figure:
     profile: not identified by that data set.
     """
     _need_load(fit, "fit_identifiability")
-    from .fitting.load_output import truth_coordinate
-    from .fitting.model import BOUNDS
-
     names = [str(n) for n in fit["parameter"].values]
     sets = [str(s) for s in fit["data_set"].values]
     fig = Figure(figsize=(6.4, 1.0 + 1.15 * len(names)), layout="constrained")
     axes = np.atleast_1d(fig.subplots(len(names), 1))
     for j, (ax, name) in enumerate(zip(axes, names, strict=True)):
         label, fn = COORDINATES.get(name, (name, lambda x: x))
-        lo_b, hi_b = BOUNDS[name]
+        lo_b, hi_b = float(fit["search_low"].values[j]), float(fit["search_high"].values[j])
         for k, ds_name in enumerate(sets):
             lo = fn(float(fit["interval_low"].values[k, j]))
             hi = fn(float(fit["interval_high"].values[k, j]))
@@ -98,13 +95,13 @@ def fig_fit_identifiability(fit: xr.Dataset) -> Figure:
             ax.plot(
                 [fn(est)] * len(sets), range(len(sets)), "o", color="w", mec="k", ms=4, zorder=3
             )
-        truth = truth_coordinate(fit.attrs, name)
-        if truth is not None:
+        truth = float(fit["generating_value"].values[j])
+        if math.isfinite(truth):
             ax.axvline(fn(truth), color="C3", ls="--", lw=1.2, label="generating value")
         ax.set_xlim(fn(lo_b), fn(hi_b))
         ax.set_yticks(range(len(sets)), sets[::-1], fontsize=8)
         ax.set_xlabel(label, labelpad=1)
-        if j == 0 and truth is not None:
+        if j == 0 and math.isfinite(truth):
             ax.legend(fontsize=8, loc="upper right")
     axes[0].set_title("95% intervals by data set (hatched: not identified); the search range "
                       "is the axis", fontsize=9)  # fmt: skip

@@ -13,12 +13,15 @@ alone, the load curves alone and both (``interval_low``, ``interval_high``,
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import xarray as xr
 
 from ..provenance import sha256_file
 from .core import FitResult
 from .loadpart import LOAD_BAND, LOAD_MEMBERS
+from .model import BOUNDS
 
 #: Data sets of the identifiability table, in order: (key of ``LoadFit.intervals``, label).
 DATA_SETS = (("runup", "run-ups"), ("load", "load curve"), ("both", "both"))
@@ -68,7 +71,16 @@ def _intervals(fit: FitResult) -> dict:
         return np.array(rows, dtype=float)
 
     dims = ("data_set", "parameter")
+    gen = truth(fit)
+    truth_x = [truth_coordinate({f"generating_{k}": v for k, v in gen.items()}, n) for n in names]
     return {
+        "search_low": ("parameter", np.array([BOUNDS[n][0] for n in names]), {"units": "1",
+                       "long_name": "lower end of the search range of each search coordinate"}),
+        "search_high": ("parameter", np.array([BOUNDS[n][1] for n in names]), {"units": "1",
+                        "long_name": "upper end of the search range of each search coordinate"}),
+        "generating_value": ("parameter", np.array([np.nan if v is None else v for v in truth_x]),
+                             {"units": "1", "long_name": "generating value of each search "
+                              "coordinate stated by synthetic data (nan: not stated)"}),
         "interval_low": (dims, table("ci_low"), {"units": "1", "long_name": "lower end of the "
                          "95% interval of each search coordinate from each data set"}),
         "interval_high": (dims, table("ci_high"), {"units": "1", "long_name": "upper end of the "
@@ -129,17 +141,15 @@ def identifiability_lines(ds: xr.Dataset) -> list[str]:
             lo, hi = (float(ds[v].values[k, j]) for v in ("interval_low", "interval_high"))
             flag = "" if ds["interval_identified"].values[k, j] else "*"
             cells.append(f"{label} [{lo:.4g}, {hi:.4g}]{flag}")
-        truth = truth_coordinate(a, name)
+        truth = float(ds["generating_value"].values[j]) if "generating_value" in ds else math.nan
         lines.append(f"    {name:>12}: " + "; ".join(cells)
-                     + (f"  (generating {truth:.4g})" if truth is not None else ""))  # fmt: skip
+                     + (f"  (generating {truth:.4g})" if math.isfinite(truth) else ""))  # fmt: skip
     return lines
 
 
 def truth_coordinate(attrs: dict, name: str) -> float | None:
     """The generating value of search coordinate ``name`` from a fit file's ``generating_*``
     attributes (``log10_r_phi`` from ``generating_r_phi``); ``None`` when not stated."""
-    import math
-
     if name.startswith("log10_"):
         v = attrs.get(f"generating_{name[6:]}")
         return math.log10(v) if v is not None and v > 0 else None
