@@ -328,7 +328,8 @@ def fit_curve(
     td = first_order_trend(layout.t[::step], records.mean(axis=0)[::step])
     load_fit = None
     if part is not None:
-        load_fit = load_result(obj, final.x, s, profiles, extra_runup, progress)
+        which = s.profile and list(s.profile)
+        load_fit = load_result(obj, final.x, s.members, which, profiles, extra_runup, progress)
     return FitResult(
         names=obj.names, x=final.x, chi2=final.chi2, profiles=profiles, correlation=corr,
         local_sd=sd, comb_sd=comb_sd, comb_vectors=comb_vec, target=target,

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import stats as _sps
@@ -21,9 +20,6 @@ from .loadpart import band as load_band
 from .model import EnsembleSpec
 from .objective import Objective, snap
 from .uncertainty import Profile, all_profiles, birge
-
-if TYPE_CHECKING:
-    from .core import FitSettings
 
 
 @dataclass
@@ -67,7 +63,7 @@ def joint_consistent(obj: Objective, members: int) -> np.ndarray:
 
 
 def identifiability(
-    obj: Objective, x: np.ndarray, s: FitSettings, extra_runup: np.ndarray
+    obj: Objective, x: np.ndarray, members: int, which: list[str] | None, extra_runup: np.ndarray
 ) -> dict[str, list[Profile]]:
     """The 95 % interval of every coordinate from the run-ups alone and from the load curves
     alone: profiles of each part's ``χ²`` about the joint estimate ``x``, on the same cached
@@ -78,22 +74,21 @@ def identifiability(
     try:
         for part, extra in (("runup", extra_runup), ("load", None)):
             obj.parts = part
-            thr = birge(obj.best(s.members).chi2, obj.n_stats, len(obj.names))
-            which = s.profile and list(s.profile)
-            out[part] = all_profiles(obj, x, s.members, which, None, thr, extra)[0]
+            thr = birge(obj.best(members).chi2, obj.n_stats, len(obj.names))
+            out[part] = all_profiles(obj, x, members, which, None, thr, extra)[0]
     finally:
         obj.parts = saved
     return out
 
 
 def load_result(
-    obj: Objective, x: np.ndarray, s: FitSettings, profiles: list[Profile],
-    extra_runup: np.ndarray, progress: Callable[[str], None] | None,
+    obj: Objective, x: np.ndarray, members: int, which: list[str] | None,
+    profiles: list[Profile], extra_runup: np.ndarray, progress: Callable[[str], None] | None,
 ) -> LoadFit:  # fmt: skip
     """The joint fit's load part: identifiability intervals, the fitted load curve's band and
     the load part's ``χ²`` at the estimate."""
     part = obj.load
-    intervals = identifiability(obj, x, s, extra_runup)
+    intervals = identifiability(obj, x, members, which, extra_runup)
     intervals["both"] = profiles
     if progress is not None:
         for j, name in enumerate(p.name for p in profiles):
@@ -104,7 +99,7 @@ def load_result(
     theta = obj.theta(xs)
     saved, obj.parts = obj.parts, "load"
     try:
-        chi2_load = obj.chi2_now(xs, s.members)
+        chi2_load = obj.chi2_now(xs, members)
     finally:
         obj.parts = saved
     return LoadFit(curves=part.curves, band=load_band(part, theta, xs), chi2=chi2_load, n=part.n,
