@@ -426,12 +426,16 @@ FIT_IN_BAND = 0.8
 def _fit_checks(src: _Source) -> list[CheckResult]:
     """The joint fit (issue 20): the model fitted to the run-up and the load curve together
     reproduces the load curve and pins every parameter. Read from the pipeline's fit file; a run
-    without ``--results`` has no fit to read (a fit takes minutes) and skips it."""
+    without ``--results`` has no fit to read (a fit takes minutes), and a run-up-only fit no load
+    curve: both skip it."""
     if src.results is None:
         return []
     path = src.results / FIT_FILE
     if not path.is_file():
         raise InputError(str(path), "", "missing: the results folder lacks the prototype's fit")
+    ds = open_checked(path, required=("omega_measured",), what="fit")
+    if "load_speed_measured" not in ds:
+        return []  # a run-up-only fit (the config names no load curve): nothing of issue 20
     ds = open_checked(
         path, required=("load_speed_measured", "interval_low", "search_low"), what="fit"
     )

@@ -30,9 +30,20 @@ def _read_figure_table():
     return table
 
 
+def _config_has(dotted):
+    """Whether the pipeline config sets the dotted key (a figure's ``needs``)."""
+    node = config
+    for key in dotted.split("."):
+        if not isinstance(node, dict) or node.get(key) in (None, ""):
+            return False
+        node = node[key]
+    return True
+
+
 FIGURE_TABLE = _read_figure_table()
-# what rule `all` draws (results/figures/<name>.pdf and .png), in the table's order
-FIGURES = list(FIGURE_TABLE)
+# what rule `all` draws (results/figures/<name>.pdf and .png), in the table's order; a figure
+# that needs a config key (e.g. the joint fit's, prototype.load_curve) only when it is set
+FIGURES = [n for n, e in FIGURE_TABLE.items() if "needs" not in e or _config_has(e["needs"])]
 # the fields of the table's path templates; those in _LIST_FIELDS give one file per value
 _FIELDS = {"results": RES, "curve": config["prototype"]["curve"]}
 _LIST_FIELDS = {"poincare": list(config["poincare"])}

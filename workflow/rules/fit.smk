@@ -22,13 +22,17 @@ rule synthetic_curve:
         "../scripts/make_synthetic_curve.py"
 
 
+# the prototype's load curve (optional): fitted jointly with the run-up when the config names it
+LOAD_CURVE = config["prototype"].get("load_curve")
+LOAD_INPUTS = [LOAD_CURVE, str(Path(LOAD_CURVE).with_suffix(".yaml"))] if LOAD_CURVE else []
+
+
 rule fit_prototype:
-    """Fit the model to the prototype's run-up and load curve jointly: results/fit/prototype.nc."""
+    """Fit the model to the prototype's run-up (and load curve, jointly): results/fit/prototype.nc."""
     input:
         code=CODE,
         curve=config["prototype"]["curve"],
-        load=config["prototype"]["load_curve"],
-        load_sidecar=str(Path(config["prototype"]["load_curve"]).with_suffix(".yaml")),
+        load=LOAD_INPUTS,
         compiled=rules.compile_engine.output,
     output:
         f"{RES}/fit/prototype.nc",

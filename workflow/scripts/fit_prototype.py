@@ -15,8 +15,9 @@ with log_to(snakemake.log[0]) as log:
         **snakemake.params.search,  # scan, zoom: the fit's defaults unless the config sets them
         cores=snakemake.threads,
     )
-    load = read_load_curve(snakemake.input.load)
-    fit = fit_curve(curve, settings, progress=log.info, load=[load])
+    # the load curve and its sidecar when the config names one (a joint fit), else none
+    loads = [read_load_curve(p) for p in snakemake.input.load if p.endswith(".csv")]
+    fit = fit_curve(curve, settings, progress=log.info, load=loads)
     ds = fit_dataset(fit)
     write_dataset(ds, snakemake.output[0])
     log.info("\n%s", summary_text(ds))
