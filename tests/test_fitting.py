@@ -203,6 +203,7 @@ def tiny_fit(periodic_csv):
     return fit_curve(read_curve(periodic_csv), TINY)
 
 
+@pytest.mark.xdist_group("tiny_fit")  # one worker fits, not both
 def test_fit_file_has_the_interface(tiny_fit):
     ds = fit_dataset(tiny_fit)
     for name in ("omega_measured", "omega_fitted", "omega_fitted_low", "omega_fitted_high"):
@@ -221,6 +222,8 @@ def test_fit_file_has_the_interface(tiny_fit):
     assert {"steady_speed_rad_s", "time_constant_s"} <= set(ds.attrs)
 
 
+@pytest.mark.slow  # a second fit
+@pytest.mark.xdist_group("tiny_fit")
 def test_fit_is_deterministic_and_never_worse_than_evaluated(periodic_csv, tiny_fit):
     a = tiny_fit
     b = fit_curve(read_curve(periodic_csv), TINY)
@@ -374,6 +377,7 @@ def test_residual_band_of_a_mean_narrows_by_sqrt_m():
     np.testing.assert_allclose(hi1, np.hypot(2.0, 1.96 * 0.3))
 
 
+@pytest.mark.slow  # a joint fit
 def test_fit_of_two_runs_keeps_each_run(tmp_path, monkeypatch):
     import bouncedisk.fitting.core as core
 
