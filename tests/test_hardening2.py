@@ -412,6 +412,7 @@ def stalling_server():
     srv.close()
 
 
+@pytest.mark.slow  # waits out the store's time-outs
 def test_item14_runs_on_a_stalled_server_times_out_in_one_line(stalling_server):
     env = {**ENV, "MLFLOW_HTTP_REQUEST_TIMEOUT": "2"}
     r = subprocess.run(
@@ -427,6 +428,7 @@ def test_item14_runs_on_a_stalled_server_times_out_in_one_line(stalling_server):
     assert stalling_server.stalled >= 1
 
 
+@pytest.mark.slow  # waits out the store's time-outs
 def test_item14_simulate_track_on_a_stalled_server_keeps_and_names_the_output(
     stalling_server, tmp_path
 ):
@@ -446,6 +448,7 @@ def test_item14_simulate_track_on_a_stalled_server_keeps_and_names_the_output(
     assert out.is_file()
 
 
+@pytest.mark.slow  # waits out the store's time-outs
 def test_item14_interrupt_while_recording_says_the_output_was_kept(stalling_server, tmp_path):
     out = tmp_path / "x.nc"
     argv = ["simulate", _scene(tmp_path), "-o", str(out), "-q", "--track"]
@@ -545,6 +548,8 @@ def tracked_store(tmp_path_factory):
     ["DROP TABLE latest_metrics", "ALTER TABLE runs RENAME COLUMN lifecycle_stage TO lc"],
 )
 @pytest.mark.parametrize("command", ["runs", "simulate"])
+@pytest.mark.xdist_group("tracked_store")  # one worker builds the store, not both
+@pytest.mark.slow  # five subprocesses importing MLflow
 def test_item16_damaged_store_is_one_line(tracked_store, tmp_path, damage, command):
     import shutil
     import sqlite3
@@ -878,6 +883,7 @@ SECONDS = {"fit", "simulation_physical"}
 
 
 @pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.xdist_group("every_kind")  # one worker writes the files, not both
 def test_item18_every_file_kind_is_cf_clean_and_carries_acdd(every_kind, monkeypatch, kind):
     pytest.importorskip("compliance_checker")
     tries = _no_network(monkeypatch)

@@ -48,6 +48,7 @@ def _wait_for_tmp(folder, proc, timeout=60.0):
     raise AssertionError("the run never started writing")
 
 
+@pytest.mark.slow  # a run in a subprocess, killed, per signal
 @pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGINT, signal.SIGTERM])
 def test_killed_run_leaves_previous_complete_file_or_none(tmp_path, sig):
     scene = tmp_path / "long.yaml"
@@ -73,6 +74,7 @@ def test_killed_run_leaves_previous_complete_file_or_none(tmp_path, sig):
         assert proc.returncode == -signal.SIGKILL
 
 
+@pytest.mark.slow  # a run in a subprocess, killed
 def test_killed_first_run_leaves_no_output(tmp_path):
     scene = tmp_path / "long.yaml"
     scene.write_text(LONG)

@@ -80,6 +80,7 @@ def _probe(path: Path, env: dict, fit: bool = False) -> dict:
     return json.loads(done.stdout.splitlines()[-1])
 
 
+@pytest.mark.slow  # two Python subprocesses
 def test_statistics_bit_identical_under_blas_kernels(curve_csv):
     """The trend, the data's statistics and an ensemble covariance have the same bits under the
     default OpenBLAS kernels, the AVX2 ones and one or two threads (no BLAS in them)."""

@@ -107,6 +107,7 @@ def test_summary_targets_logic():
     )
 
 
+@pytest.mark.slow  # three child processes
 def test_peak_memory_is_the_childs_own_and_grows_with_the_run():
     peak_memory_mb(1_000)  # the engine's compiled cache is warm for the runs compared below
     ballast = np.ones(80_000_000)  # 640 MB resident in this process, not in the child

@@ -190,6 +190,7 @@ def one_error_line(err: str, *needles: str) -> None:
         assert n in lines[0], lines[0]
 
 
+@pytest.mark.slow  # MLflow stores made and read
 def test_unusable_store_and_unknown_run_exit_2_with_one_line(tmp_path, capsys):
     scene = tmp_path / "s.yaml"
     scene.write_text(SCENE.format(name="s", e=0.3))
@@ -226,6 +227,7 @@ def test_unusable_store_and_unknown_run_exit_2_with_one_line(tmp_path, capsys):
     assert not (tmp_path / "none").exists()
 
 
+@pytest.mark.slow  # a Snakemake subprocess
 @needs_snakemake
 def test_pipeline_with_unreachable_store_fails_before_any_job(tmp_path):
     base = project(tmp_path / "p")

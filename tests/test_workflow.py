@@ -121,6 +121,7 @@ def parse_error(config: Path, res: Path, monkeypatch, cwd: Path = ROOT) -> str:
     return ""
 
 
+@pytest.mark.slow  # Snakemake parses the pipeline once per bad config
 def test_bad_config_fails_before_any_job(tmp_path, monkeypatch):
     bad = tmp_path / "bad.yaml"
     # one case end to end: the snakemake command fails, naming the key
@@ -138,6 +139,7 @@ def test_bad_config_fails_before_any_job(tmp_path, monkeypatch):
     assert not (tmp_path / "r").exists()
 
 
+@pytest.mark.slow  # as above
 def test_bad_sensitivity_ranges_or_sizes_are_one_line_exit_2_before_any_job(tmp_path):
     bad = tmp_path / "bad.yaml"
     for old, new, field in (
