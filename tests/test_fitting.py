@@ -504,6 +504,14 @@ def test_residual_check_finds_a_systematic_excursion():
 SHIPPED_CURVE = Path("data/prototype/synthetic_motor.csv")
 
 
+def pipeline_load_curve() -> Path | None:
+    """The load curve the pipeline fits jointly with the shipped run-up (None: none)."""
+    import yaml
+
+    proto = yaml.safe_load(Path("workflow/config/config.yaml").read_text())["prototype"]
+    return Path(proto["load_curve"]) if proto.get("load_curve") else None
+
+
 def pipeline_fit_settings() -> FitSettings:
     """The settings of the pipeline's fit (workflow/config/config.yaml, rule fit_prototype)."""
     import yaml
@@ -531,6 +539,9 @@ def pipeline_fit(settings: FitSettings) -> tuple[xr.Dataset | None, str]:
     wanted = {"git_commit": commit, "seed": settings.seed, "n_bootstrap": settings.bootstrap,
               "e_sigma": settings.e_sigma, "scan_points": settings.scan,
               "zoom_points": settings.zoom, "curve_sha256": sha256_file(SHIPPED_CURVE)}  # fmt: skip
+    load = pipeline_load_curve()
+    if load is not None:
+        wanted["load_curve_sha256"] = sha256_file(load)
     if commit == "unknown" or commit.endswith("-dirty"):
         return None, f"this source tree is {commit}: {path} cannot be matched to it"
     differ = [k for k, v in wanted.items() if a.get(k) != v]
@@ -541,8 +552,9 @@ def pipeline_fit(settings: FitSettings) -> tuple[xr.Dataset | None, str]:
 
 @pytest.mark.slow
 def test_shipped_curve_fit_is_adequate_and_fig5_residual_in_band():
-    """The pipeline's fit of the shipped curve: adequate, truth in every identified interval,
-    and Fig. 5's residual without systematic excursion (fraction outside, longest run).
+    """The pipeline's fit of the shipped curve (with its load curve, jointly, as the pipeline's
+    config says): adequate, truth in every identified interval, and Fig. 5's residual without
+    systematic excursion (fraction outside, longest run).
 
     The fit is the pipeline's own file when it is current (CI runs the pipeline first), else the
     same fit made here: the one fit with the default search, not repeated."""
@@ -554,7 +566,11 @@ def test_shipped_curve_fit_is_adequate_and_fig5_residual_in_band():
     ds, source = pipeline_fit(settings)
     if ds is None:
         print(f"\nSHIPPED: fitting here ({source})")
-        ds = fit_dataset(fit_curve(read_curve(SHIPPED_CURVE), settings))
+        from bouncedisk.loaddata import read_load_curve
+
+        load = pipeline_load_curve()
+        loads = [read_load_curve(load)] if load is not None else None
+        ds = fit_dataset(fit_curve(read_curve(SHIPPED_CURVE), settings, load=loads))
     else:
         print(f"\nSHIPPED: {source}")
     print(f"\nSHIPPED: {ds.attrs['chi2']:.4g} p {ds.attrs['chi2_p_value']:.3g}, "
