@@ -134,6 +134,9 @@ MOVES: dict[str, str] = {
     "fitting.command": "fitting.command",
     "fitting.core": "fitting.core",
     "fitting.detlinalg": "fitting.detlinalg",
+    "fitting.joint": "fitting.joint",
+    "fitting.load_output": "fitting.load_output",
+    "fitting.loadpart": "fitting.loadpart",
     "fitting.model": "fitting.model",
     "fitting.objective": "fitting.objective",
     "fitting.output": "fitting.output",
@@ -146,6 +149,7 @@ MOVES: dict[str, str] = {
     "registry": "tracking.reading",
     # figures/
     "plot_load": "figures.load",
+    "plot_fit_load": "figures.joint_fit",
     "figure_registry": "figures.registry",
 }
 
