@@ -5,8 +5,8 @@ from pathlib import Path
 
 from snakemake.utils import min_version, validate
 
-from bouncedisk.errors import InputError
-from bouncedisk.sensitivity_config import study_settings
+from bouncedisk.model.errors import InputError
+from bouncedisk.studies.sensitivity_settings import study_settings
 
 min_version("8.0")
 

@@ -19,7 +19,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from bouncedisk.studies import scaling, work_precision, work_precision_summary
+from bouncedisk.studies.scaling import scaling
+from bouncedisk.studies.work_precision import work_precision, work_precision_summary
 
 CONFIG = Path(__file__).resolve().parents[1] / "workflow" / "config" / "config.yaml"
 

@@ -17,9 +17,9 @@ import os
 import platform
 import time
 
+from bouncedisk.analysis.ensembles import run_ensemble
+from bouncedisk.analysis.statistics import confidence_interval
 from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
-from bouncedisk.ensemble import run_ensemble
-from bouncedisk.stats import confidence_interval
 
 CFG = EngineConfig(
     e=0.6,

@@ -22,8 +22,8 @@ import time
 
 from bouncedisk.engine import EngineConfig, simulate_arrays
 from bouncedisk.engine.driver import audit_balances
-from bouncedisk.loadcurve import torque_speed
-from bouncedisk.scene import scene_from_mapping
+from bouncedisk.model.scene import scene_from_mapping
+from bouncedisk.studies.torque_speed import torque_speed
 
 BASE = dict(e=0.6, omega_s=1.5, r_phi=0.01, psi=0.0, torsion=True, e_sigma=1e-9, stats_from=0.0)
 REGIMES = {

@@ -3,7 +3,7 @@
 Run:  python benchmarks/bench_sensitivity.py [--size small|full] [--points K] [--stride S]
 
 Evaluates K points of the size's own Sobol' sample (every S-th row, so all parameters vary) with
-the pipeline's model (bouncedisk.sensitivity.MotorModel) on one core, and prints the CPU time of
+the pipeline's model (bouncedisk.studies.sensitivity.MotorModel) on one core, and prints the CPU time of
 each. A point's run lasts (discard + duration)/R_phi, so its cost grows like 1/R_phi; the
 extrapolation to the whole sample (and the design maps) scales the measured CPU per unit of
 1/R_phi by the sample's sum of 1/R_phi (a ratio estimator), beside the plain mean. The first
@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from bouncedisk import sensitivity as sens
-from bouncedisk.sensitivity_config import study_settings
+from bouncedisk.studies import sensitivity as sens
+from bouncedisk.studies.sensitivity_settings import study_settings
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -19,9 +19,9 @@ import math
 import tempfile
 from pathlib import Path
 
-from bouncedisk.curves import read_curve
 from bouncedisk.fitting import FitSettings, fit_curve, fit_dataset, summary_text
-from bouncedisk.loaddata import read_load_curve
+from bouncedisk.io.load_curves import read_load_curve
+from bouncedisk.io.runup_curves import read_curve
 
 ROOT = Path(__file__).resolve().parents[1]
 

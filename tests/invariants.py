@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from bouncedisk import stator
 from bouncedisk.engine import KIND_IMPACT, RunResult
+from bouncedisk.model import stator
 
 
 def check_events_sane(res: RunResult) -> None:

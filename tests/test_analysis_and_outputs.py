@@ -8,16 +8,19 @@ import pytest
 import xarray as xr
 from matplotlib.figure import Figure
 
-from bouncedisk import plotting, stator
-from bouncedisk.analysis import clipped_comparison, poincare_dataset
-from bouncedisk.bands import omega_band
+from bouncedisk.analysis.bands import omega_band
+from bouncedisk.analysis.observables import REGIMES
+from bouncedisk.analysis.poincare import poincare_dataset
+from bouncedisk.analysis.sweeps import combine_shards, run_continuation, run_sweep
 from bouncedisk.cli import main
-from bouncedisk.datasets import open_simulation
 from bouncedisk.engine import EngineConfig, simulate_arrays
-from bouncedisk.observables import REGIMES
-from bouncedisk.records import TrajColumn as C
-from bouncedisk.scene import scene_from_mapping
-from bouncedisk.sweeps import combine_shards, run_continuation, run_sweep
+from bouncedisk.figures import common, dynamics, motor, schematic, trajectory
+from bouncedisk.figures import cost as figures_cost
+from bouncedisk.io.netcdf import open_simulation
+from bouncedisk.io.records import TrajColumn as C
+from bouncedisk.model import stator
+from bouncedisk.model.scene import scene_from_mapping
+from bouncedisk.studies.clipped import clipped_comparison
 
 #: its module fixtures are built once, on one worker (pytest-xdist ``--dist loadgroup``)
 pytestmark = pytest.mark.xdist_group("analysis")
@@ -191,20 +194,20 @@ def test_every_figure_function_returns_a_figure(sim_file, tmp_path):
     )
     curve = pd.DataFrame({"time_s": np.linspace(0, 1, 50), "omega_rad_s": np.linspace(0, 1, 50)})
     figs = [
-        plotting.fig2_schematic(),
-        plotting.fig_trajectory(sim),
-        plotting.fig_trajectory(sim, band=band),
-        plotting.fig_clipped_vs_bouncing(clipped),
-        plotting.fig_stats_cost(cost, singles),
-        plotting.fig_poincare({"a": pmap}),
-        plotting.fig_bifurcation(*cont),
-        plotting.fig_regime_map(sweep2),
-        plotting.fig_speed_vs_psi(psi),
-        plotting.fig_work_precision(wp),
-        plotting.fig_scaling(sc),
-        plotting.fig5_motor(curve, simulated=curve),
+        schematic.fig2_schematic(),
+        trajectory.fig_trajectory(sim),
+        trajectory.fig_trajectory(sim, band=band),
+        dynamics.fig_clipped_vs_bouncing(clipped),
+        figures_cost.fig_stats_cost(cost, singles),
+        dynamics.fig_poincare({"a": pmap}),
+        dynamics.fig_bifurcation(*cont),
+        dynamics.fig_regime_map(sweep2),
+        dynamics.fig_speed_vs_psi(psi),
+        figures_cost.fig_work_precision(wp),
+        figures_cost.fig_scaling(sc),
+        motor.fig5_motor(curve, simulated=curve),
     ]
     for i, fig in enumerate(figs):
         assert isinstance(fig, Figure)
-        plotting.save_figure(fig, tmp_path / f"f{i}.png")
+        common.save_figure(fig, tmp_path / f"f{i}.png")
         assert (tmp_path / f"f{i}.png").stat().st_size > 1000

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from bouncedisk import checks
-from bouncedisk import observables as ob
+from bouncedisk.analysis import observables as ob
 from bouncedisk.engine import KIND_CHATTER, EngineConfig, InitialState, simulate_arrays
+from bouncedisk.studies import reproduction as checks
 
 W_REST = 1e-9  # a stator that is practically at rest over the test's time span
 
@@ -91,7 +91,7 @@ def test_impact_map_jacobian_at_period_1_fixed_point():
 @pytest.mark.parametrize("n", [1, 2])
 def test_period_n_existence_threshold_within_1e_3(n):
     """Bisect Γ on 'a run started at the orbit's phase settles on it' (MODEL.md Γ_n), with the
-    reproduction check's own bisection (bouncedisk.checks)."""
+    reproduction check's own bisection (bouncedisk.studies.reproduction)."""
     e = 0.3
     g_n = ob.period_n_threshold(n, e)
     # the bracket the bisection starts from is a real bracket: below, no orbit; above, stable

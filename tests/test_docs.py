@@ -21,7 +21,7 @@ SITE = ROOT / "docs" / "_build" / "html"
 PAGES = {
     "landing": "index.html",
     "gallery": "auto_examples/plot_simulate_scene.html",
-    "api": "api/generated/bouncedisk.loadcurve.torque_speed.html",
+    "api": "api/generated/bouncedisk.studies.torque_speed.torque_speed.html",
 }
 
 pytestmark = [
@@ -104,7 +104,7 @@ def test_every_public_function_and_class_has_an_api_page():
     spec.loader.exec_module(apipages)
     names = apipages.public_pages()
     assert (
-        "bouncedisk.loadcurve.torque_speed" in names
+        "bouncedisk.studies.torque_speed.torque_speed" in names
         and "bouncedisk.engine.laws.impact_law" in names
     )
     assert not [n for n in names if any(part.startswith("_") for part in n.split("."))]

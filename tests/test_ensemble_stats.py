@@ -12,15 +12,15 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from bouncedisk.analysis.ensembles import MemberStats, run_ensemble
+from bouncedisk.analysis.observables import REGIME_CODES
+from bouncedisk.analysis.statistics import EnsembleStats, confidence_interval, run_stats
 from bouncedisk.cli import main
+from bouncedisk.cli.stats import format_summary
 from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
 from bouncedisk.engine.noise import noisy_restitution, normals
-from bouncedisk.ensemble import MemberStats, run_ensemble
-from bouncedisk.observables import REGIME_CODES
-from bouncedisk.records import TrajColumn as C
-from bouncedisk.scene import load_scene
-from bouncedisk.stats import EnsembleStats, confidence_interval, run_stats
-from bouncedisk.statscli import format_summary
+from bouncedisk.io.records import TrajColumn as C
+from bouncedisk.model.scene import load_scene
 
 CHAOTIC = """\
 name: chaotic
@@ -195,7 +195,7 @@ def test_confidence_interval_is_bit_identical_to_scipy_stats_t(k, level):
 
 def test_run_stats_needs_a_time_stop(scene_file):
     f = scene_file(CHAOTIC.replace("stop: {time: 53000.0}", "stop: {impacts: 100}"))
-    from bouncedisk.errors import InputError
+    from bouncedisk.model.errors import InputError
 
     scene = load_scene(f, ["stats.discard=0"])
     with pytest.raises(InputError, match="stop.time"):

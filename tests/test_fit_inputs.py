@@ -10,12 +10,12 @@ import pytest
 import yaml
 
 from bouncedisk.cli import main
-from bouncedisk.curves import read_curve, write_curve
-from bouncedisk.errors import InputError
 from bouncedisk.fitting import core
 from bouncedisk.fitting.core import data_layout, prepare_runs
 from bouncedisk.fitting.model import synthesize_curve
 from bouncedisk.fitting.statistics import STATS
+from bouncedisk.io.runup_curves import read_curve, write_curve
+from bouncedisk.model.errors import InputError
 
 F_HZ, PHI0, DT, SIGMA = 15000.0, 3.0e-4, 2.5e-5, 0.05
 TRUE = {"e": 0.31, "r_phi": 0.0041, "psi": 0.25, "omega_s": 1.37}
@@ -147,7 +147,7 @@ def test_the_same_curve_twice(tmp_path, capsys, frame):
 def test_scene_members_as_text_is_refused():
     from types import SimpleNamespace
 
-    from bouncedisk.scene import _ensemble
+    from bouncedisk.model.scene import _ensemble
 
     noisy = (frozenset({"restitution_noise"}), SimpleNamespace(e=0.5, e_sigma=0.03))
     assert _ensemble("s.yaml", {"members": 3}, *noisy).members == 3
@@ -157,7 +157,7 @@ def test_scene_members_as_text_is_refused():
 
 def test_time_origin_keeps_uniform_curves_on_their_grid(frame):
     """The shipped-style curve (t0 = 0, uniform): relative times are its own grid (to round-off)."""
-    from bouncedisk.curves import MotorCurve
+    from bouncedisk.io.runup_curves import MotorCurve
 
     c = MotorCurve(frame["time_s"].to_numpy(), frame["omega_rad_s"].to_numpy(), SIGMA, F_HZ,
                    PHI0, "", True, "x.csv")  # fmt: skip

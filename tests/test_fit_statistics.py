@@ -5,7 +5,6 @@ import math
 import numpy as np
 import pytest
 
-from bouncedisk.curves import MotorCurve
 from bouncedisk.fitting.model import EnsembleSpec, member_records
 from bouncedisk.fitting.statistics import (
     STAT_LONG_NAMES,
@@ -17,6 +16,7 @@ from bouncedisk.fitting.statistics import (
     record_stats,
     stat_floor,
 )
+from bouncedisk.io.runup_curves import MotorCurve
 
 F_HZ, PHI0, DT = 15000.0, 3.0e-4, 2.5e-5
 KICKS, STEADY, LOG_TAU = (STATS.index(n) for n in ("log_increment_var", "steady_mean",

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from bouncedisk.analysis.observables import first_order_trend
 from bouncedisk.cli import main
-from bouncedisk.curves import MotorCurve, read_curve, write_curve
 from bouncedisk.fitting import (
     FitSettings,
     fit_curve,
@@ -21,7 +21,7 @@ from bouncedisk.fitting import (
 )
 from bouncedisk.fitting.core import MAX_SAMPLES
 from bouncedisk.fitting.model import MODEL_E_SIGMA, EnsembleSpec, member_records, uniform_grid
-from bouncedisk.observables import first_order_trend
+from bouncedisk.io.runup_curves import MotorCurve, read_curve, write_curve
 
 F_HZ, PHI0, SPAN, DT, SIGMA = 15000.0, 3.0e-4, 0.06, 2.5e-5, 0.05
 # generating parameters used nowhere else in the repository; every curve is one ensemble member
@@ -96,8 +96,8 @@ def _run(args, capsys):
     ],
 )
 def test_bad_option_exits_2_before_work(periodic_csv, tmp_path, capsys, monkeypatch, extra, field):
-    import bouncedisk.curves
     import bouncedisk.fitting.core as core
+    import bouncedisk.io.runup_curves
 
     calls = []
 
@@ -107,7 +107,7 @@ def test_bad_option_exits_2_before_work(periodic_csv, tmp_path, capsys, monkeypa
 
     # the curve is not even read, the fit never starts
     monkeypatch.setattr(core, "fit_curve", refuse)
-    monkeypatch.setattr(bouncedisk.curves, "read_curve", refuse)
+    monkeypatch.setattr(bouncedisk.io.runup_curves, "read_curve", refuse)
     out = tmp_path / "fit.nc"
     code, err, _ = _run([str(periodic_csv), "-o", str(out), *extra], capsys)
     assert code == 2 and len(err) == 1 and field in err[0]
@@ -397,7 +397,7 @@ def test_fit_of_two_runs_keeps_each_run(tmp_path, monkeypatch):
     # Fig. 5 draws what the fit compared with: the runs' mean, labelled as such
     import pandas as pd
 
-    from bouncedisk.plotting import fig5_motor
+    from bouncedisk.figures.motor import fig5_motor
 
     fig = fig5_motor(pd.read_csv(a), fitted=ds)
     line = next(ln for ln in fig.axes[0].lines if ln.get_label().startswith("measured"))
@@ -527,7 +527,7 @@ def pipeline_fit(settings: FitSettings) -> tuple[xr.Dataset | None, str]:
     """The pipeline's own fit of the shipped curve, ``results/fit/prototype.nc``, when it is this
     source tree's (same commit, no uncommitted change to the package) with these settings and
     this curve; else ``None``, and why. CI runs the pipeline before the tests."""
-    from bouncedisk.provenance import git_commit, sha256_file
+    from bouncedisk.io.provenance import git_commit, sha256_file
 
     path = Path("results/fit/prototype.nc")
     if not path.is_file():
@@ -566,7 +566,7 @@ def test_shipped_curve_fit_is_adequate_and_fig5_residual_in_band():
     ds, source = pipeline_fit(settings)
     if ds is None:
         print(f"\nSHIPPED: fitting here ({source})")
-        from bouncedisk.loaddata import read_load_curve
+        from bouncedisk.io.load_curves import read_load_curve
 
         load = pipeline_load_curve()
         loads = [read_load_curve(load)] if load is not None else None

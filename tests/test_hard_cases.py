@@ -12,8 +12,8 @@ import pytest
 from invariants import check_events_sane, check_no_skipped_root, check_slip_never_reverses
 
 from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
-from bouncedisk.records import EventKind
-from bouncedisk.records import TrajColumn as C
+from bouncedisk.io.records import EventKind
+from bouncedisk.io.records import TrajColumn as C
 
 MILLION = 1_000_000
 

@@ -19,10 +19,10 @@ from hypothesis import strategies as st
 
 from bouncedisk.cli import main
 from bouncedisk.engine import EngineConfig, InitialState, iterate, simulate_arrays
-from bouncedisk.errors import InputError
-from bouncedisk.memprobe import vm_hwm_mb
-from bouncedisk.records import EventKind
-from bouncedisk.scene import load_scene, scene_from_mapping
+from bouncedisk.io.records import EventKind
+from bouncedisk.model.errors import InputError
+from bouncedisk.model.scene import load_scene, scene_from_mapping
+from bouncedisk.run.memory_probe import vm_hwm_mb
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "workflow" / "config" / "scenes"
@@ -127,7 +127,7 @@ def test_item2_scaling_trajectory_case_runs_in_bounded_memory():
     """The '+ trajectory' case of the scaling study at 30,000 impacts (12.7 million samples):
     collected in memory it peaked above 1 GB; streamed, it stays near the engine's baseline."""
     code = (
-        "from bouncedisk.studies import _rate\n"
+        "from bouncedisk.studies.scaling import _rate\n"
         "from bouncedisk.engine import EngineConfig\n"
         "_rate(EngineConfig(e=0.6, omega_s=1.5, max_events=30000, torsion=True, r_phi=0.01,"
         " traj_dt=0.01), repeat=1)\n"
@@ -156,12 +156,12 @@ def test_item3_output_an_existing_folder(tmp_path, capsys):
 
 
 def test_item3_memory_error_anywhere_is_one_line(tmp_path, capsys, monkeypatch):
-    import bouncedisk.runner
+    import bouncedisk.run.runner
 
     def boom(*args, **kwargs):
         raise MemoryError
 
-    monkeypatch.setattr(bouncedisk.runner, "run_scene", boom)
+    monkeypatch.setattr(bouncedisk.run.runner, "run_scene", boom)
     assert main(["simulate", FIG3, "-o", str(tmp_path / "out.nc"), "-q"]) == 2
     assert "out of memory" in _one_line(capsys)
     _no_files(tmp_path)
@@ -193,7 +193,7 @@ def test_item5_scientific_notation_in_set_values(text):
 
 
 def test_item5_scientific_notation_in_scene_files_and_sidecars(tmp_path):
-    from bouncedisk.curves import read_sidecar
+    from bouncedisk.io.runup_curves import read_sidecar
 
     f = tmp_path / "s.yaml"
     f.write_text(SMALL.replace("r_phi: 0.01", "r_phi: 1e-2").replace("impacts: 50", "impacts: 5e1"))
@@ -365,8 +365,8 @@ def test_item10_physical_scene_gives_seconds_and_scales(tmp_path):
 
 
 def test_item10_joined_shards_report_the_whole_sweep(tmp_path):
-    from bouncedisk.datasets import write_dataset
-    from bouncedisk.sweeps import combine_shards, run_sweep
+    from bouncedisk.analysis.sweeps import combine_shards, run_sweep
+    from bouncedisk.io.netcdf import write_dataset
 
     base = scene_from_mapping(
         {"name": "sw", "parameters": {"e": 0.3, "omega_s": 1.5}, "stop": {"time": 800.0}}

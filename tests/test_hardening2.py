@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 
 import bouncedisk
-from bouncedisk import atomic
 from bouncedisk.cli import main
+from bouncedisk.io import atomic
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "workflow" / "config" / "scenes"
@@ -110,7 +110,7 @@ def _kill_self_during(monkeypatch, module, name: str, sig=signal.SIGINT) -> None
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_item5_interrupt_while_writing_stats_leaves_no_output(tmp_path, capsys, monkeypatch, sig):
-    from bouncedisk import datasets
+    from bouncedisk.io import netcdf as datasets
 
     out = tmp_path / "s.nc"
     _kill_self_during(monkeypatch, datasets, "finalize", sig)  # inside write_dataset
@@ -122,7 +122,7 @@ def test_item5_interrupt_while_writing_stats_leaves_no_output(tmp_path, capsys, 
 
 
 def test_item5_interrupt_after_the_members_leaves_no_output(tmp_path, capsys, monkeypatch):
-    from bouncedisk import stats
+    from bouncedisk.analysis import statistics as stats
 
     out = tmp_path / "s.nc"
     _kill_self_during(monkeypatch, stats, "to_dataset")  # the members are done
@@ -132,7 +132,7 @@ def test_item5_interrupt_after_the_members_leaves_no_output(tmp_path, capsys, mo
 
 
 def test_item5_interrupt_while_printing_removes_the_output(tmp_path, capsys, monkeypatch):
-    from bouncedisk import stats
+    from bouncedisk.analysis import statistics as stats
 
     out = tmp_path / "s.nc"
     _kill_self_during(monkeypatch, stats.EnsembleStats, "summary")  # after the rename
@@ -141,7 +141,7 @@ def test_item5_interrupt_while_printing_removes_the_output(tmp_path, capsys, mon
 
 
 def test_item5_interrupt_while_simulating_leaves_no_output(tmp_path, capsys, monkeypatch):
-    from bouncedisk import datasets
+    from bouncedisk.io import netcdf as datasets
 
     out = tmp_path / "out.nc"
     _kill_self_during(monkeypatch, datasets.SimulationWriter, "set_attrs", signal.SIGTERM)
@@ -190,7 +190,7 @@ def test_item6_disk_full_is_one_line_naming_the_file(full_folder, tmp_path, comm
     )
     if command == "check":  # the report of `check -o` is written by write_text_atomic
         code = (
-            f"{limit}import sys; from bouncedisk.cli import main; from bouncedisk import checks\n"
+            f"{limit}import sys; from bouncedisk.cli import main; from bouncedisk.studies import reproduction as checks\n"
             "checks.run_checks = lambda d: []\n"
             "checks.to_markdown = lambda r: 'x' * (3 << 20)\n"
             f"sys.exit(main(['check', '-o', {str(out)!r}]))"
@@ -341,7 +341,7 @@ def test_item11_nested_aliases_are_refused_quickly(tmp_path, capsys):
 
 
 def test_item11_ordinary_aliases_still_load():
-    from bouncedisk import yamlio
+    from bouncedisk.model import yamlio
 
     text = "p: &p {e: 0.3, omega_s: 1.5}\nq: *p\nr: {<<: *p, e: 0.5}\n"
     data = yamlio.load(text, "x")
@@ -353,7 +353,7 @@ def test_item11_ordinary_aliases_still_load():
 class StallingServer:
     """An HTTP server on 127.0.0.1 that answers the connection check, then stalls.
 
-    It answers ``experiments/search`` (what :func:`bouncedisk.tracking.preflight` asks) and
+    It answers ``experiments/search`` (what :func:`bouncedisk.tracking.store.preflight` asks) and
     holds every other request open without replying until it is stopped or ``lifetime`` seconds
     have passed; then it closes itself.
     """
@@ -473,12 +473,12 @@ def test_item14_interrupt_while_recording_says_the_output_was_kept(stalling_serv
 
 
 def test_item14_every_store_request_has_a_timeout(monkeypatch):
-    from bouncedisk import tracking
+    from bouncedisk.tracking import store as tracking_store
 
     env = {k: v for k, v in os.environ.items() if not k.startswith("MLFLOW_HTTP_REQUEST")}
     monkeypatch.setattr(os, "environ", env)
-    tracking._client(tracking.Store("http://127.0.0.1:9"))
-    assert env["MLFLOW_HTTP_REQUEST_TIMEOUT"] == str(tracking.HTTP_TIMEOUT_S) == "10"
+    tracking_store._client(tracking_store.Store("http://127.0.0.1:9"))
+    assert env["MLFLOW_HTTP_REQUEST_TIMEOUT"] == str(tracking_store.HTTP_TIMEOUT_S) == "10"
     assert env["MLFLOW_HTTP_REQUEST_MAX_RETRIES"] == "1"
 
 
@@ -617,7 +617,7 @@ def _pipeline_pair():
 
 
 def test_item17_diff_compares_the_jobs_both_runs_ran():
-    from bouncedisk import registry
+    from bouncedisk.tracking import reading as registry
 
     ra, rb = _pipeline_pair()
     d = registry.diff(_FakeRuns(), ra, rb)
@@ -636,7 +636,7 @@ def test_item17_diff_compares_the_jobs_both_runs_ran():
 
 
 def test_item17_changed_since_previous_names_only_changed_inputs():
-    from bouncedisk import registry
+    from bouncedisk.tracking import reading as registry
 
     ra, rb = _pipeline_pair()
     assert registry.changed_keys(ra.data.params, rb.data.params) == [
@@ -697,9 +697,9 @@ def _sensitivity_files(d: Path) -> dict[str, Path]:
 
     import yaml
 
-    from bouncedisk import sensitivity as sens
-    from bouncedisk import sensitivity_config as sc
-    from bouncedisk.datasets import open_checked, write_dataset
+    from bouncedisk.io.netcdf import open_checked, write_dataset
+    from bouncedisk.studies import sensitivity as sens
+    from bouncedisk.studies import sensitivity_settings as sc
 
     cfg = yaml.safe_load((ROOT / "workflow" / "config" / "config.yaml").read_text())
     st = dataclasses.replace(
@@ -732,13 +732,14 @@ def every_kind(tmp_path_factory):
     scripts call (workflow/scripts/*.py); the parts of joined files written at other times."""
     import yaml
 
-    from bouncedisk.analysis import clipped_comparison, poincare_dataset
-    from bouncedisk.bands import omega_band
-    from bouncedisk.datasets import open_checked, open_simulation, write_dataset
-    from bouncedisk.loadcurve import motor_scene, to_dataset, torque_speed
-    from bouncedisk.params import Parameters
-    from bouncedisk.scene import load_scene
-    from bouncedisk.sweeps import combine_shards, grid_values, run_continuation, run_sweep
+    from bouncedisk.analysis.bands import omega_band
+    from bouncedisk.analysis.poincare import poincare_dataset
+    from bouncedisk.analysis.sweeps import combine_shards, grid_values, run_continuation, run_sweep
+    from bouncedisk.io.netcdf import open_checked, open_simulation, write_dataset
+    from bouncedisk.model.params import Parameters
+    from bouncedisk.model.scene import load_scene
+    from bouncedisk.studies.clipped import clipped_comparison
+    from bouncedisk.studies.torque_speed import motor_scene, to_dataset, torque_speed
 
     d = tmp_path_factory.mktemp("kinds")
     (d / "s.yaml").write_text(SMALL)
@@ -925,7 +926,7 @@ def test_item18_string_labels_are_cf_labels_that_read_back_as_the_index(every_ki
     as the dimension and its index. Files written before still read."""
     import xarray as xr
 
-    from bouncedisk.datasets import labels_to_cf, open_checked
+    from bouncedisk.io.netcdf import labels_to_cf, open_checked
 
     with netCDF4.Dataset(every_kind["load"]) as nc:
         assert nc["branch"].dimensions == ("branch_index",) and "branch" not in nc.dimensions

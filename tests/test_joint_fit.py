@@ -10,15 +10,15 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from bouncedisk.analysis.ensembles import run_member
 from bouncedisk.cli import main
-from bouncedisk.curves import read_curve, write_curve
 from bouncedisk.engine import EngineConfig, InitialState
-from bouncedisk.ensemble import run_member
 from bouncedisk.fitting import FitSettings, fit_curve, fit_dataset, summary_text, synthesize_curve
 from bouncedisk.fitting import loadpart as lp
 from bouncedisk.fitting.model import BOUNDS
-from bouncedisk.loadcurve import synthetic_load_curve
-from bouncedisk.loaddata import read_load_curve
+from bouncedisk.io.load_curves import read_load_curve
+from bouncedisk.io.runup_curves import read_curve, write_curve
+from bouncedisk.studies.torque_speed import synthetic_load_curve
 
 F_HZ, PHI0, SPAN, DT, SIGMA = 15000.0, 3.0e-4, 0.06, 2.5e-5, 0.05
 ROTOR = {"m_r_kg": 0.01, "r_g_m": 0.004, "r_c_m": 0.002}
@@ -45,7 +45,7 @@ def torque_scale(true: dict) -> float:
 
 
 def _fake_load_data(window=(0.03, 0.06)):
-    from bouncedisk.loaddata import LoadCurveData
+    from bouncedisk.io.load_curves import LoadCurveData
 
     return LoadCurveData(torque=np.array([0.0, 1e-4, 2e-4]), speed=np.zeros(3), speed_sd=None,
                          drive_frequency_hz=F_HZ, phi0_rad=PHI0, rotor=ROTOR, preload_n=PRELOAD,
@@ -219,7 +219,7 @@ def tiny_fit(data_dir):
 
 
 def test_the_fit_file_holds_the_load_curves_and_the_identifiability_table(tiny_fit, tmp_path):
-    from bouncedisk.datasets import write_dataset
+    from bouncedisk.io.netcdf import write_dataset
 
     ds = fit_dataset(tiny_fit)
     path = tmp_path / "fit.nc"
@@ -264,7 +264,7 @@ def test_joint_chi2_is_the_sum_of_the_parts(tiny_fit):
 
 
 def test_joint_figures_draw(tiny_fit, tmp_path):
-    from bouncedisk.plotting import FIGURES
+    from bouncedisk.figures.drawing import FIGURES
 
     ds = fit_dataset(tiny_fit)
     for name in ("fit_load", "fit_identifiability"):
@@ -275,7 +275,7 @@ def test_joint_figures_draw(tiny_fit, tmp_path):
 
 
 def test_joint_figures_refuse_a_run_up_fit(tiny_fit):
-    from bouncedisk.plotting import FIGURES
+    from bouncedisk.figures.drawing import FIGURES
 
     ds = fit_dataset(tiny_fit).drop_vars(["load_speed_measured"])
     with pytest.raises(ValueError, match="no load curve"):

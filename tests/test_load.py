@@ -16,14 +16,14 @@ from hypothesis import strategies as st
 from scipy.integrate import quad, solve_ivp
 
 from bouncedisk.cli import main
-from bouncedisk.datasets import open_checked
 from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
 from bouncedisk.engine import laws as L
 from bouncedisk.engine.driver import audit_balances
-from bouncedisk.loadcurve import first_zero, parse_loads, peak, torque_speed
-from bouncedisk.loaddata import read_load_curve
-from bouncedisk.params import PhysicalParameters
-from bouncedisk.scene import scene_from_mapping
+from bouncedisk.io.load_curves import read_load_curve
+from bouncedisk.io.netcdf import open_checked
+from bouncedisk.model.params import PhysicalParameters
+from bouncedisk.model.scene import scene_from_mapping
+from bouncedisk.studies.torque_speed import first_zero, parse_loads, peak, torque_speed
 
 W, R, PSI = 1.5, 0.01, 0.7
 
@@ -391,8 +391,8 @@ def test_clipped_model_takes_the_load():
 def test_shipped_synthetic_load_curve_is_regenerated_byte_for_byte(tmp_path):
     import yaml
 
-    from bouncedisk.curves import write_curve
-    from bouncedisk.loadcurve import synthetic_load_curve
+    from bouncedisk.io.runup_curves import write_curve
+    from bouncedisk.studies.torque_speed import synthetic_load_curve
 
     root = Path(__file__).resolve().parents[1]
     spec = yaml.safe_load((root / "workflow/config/synthetic_motor.yaml").read_text())
@@ -432,7 +432,7 @@ window_s: [0.06, 0.12]
     ],
 )
 def test_bad_load_curve_names_file_row_and_column(csv, yaml_text, field, tmp_path):
-    from bouncedisk.errors import InputError
+    from bouncedisk.model.errors import InputError
 
     (tmp_path / "load.csv").write_text(csv)
     (tmp_path / "load.yaml").write_text(yaml_text)
@@ -443,8 +443,8 @@ def test_bad_load_curve_names_file_row_and_column(csv, yaml_text, field, tmp_pat
 
 
 def test_load_curve_and_run_ups_must_share_the_drive(tmp_path):
-    from bouncedisk.errors import InputError
-    from bouncedisk.loaddata import check_same_setup
+    from bouncedisk.io.load_curves import check_same_setup
+    from bouncedisk.model.errors import InputError
 
     (tmp_path / "load.csv").write_text(LOAD_CSV)
     (tmp_path / "load.yaml").write_text(LOAD_YAML)
@@ -469,8 +469,8 @@ def test_simulation_files_carry_the_energy_audit(scene_file, tmp_path):
 
 def test_physical_scene_reports_watts_and_the_motor_efficiency():
     """A physical scene's stats add the powers in W and η = P_out / (P_ax + P_t)."""
-    from bouncedisk.params import Parameters
-    from bouncedisk.stats import run_stats
+    from bouncedisk.analysis.statistics import run_stats
+    from bouncedisk.model.params import Parameters
 
     phys = PhysicalParameters.from_nondimensional(
         Parameters(e=0.55, omega_s=1.7, r_phi=0.002, psi=0.4),

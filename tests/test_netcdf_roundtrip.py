@@ -8,8 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from bouncedisk.datasets import SimulationWriter, open_simulation, write_dataset
 from bouncedisk.engine.driver import Chunk
+from bouncedisk.io.netcdf import SimulationWriter, open_simulation, write_dataset
 
 floats = st.floats(allow_nan=True, allow_infinity=True, width=64)
 names = st.from_regex(r"[a-z][a-z0-9_]{0,11}", fullmatch=True)

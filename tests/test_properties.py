@@ -6,9 +6,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 from invariants import check_events_sane, check_no_skipped_root, check_slip_never_reverses
 
-from bouncedisk import stator
 from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
-from bouncedisk.records import TrajColumn as C
+from bouncedisk.io.records import TrajColumn as C
+from bouncedisk.model import stator
 
 
 @given(

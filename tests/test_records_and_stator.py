@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from bouncedisk import stator
 from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
-from bouncedisk.records import EventKind, RunStatus, StrobeColumn, TrajColumn
+from bouncedisk.io.records import EventKind, RunStatus, StrobeColumn, TrajColumn
+from bouncedisk.model import stator
 
 
 def test_a_run_at_rest_reports_the_rest_status_by_name():

@@ -14,9 +14,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from bouncedisk.cli import main
-from bouncedisk.curves import read_curve
-from bouncedisk.errors import InputError
-from bouncedisk.scene import EFFECTS, scene_from_mapping
+from bouncedisk.io.runup_curves import read_curve
+from bouncedisk.model.errors import InputError
+from bouncedisk.model.scene import EFFECTS, scene_from_mapping
 
 LONG = """
 name: long
@@ -176,7 +176,7 @@ def test_fuzzed_scenes_never_crash(raw):
         return
     # a valid scene runs to an end (caps apply) or fails with a clear InputError
     from bouncedisk.engine import EngineError
-    from bouncedisk.runner import run_scene_arrays
+    from bouncedisk.run.runner import run_scene_arrays
 
     small = scene_from_mapping(
         {

@@ -13,12 +13,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bouncedisk.curves import MotorCurve, read_curve, write_curve
 from bouncedisk.fitting import detlinalg
 from bouncedisk.fitting.basins import CHI2_DIGITS, choose, list_basins, rank_key
 from bouncedisk.fitting.core import FitSettings, fit_curve
 from bouncedisk.fitting.model import synthesize_curve
 from bouncedisk.fitting.output import fit_dataset
+from bouncedisk.io.runup_curves import MotorCurve, read_curve, write_curve
 
 F_HZ, PHI0, DT, SIGMA = 15000.0, 3.0e-4, 2.5e-5, 0.05
 TRUE = {"e": 0.31, "r_phi": 0.0041, "psi": 0.25, "omega_s": 1.37}
@@ -35,10 +35,10 @@ KERNELS = (
 _PROBE = """
 import json, sys
 import numpy as np
-from bouncedisk.curves import read_curve
+from bouncedisk.io.runup_curves import read_curve
 from bouncedisk.fitting.core import FitSettings, data_layout, fit_curve, prepare_runs
 from bouncedisk.fitting.statistics import EnsembleStats, record_stats
-from bouncedisk.observables import first_order_trend
+from bouncedisk.analysis.observables import first_order_trend
 c = read_curve(sys.argv[1])
 (r,), _, _ = prepare_runs(c)
 layout, records, target = data_layout([r])

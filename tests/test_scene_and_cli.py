@@ -9,10 +9,10 @@ import pytest
 import xarray as xr
 
 from bouncedisk.cli import main
-from bouncedisk.errors import InputError
-from bouncedisk.params import PhysicalParameters
-from bouncedisk.provenance import REQUIRED_ATTRS
-from bouncedisk.scene import load_scene
+from bouncedisk.io.provenance import REQUIRED_ATTRS
+from bouncedisk.model.errors import InputError
+from bouncedisk.model.params import PhysicalParameters
+from bouncedisk.model.scene import load_scene
 
 GOOD = """
 name: demo

@@ -10,10 +10,10 @@ import pytest
 import xarray as xr
 import yaml
 
-from bouncedisk import sensitivity as sens
-from bouncedisk import sensitivity_config as sc
-from bouncedisk.datasets import write_dataset
-from bouncedisk.errors import InputError
+from bouncedisk.io.netcdf import write_dataset
+from bouncedisk.model.errors import InputError
+from bouncedisk.studies import sensitivity as sens
+from bouncedisk.studies import sensitivity_settings as sc
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = yaml.safe_load((ROOT / "workflow" / "config" / "config.yaml").read_text())

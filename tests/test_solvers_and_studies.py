@@ -7,12 +7,13 @@ import pandas as pd
 import pytest
 
 from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
-from bouncedisk.errors import InputError
-from bouncedisk.memprobe import vm_hwm_mb
-from bouncedisk.runner import run_scene_arrays
-from bouncedisk.scene import scene_from_mapping
-from bouncedisk.solvers import ivp_events, moreau_events
-from bouncedisk.studies import CASES, _errors, peak_memory_mb, work_precision_summary
+from bouncedisk.model.errors import InputError
+from bouncedisk.model.scene import scene_from_mapping
+from bouncedisk.run.comparators import ivp_events, moreau_events
+from bouncedisk.run.memory_probe import vm_hwm_mb
+from bouncedisk.run.runner import run_scene_arrays
+from bouncedisk.studies.scaling import peak_memory_mb
+from bouncedisk.studies.work_precision import CASES, _errors, work_precision_summary
 
 REF = simulate_arrays(EngineConfig(e=0.3, omega_s=1.5, max_events=40, tol=1e-14)).events
 

@@ -21,8 +21,9 @@ import pytest
 import xarray as xr
 import yaml
 
-from bouncedisk import tracking
 from bouncedisk.cli import main
+from bouncedisk.tracking import extraction, pipeline
+from bouncedisk.tracking import store as tracking_store
 
 #: its module fixtures run the pipeline: built once, on one worker (pytest-xdist loadgroup)
 pytestmark = pytest.mark.xdist_group("tracking")
@@ -103,9 +104,9 @@ def runs_json(base: Path, *args: str) -> object:
 
 
 def client_of(base: Path):
-    store = tracking.resolve_store(None, base / "results")
-    client = tracking._client(store)
-    return client, client.get_experiment_by_name(tracking.EXPERIMENT).experiment_id
+    store = tracking_store.resolve_store(None, base / "results")
+    client = tracking_store._client(store)
+    return client, client.get_experiment_by_name(tracking_store.EXPERIMENT).experiment_id
 
 
 def db_statuses(db: Path) -> list[str]:
@@ -150,7 +151,7 @@ def test_new_outputs_are_picked_up_without_code_changes(tmp_path):
     )
     f = tmp_path / "stats.nc"
     ds.to_netcdf(f)
-    params, metrics = tracking.describe_output(f)
+    params, metrics = extraction.describe_output(f)
     assert params == {"members": "4.0", "scene_name": "s"}
     assert metrics == {
         "mean_omega": 1.25,
@@ -163,14 +164,14 @@ def test_new_outputs_are_picked_up_without_code_changes(tmp_path):
     }
     j = tmp_path / "s.json"
     j.write_text(json.dumps({"a": 1, "b": {"c": [0.1, 0.2], "d": "text"}, "ok": True}))
-    assert tracking.describe_output(j) == ({}, {"a": 1.0, "b.c.0": 0.1, "b.c.1": 0.2, "ok": 1.0})
+    assert extraction.describe_output(j) == ({}, {"a": 1.0, "b.c.0": 0.1, "b.c.1": 0.2, "ok": 1.0})
     md = tmp_path / "reproduction.md"
     md.write_text(
         "| claim | measured | expected | result | from |\n| --- | --- | --- | --- | --- |\n"
         "| period 1 exists | engine: Gamma = 1.69 | 1.7 | **pass** | x |\n"
         "| chaos | no period | Lyapunov > 0 | **FAIL** | y |\n"
     )
-    _, m = tracking.describe_output(md)
+    _, m = extraction.describe_output(md)
     assert m["check.period_1_exists.passed"] == 1.0
     assert m["check.period_1_exists.measured"] == 1.69
     assert m["check.chaos.passed"] == 0.0 and "check.chaos.measured" not in m
@@ -401,11 +402,11 @@ def test_mlflow_server_on_the_store_answers_with_the_pipeline_runs(two_runs):
                 pass
             assert time.monotonic() < deadline, "mlflow server did not answer in 90 s"
             time.sleep(0.5)
-        exp = tracking._http_request(
+        exp = tracking_store._http_request(
             url, "/api/2.0/mlflow/experiments/get-by-name?experiment_name=bouncedisk", 10
         )
         body = {"experiment_ids": [exp["experiment"]["experiment_id"]], "max_results": 500}
-        found = tracking._http_request(url, "/api/2.0/mlflow/runs/search", 10, body)["runs"]
+        found = tracking_store._http_request(url, "/api/2.0/mlflow/runs/search", 10, body)["runs"]
         ids = {r["info"]["run_id"] for r in found}
         assert {rows[0]["run_id"], rows[1]["run_id"]} <= ids
         # the same code reads the store through the server
@@ -474,7 +475,7 @@ def test_interrupted_or_killed_pipeline_never_reads_finished(tmp_path):
     assert [r["status"] for r in runs_json(base)] == ["KILLED", "KILLED"]
     # and the next writer on this host ends it as KILLED
     client, exp = client_of(base)
-    assert tracking.mark_stale_runs(client, exp) == 1
+    assert pipeline.mark_stale_runs(client, exp) == 1
     assert db_statuses(db) == ["KILLED", "KILLED"]
 
 

@@ -11,7 +11,8 @@ import pytest
 import xarray as xr
 import yaml
 
-from bouncedisk import figure_registry, plotting
+from bouncedisk.figures import drawing
+from bouncedisk.figures import registry as figure_registry
 
 ROOT = Path(__file__).resolve().parents[1]
 SMALL = ROOT / "tests" / "data" / "config_small.yaml"
@@ -184,9 +185,9 @@ FIGURE_NAMES = {
 def test_figure_table_names_every_figure_and_uses_every_registered_plot():
     table = yaml.safe_load((ROOT / "workflow" / "config" / "figures.yaml").read_text())
     assert set(table) == FIGURE_NAMES
-    assert {row["plot"] for row in table.values()} == set(plotting.FIGURES)
+    assert {row["plot"] for row in table.values()} == set(drawing.FIGURES)
     for name, row in table.items():
-        spec = plotting.FIGURES[row["plot"]]
+        spec = drawing.FIGURES[row["plot"]]
         assert set(row.get("inputs", {})) == set(spec.inputs), name
         assert set(row.get("params", {})) == set(spec.params), name
         assert (ROOT / "workflow" / "report" / f"{row['caption']}.rst").is_file(), name
@@ -250,12 +251,12 @@ def test_one_figure_rule_draws_exactly_what_rule_all_wants(tmp_path):
 
 def test_figure_registry_refuses_an_unknown_figure_or_wrong_inputs(tmp_path):
     with pytest.raises(ValueError, match=r"unknown figure 'nope'; known figures: .*trajectory"):
-        plotting.draw_figure("nope", {})
+        drawing.draw_figure("nope", {})
     with pytest.raises(ValueError, match=r"takes the inputs \['table'\], given \['tabel'\]"):
-        plotting.draw_figure("scaling", {"tabel": "x.csv"})
+        drawing.draw_figure("scaling", {"tabel": "x.csv"})
     with pytest.raises(ValueError, match=r"takes the parameters \['labels'\], given \[\]"):
-        plotting.draw_figure("poincare", {"maps": []})
-    assert plotting.draw_figure("fig2", {}).axes
+        drawing.draw_figure("poincare", {"maps": []})
+    assert drawing.draw_figure("fig2", {}).axes
 
 
 @pytest.mark.slow
@@ -304,7 +305,7 @@ def test_the_figure_table_is_checked_against_the_registry(tmp_path, monkeypatch)
     for broken, message in (
         (
             good.replace(entry, "  plot: nope\n  inputs: {sweep:"),
-            f"regime_map.plot: unknown figure 'nope' (bouncedisk.plotting.FIGURES: {known})",
+            f"regime_map.plot: unknown figure 'nope' (bouncedisk.figures.drawing.FIGURES: {known})",
         ),
         (
             good.replace(entry, "  plot: regime_map\n  inputs: {swep:"),

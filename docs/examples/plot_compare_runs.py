@@ -18,8 +18,8 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import xarray as xr
 
-from bouncedisk import registry
 from bouncedisk.cli import main
+from bouncedisk.tracking import reading as registry
 
 os.environ["MLFLOW_DISABLE_TELEMETRY"] = "true"
 ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents) if (p / "workflow").is_dir())

@@ -14,8 +14,8 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from bouncedisk.scene import load_scene
-from bouncedisk.stats import confidence_interval, run_stats
+from bouncedisk.analysis.statistics import confidence_interval, run_stats
+from bouncedisk.model.scene import load_scene
 
 ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents) if (p / "workflow").is_dir())
 
@@ -32,7 +32,7 @@ print("regime:", summary["regime"], f"({summary['regime_fraction']:.0%} of membe
 
 # %%
 # Each member's mean rotor speed, and the interval of their mean. The interval is
-# ``mean ± t s/sqrt(K)`` (:func:`bouncedisk.stats.confidence_interval`): it narrows like
+# ``mean ± t s/sqrt(K)`` (:func:`bouncedisk.analysis.statistics.confidence_interval`): it narrows like
 # ``1/sqrt(members × duration)``; the members themselves scatter much more widely.
 speeds = result.column("mean_omega")
 mean, low, high = confidence_interval(speeds)

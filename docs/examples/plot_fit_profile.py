@@ -19,7 +19,7 @@ tests' small search, made by::
 The pipeline fits the same curve with the defaults (``--scan 192 --zoom 16``, about a minute on
 two cores). To run a fit from Python::
 
-    from bouncedisk.curves import read_curve
+    from bouncedisk.io.runup_curves import read_curve
     from bouncedisk.fitting import FitSettings, fit_curve, fit_dataset
 
     fit = fit_dataset(fit_curve(read_curve("data/prototype/synthetic_motor.csv"),

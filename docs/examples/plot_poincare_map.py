@@ -13,9 +13,9 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import xarray as xr
 
-from bouncedisk.analysis import poincare_dataset
-from bouncedisk.runner import run_scene
-from bouncedisk.scene import load_scene
+from bouncedisk.analysis.poincare import poincare_dataset
+from bouncedisk.model.scene import load_scene
+from bouncedisk.run.runner import run_scene
 
 ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents) if (p / "workflow").is_dir())
 

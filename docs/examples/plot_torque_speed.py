@@ -3,7 +3,7 @@ A torque–speed curve
 ====================
 
 A motor is read from its load characteristic (:doc:`/user_guide/load`). The effect ``load`` puts a
-constant load torque ``τ_L`` on the rotor; :func:`bouncedisk.loadcurve.torque_speed` runs the
+constant load torque ``τ_L`` on the rotor; :func:`bouncedisk.studies.torque_speed.torque_speed` runs the
 scene's ensemble at each load, up and then down by continuation, and reduces it to the mean rotor
 speed and output power with 95 % intervals. A small ensemble here (6 members, 7 loads, short
 window) so that it runs in seconds; the pipeline's ``torque_speed_fig3`` uses 32 members and 20 loads.
@@ -15,8 +15,8 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from bouncedisk.loadcurve import to_dataset, torque_speed
-from bouncedisk.scene import load_scene
+from bouncedisk.model.scene import load_scene
+from bouncedisk.studies.torque_speed import to_dataset, torque_speed
 
 ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents) if (p / "workflow").is_dir())
 
@@ -37,7 +37,7 @@ for key in ("no_load_speed", "stall_torque", "max_power", "max_power_load"):
 # loads and then hardly changes up to ``τ_L = 0.9``, as in the pipeline's ``torque_speed_fig3``.
 # Speed and output power ``P_out = τ_L Ω̄`` against the load, both branches of the sweep, each with
 # the 95 % interval of its ensemble mean. The project's figure of the same file is
-# :func:`bouncedisk.plot_load.fig_torque_speed`.
+# :func:`bouncedisk.figures.load.fig_torque_speed`.
 fig, (ax1, ax2) = plt.subplots(2, 1, sharex=True, figsize=(7, 5.5))
 for k, branch in enumerate(ds["branch"].values):
     sel = ds.sel(branch=branch)

@@ -11,8 +11,8 @@ sys.path.insert(0, str(Path(__file__).parent))
 import yaml  # noqa: E402
 from cases import BASES, CASES  # noqa: E402
 
-from bouncedisk.runner import run_scene_arrays  # noqa: E402
-from bouncedisk.scene import apply_overrides, scene_from_mapping  # noqa: E402
+from bouncedisk.model.scene import apply_overrides, scene_from_mapping  # noqa: E402
+from bouncedisk.run.runner import run_scene_arrays  # noqa: E402
 
 OUT = Path("tests/data/reference")
 

@@ -4,7 +4,7 @@ import os
 
 RES = config["results"]
 # who made the files (ACDD creator/institution attributes of every netCDF file): the jobs read
-# them from the environment (bouncedisk.provenance.METADATA_ENV); unset keys keep the defaults
+# them from the environment (bouncedisk.io.provenance.METADATA_ENV); unset keys keep the defaults
 for _key, _value in (config.get("metadata") or {}).items():
     if _value:
         os.environ[f"BOUNCEDISK_{_key.upper()}"] = str(_value)
@@ -80,9 +80,9 @@ def _check_config():
         )
 
 
-# ensemble statistics the reproduction checks read (bouncedisk.checks.STATS_SCENES)
+# ensemble statistics the reproduction checks read (bouncedisk.studies.reproduction.STATS_SCENES)
 CHECKED_STATS = ["stats_e03", "stats_e06", "stats_locked"]
-# load curves the reproduction checks read (bouncedisk.checks.LOAD_CURVES)
+# load curves the reproduction checks read (bouncedisk.studies.reproduction.LOAD_CURVES)
 CHECKED_LOAD_CURVES = ["load_fig3", "load_fig4"]
 _check_config()
 

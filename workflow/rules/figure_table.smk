@@ -1,14 +1,14 @@
 # The figure table workflow/config/figures.yaml (what each figure is drawn from, how, and where the
 # report shows it), checked against the figure registry before any job runs, and the functions
-# rule `figure` (figures.smk) reads it with. The registry is bouncedisk.figure_registry, the light
-# declaration bouncedisk.plotting.FIGURES is built from: every Snakemake invocation and every
+# rule `figure` (figures.smk) reads it with. The registry is bouncedisk.figures.registry, the light
+# declaration bouncedisk.figures.drawing.FIGURES is built from: every Snakemake invocation and every
 # job parses this file, and importing it loads no matplotlib, xarray or pandas.
 import re
 
 import yaml
 from snakemake.exceptions import WorkflowError
 
-from bouncedisk.figure_registry import FIGURES as PLOTS
+from bouncedisk.figures.registry import FIGURES as PLOTS
 
 FIGURE_TABLE_FILE = "workflow/config/figures.yaml"
 
@@ -74,7 +74,7 @@ def _check_figures():
         spec = PLOTS.get(row["plot"])
         if spec is None:
             raise ValueError(f"{where}.plot: unknown figure {row['plot']!r} "
-                             f"(bouncedisk.plotting.FIGURES: {', '.join(sorted(PLOTS))})")
+                             f"(bouncedisk.figures.drawing.FIGURES: {', '.join(sorted(PLOTS))})")
         for part, given, wanted in (("inputs", row.get("inputs", {}), spec.inputs),
                                     ("params", row.get("params", {}), spec.params)):
             if set(given) != set(wanted):

@@ -1,5 +1,5 @@
 # Stage 2c: the motor under load (MODEL.md "The motor under load"): torque-speed curves by
-# continuation, both branches, with the energy audit (bouncedisk.loadcurve).
+# continuation, both branches, with the energy audit (bouncedisk.studies.torque_speed).
 import re
 
 

@@ -7,9 +7,10 @@ import sys
 
 import snakemake as _snakemake
 
-from bouncedisk import tracking as _tracking
+from bouncedisk.tracking import pipeline as _pipeline
+from bouncedisk.tracking import store as _store
 
-TRACKING = _tracking.PipelineSettings.from_config(config)
+TRACKING = _pipeline.PipelineSettings.from_config(config)
 _TRACKER = []  # the invocation's PipelineTracker, once onstart made it
 
 
@@ -20,7 +21,7 @@ def _tracking_jobs():
         if not job.output:
             continue
         records.append(
-            _tracking.JobRecord(
+            _pipeline.JobRecord(
                 job.rule.name,
                 [str(o) for o in job.output],
                 wildcards={k: str(v) for k, v in job.wildcards.items()},
@@ -58,7 +59,7 @@ def tracking_start():
         cores = workflow.cores
     except Exception:
         cores = None
-    tracker = _tracking.PipelineTracker(
+    tracker = _pipeline.PipelineTracker(
         TRACKING,
         RES,
         config,
@@ -68,8 +69,8 @@ def tracking_start():
     )
     try:
         tracker.start(_tracking_jobs())
-    except _tracking.TrackingError as ex:
-        _tracking.print_error(ex)
+    except _store.TrackingError as ex:
+        _store.print_error(ex)
         raise SystemExit(1)
     _TRACKER.append(tracker)
     _note_interrupt(signal.SIGINT)
@@ -80,8 +81,8 @@ def tracking_finish():
     for tracker in _TRACKER:
         try:
             run_id = tracker.finish()
-        except _tracking.TrackingError as ex:
-            _tracking.print_error(ex)
+        except _store.TrackingError as ex:
+            _store.print_error(ex)
             raise SystemExit(1)
         t = tracker.timings
         spent = t.get("tracking.start_s", 0) + t.get("tracking.finish_s", 0)
@@ -96,5 +97,5 @@ def tracking_fail():
     for tracker in _TRACKER:
         try:
             tracker.fail()
-        except _tracking.TrackingError as ex:
-            _tracking.print_error(ex)
+        except _store.TrackingError as ex:
+            _store.print_error(ex)

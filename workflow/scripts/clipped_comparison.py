@@ -1,9 +1,9 @@
 """Adapter: bouncing model against the clipped spring-contact model, for several psi."""
 
-from bouncedisk.analysis import clipped_comparison
-from bouncedisk.datasets import write_dataset
-from bouncedisk.logutil import log_to
-from bouncedisk.scene import load_scene
+from bouncedisk.io.job_log import log_to
+from bouncedisk.io.netcdf import write_dataset
+from bouncedisk.model.scene import load_scene
+from bouncedisk.studies.clipped import clipped_comparison
 
 with log_to(snakemake.log[0]) as log:
     scene = load_scene(snakemake.input.scene)

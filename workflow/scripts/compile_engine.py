@@ -3,7 +3,7 @@
 from pathlib import Path
 
 from bouncedisk.engine import EngineConfig, simulate_arrays
-from bouncedisk.logutil import log_to
+from bouncedisk.io.job_log import log_to
 
 with log_to(snakemake.log[0]) as log:
     for torsion in (False, True):

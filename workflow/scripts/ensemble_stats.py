@@ -2,10 +2,10 @@
 
 import time
 
-from bouncedisk.datasets import write_dataset
-from bouncedisk.logutil import log_to
-from bouncedisk.scene import load_scene
-from bouncedisk.stats import run_stats, to_dataset
+from bouncedisk.analysis.statistics import run_stats, to_dataset
+from bouncedisk.io.job_log import log_to
+from bouncedisk.io.netcdf import write_dataset
+from bouncedisk.model.scene import load_scene
 
 with log_to(snakemake.log[0]) as log:
     scene = load_scene(snakemake.input.scene)

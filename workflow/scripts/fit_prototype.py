@@ -1,10 +1,10 @@
 """Adapter: fit the model to the prototype's velocity-time curve and load curve jointly."""
 
-from bouncedisk.curves import read_curve
-from bouncedisk.datasets import write_dataset
 from bouncedisk.fitting import FitSettings, fit_curve, fit_dataset, summary_text
-from bouncedisk.loaddata import read_load_curve
-from bouncedisk.logutil import log_to
+from bouncedisk.io.job_log import log_to
+from bouncedisk.io.load_curves import read_load_curve
+from bouncedisk.io.netcdf import write_dataset
+from bouncedisk.io.runup_curves import read_curve
 
 with log_to(snakemake.log[0]) as log:
     curve = read_curve(snakemake.input.curve)

@@ -2,9 +2,9 @@
 
 import filecmp
 
-from bouncedisk.curves import write_curve
 from bouncedisk.fitting.synthetic import read_spec, synthetic_from_spec
-from bouncedisk.logutil import log_to
+from bouncedisk.io.job_log import log_to
+from bouncedisk.io.runup_curves import write_curve
 
 with log_to(snakemake.log[0]) as log:
     spec = read_spec(snakemake.input.spec)

@@ -1,9 +1,9 @@
 """Adapter: ensemble band of the rotor speed of one scene."""
 
-from bouncedisk.bands import omega_band
-from bouncedisk.datasets import write_dataset
-from bouncedisk.logutil import log_to
-from bouncedisk.scene import load_scene
+from bouncedisk.analysis.bands import omega_band
+from bouncedisk.io.job_log import log_to
+from bouncedisk.io.netcdf import write_dataset
+from bouncedisk.model.scene import load_scene
 
 with log_to(snakemake.log[0]) as log:
     spec = snakemake.params.spec

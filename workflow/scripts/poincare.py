@@ -1,8 +1,8 @@
 """Adapter: impact map and stroboscopic map of a simulation file."""
 
-from bouncedisk.analysis import poincare_dataset
-from bouncedisk.datasets import open_simulation, write_dataset
-from bouncedisk.logutil import log_to
+from bouncedisk.analysis.poincare import poincare_dataset
+from bouncedisk.io.job_log import log_to
+from bouncedisk.io.netcdf import open_simulation, write_dataset
 
 with log_to(snakemake.log[0]) as log:
     sim = open_simulation(snakemake.input.sim)

@@ -2,9 +2,9 @@
 
 from pathlib import Path
 
-from bouncedisk import checks
-from bouncedisk.atomic import write_text_atomic
-from bouncedisk.logutil import log_to
+from bouncedisk.io.atomic import write_text_atomic
+from bouncedisk.io.job_log import log_to
+from bouncedisk.studies import reproduction as checks
 
 with log_to(snakemake.log[0]) as log:
     results = checks.run_checks(Path(snakemake.params.results))

@@ -2,11 +2,11 @@
 
 import json
 
-from bouncedisk.atomic import write_text_atomic
-from bouncedisk.datasets import open_checked, write_dataset
-from bouncedisk.logutil import log_to
-from bouncedisk.sensitivity import analyse, join_maps, summary
-from bouncedisk.sensitivity_config import StudySettings
+from bouncedisk.io.atomic import write_text_atomic
+from bouncedisk.io.job_log import log_to
+from bouncedisk.io.netcdf import open_checked, write_dataset
+from bouncedisk.studies.sensitivity import analyse, join_maps, summary
+from bouncedisk.studies.sensitivity_settings import StudySettings
 
 with log_to(snakemake.log[0]) as log:
     settings = StudySettings.from_params(snakemake.params.settings)

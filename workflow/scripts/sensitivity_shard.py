@@ -1,9 +1,9 @@
 """Adapter: evaluate one shard of the sensitivity study's Sobol' sample."""
 
-from bouncedisk.datasets import write_dataset
-from bouncedisk.logutil import log_to
-from bouncedisk.sensitivity import MotorModel, run_shard
-from bouncedisk.sensitivity_config import StudySettings
+from bouncedisk.io.job_log import log_to
+from bouncedisk.io.netcdf import write_dataset
+from bouncedisk.studies.sensitivity import MotorModel, run_shard
+from bouncedisk.studies.sensitivity_settings import StudySettings
 
 with log_to(snakemake.log[0]) as log:
     settings = StudySettings.from_params(snakemake.params.settings)

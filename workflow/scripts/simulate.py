@@ -1,8 +1,8 @@
 """Adapter: run one scene and write its netCDF file."""
 
-from bouncedisk.logutil import log_to
-from bouncedisk.runner import run_scene
-from bouncedisk.scene import load_scene
+from bouncedisk.io.job_log import log_to
+from bouncedisk.model.scene import load_scene
+from bouncedisk.run.runner import run_scene
 
 with log_to(snakemake.log[0]) as log:
     scene = load_scene(snakemake.input.scene, list(snakemake.params.overrides))

@@ -1,9 +1,9 @@
 """Adapter: the cost of ensemble statistics, beside the scatter of single runs."""
 
-from bouncedisk.atomic import write_text_atomic
-from bouncedisk.logutil import log_to
-from bouncedisk.scene import load_scene
-from bouncedisk.stats_cost import half_width_table, single_run_table
+from bouncedisk.io.atomic import write_text_atomic
+from bouncedisk.io.job_log import log_to
+from bouncedisk.model.scene import load_scene
+from bouncedisk.studies.statistics_cost import half_width_table, single_run_table
 
 with log_to(snakemake.log[0]) as log:
     spec = snakemake.params.spec

@@ -2,9 +2,9 @@
 
 import xarray as xr
 
-from bouncedisk.datasets import open_checked, write_dataset
-from bouncedisk.logutil import log_to
-from bouncedisk.sweeps import combine_shards
+from bouncedisk.analysis.sweeps import combine_shards
+from bouncedisk.io.job_log import log_to
+from bouncedisk.io.netcdf import open_checked, write_dataset
 
 with log_to(snakemake.log[0]) as log:
     shards = [open_checked(p, required=("regime",)) for p in snakemake.input.shards]

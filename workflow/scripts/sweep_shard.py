@@ -1,9 +1,9 @@
 """Adapter: run one shard of a parameter sweep."""
 
-from bouncedisk.datasets import write_dataset
-from bouncedisk.logutil import log_to
-from bouncedisk.scene import load_scene
-from bouncedisk.sweeps import grid_values, run_sweep
+from bouncedisk.analysis.sweeps import grid_values, run_sweep
+from bouncedisk.io.job_log import log_to
+from bouncedisk.io.netcdf import write_dataset
+from bouncedisk.model.scene import load_scene
 
 with log_to(snakemake.log[0]) as log:
     spec = snakemake.params.spec

@@ -2,10 +2,10 @@
 
 import time
 
-from bouncedisk.datasets import write_dataset
-from bouncedisk.loadcurve import parse_loads, to_dataset, torque_speed
-from bouncedisk.logutil import log_to
-from bouncedisk.scene import load_scene
+from bouncedisk.io.job_log import log_to
+from bouncedisk.io.netcdf import write_dataset
+from bouncedisk.model.scene import load_scene
+from bouncedisk.studies.torque_speed import parse_loads, to_dataset, torque_speed
 
 with log_to(snakemake.log[0]) as log:
     scene = load_scene(snakemake.input.scene)

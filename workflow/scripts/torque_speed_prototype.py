@@ -5,10 +5,10 @@ import time
 import xarray as xr
 import yaml
 
-from bouncedisk.datasets import write_dataset
-from bouncedisk.loadcurve import motor_scene, parse_loads, to_dataset, torque_speed
-from bouncedisk.logutil import log_to
-from bouncedisk.params import Parameters
+from bouncedisk.io.job_log import log_to
+from bouncedisk.io.netcdf import write_dataset
+from bouncedisk.model.params import Parameters
+from bouncedisk.studies.torque_speed import motor_scene, parse_loads, to_dataset, torque_speed
 
 with log_to(snakemake.log[0]) as log:
     spec = snakemake.params.spec

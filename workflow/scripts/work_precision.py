@@ -2,9 +2,9 @@
 
 import json
 
-from bouncedisk.atomic import atomic_path, write_text_atomic
-from bouncedisk.logutil import log_to
-from bouncedisk.studies import work_precision, work_precision_summary
+from bouncedisk.io.atomic import atomic_path, write_text_atomic
+from bouncedisk.io.job_log import log_to
+from bouncedisk.studies.work_precision import work_precision, work_precision_summary
 
 with log_to(snakemake.log[0]) as log:
     table = work_precision(progress=log.info)

@@ -31,7 +31,7 @@ OK_STATUSES = frozenset({K.ST_EVENTS, K.ST_TIME, K.ST_REST})
 
 @dataclass(frozen=True)
 class EngineConfig:
-    """Everything the kernel needs, already validated (see :mod:`bouncedisk.scene`).
+    """Everything the kernel needs, already validated (see :mod:`bouncedisk.model.scene`).
 
     Parameters
     ----------

@@ -12,7 +12,7 @@ import sys
 import time
 from pathlib import Path
 
-from ..errors import InputError
+from ..model.errors import InputError
 
 ARG = "<arguments>"
 
@@ -48,7 +48,7 @@ def check_output(
         if out.resolve() == p.resolve():
             raise InputError(str(out), "-o", "is an input file; give another output name")
     # a device, pipe or socket in the way; a read-only file system (os.access misjudges root)
-    from ..outputs import check_output_path
+    from ..io.output_checks import check_output_path
 
     return check_output_path(out, "-o", inputs=inputs)
 
@@ -76,7 +76,7 @@ def validate(args) -> dict:
     loads = list(getattr(args, "load", None) or [])
     check_output(args.output, list(args.curve), args.sidecar, loads)
     if cores is None:
-        from ..statscli import available_cores
+        from ..run.cores import available_cores
 
         cores = available_cores()
     return {**opts, "cores": cores}
@@ -84,7 +84,7 @@ def validate(args) -> dict:
 
 def _e_sigma_option(text) -> float:
     """``--e-sigma``: the members' restitution noise ``σ_e`` (MODEL.md), in ``(0, 0.5]``."""
-    from ..params import number
+    from ..model.params import number
 
     value = number(ARG, "--e-sigma", text, positive=True)
     if value > 0.5:
@@ -94,8 +94,8 @@ def _e_sigma_option(text) -> float:
 
 def fit_command(args) -> None:
     """Run ``bouncedisk fit`` (see :mod:`bouncedisk.cli`)."""
-    from ..curves import read_curve
-    from ..datasets import write_dataset
+    from ..io.netcdf import write_dataset
+    from ..io.runup_curves import read_curve
     from .core import FitSettings, fit_curve
     from .output import fit_dataset, summary_text
 
@@ -128,9 +128,9 @@ def fit_command(args) -> None:
 
 
 def read_loads(paths: list[str], seen: dict, progress) -> list:
-    """Read and check the load curves (:func:`bouncedisk.loaddata.read_load_curve`): each file
+    """Read and check the load curves (:func:`bouncedisk.io.load_curves.read_load_curve`): each file
     once, none of them a run-up."""
-    from ..loaddata import read_load_curve
+    from ..io.load_curves import read_load_curve
 
     out = []
     for path in paths:

@@ -16,10 +16,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats as _sps
 
-from ..curves import MotorCurve
-from ..errors import InputError
-from ..loaddata import LoadCurveData
-from ..observables import first_order_trend
+from ..analysis.observables import first_order_trend
+from ..io.load_curves import LoadCurveData
+from ..io.runup_curves import MotorCurve
+from ..model.errors import InputError
 from .basins import Basin, choose, list_basins
 from .joint import LoadFit, joint_consistent, load_part, load_result
 from .model import MODEL_E_SIGMA, EnsembleSpec, member_records, param_names, physical, uniform_grid

@@ -12,9 +12,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats as _sps
 
-from ..curves import MotorCurve
-from ..errors import InputError
-from ..loaddata import LoadCurveData, check_same_setup
+from ..io.load_curves import LoadCurveData, check_same_setup
+from ..io.runup_curves import MotorCurve
+from ..model.errors import InputError
 from .loadpart import LoadPart
 from .loadpart import band as load_band
 from .model import EnsembleSpec

@@ -18,7 +18,7 @@ import math
 import numpy as np
 import xarray as xr
 
-from ..provenance import sha256_file
+from ..io.provenance import sha256_file
 from .core import FitResult
 from .loadpart import LOAD_BAND, LOAD_MEMBERS
 from .model import BOUNDS

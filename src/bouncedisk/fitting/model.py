@@ -22,9 +22,9 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from ..curves import MotorCurve
 from ..engine import EngineConfig, InitialState, simulate_arrays
-from ..records import TrajColumn
+from ..io.records import TrajColumn
+from ..io.runup_curves import MotorCurve
 
 #: Search range of every search coordinate.
 BOUNDS: dict[str, tuple[float, float]] = {

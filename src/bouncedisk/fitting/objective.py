@@ -33,7 +33,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..curves import MotorCurve
+from ..io.runup_curves import MotorCurve
 from . import detlinalg
 from .basins import rank_key
 from .loadpart import LoadPart, members_for

@@ -15,8 +15,8 @@ import numpy as np
 import xarray as xr
 from scipy.stats import chi2 as chi2_dist
 
-from ..observables import first_order_trend
-from ..provenance import base_attrs, new_run_id, sha256_file
+from ..analysis.observables import first_order_trend
+from ..io.provenance import base_attrs, new_run_id, sha256_file
 from .core import FitResult
 from .model import BOUNDS
 from .statistics import STAT_LONG_NAMES, STAT_UNITS, STATS

@@ -20,8 +20,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..curves import MotorCurve
-from ..errors import InputError
+from ..io.runup_curves import MotorCurve
+from ..model.errors import InputError
 
 
 def _same(a: float | None, b: float | None) -> bool:

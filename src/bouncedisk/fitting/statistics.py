@@ -5,7 +5,7 @@ distribution of a realization's statistics (MODEL.md "Long-run statistics of cha
 A record ``y(t)`` (rad/s on a uniform grid) is reduced to:
 
 * the trend: steady speed ``S`` and ``log τ`` of its first-order fit
-  (:func:`~bouncedisk.observables.first_order_trend`), and the rise curve as the mean speed over
+  (:func:`~bouncedisk.analysis.observables.first_order_trend`), and the rise curve as the mean speed over
   three fixed windows ``[0, τ_ref/2]``, ``[τ_ref/2, τ_ref]``, ``[τ_ref, 2τ_ref]`` (``τ_ref`` the
   data's time constant, fixed once per fit, so these are linear in the record);
 * the ripple, the residual about the trend once the rise is over (``t ≥ 3τ_ref``, or the last
@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import welch
 
-from ..observables import first_order_trend
+from ..analysis.observables import first_order_trend
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..scene import read_yaml
+from ..model.scene import read_yaml
 from .model import RESTITUTION_SEED_OFFSET, synthesize_curve
 
 #: Keys of the spec file.
@@ -23,7 +23,7 @@ SPEC_KEYS = ("parameters", "drive_frequency_hz", "Phi0_rad", "span_s", "dt_s",
 
 def read_spec(path: str | Path) -> dict:
     """Read the generator's spec file (every key of :data:`SPEC_KEYS` required)."""
-    from ..errors import InputError
+    from ..model.errors import InputError
 
     spec = read_yaml(path)
     for key in SPEC_KEYS:

@@ -1,0 +1,451 @@
+"""Observables of a run: periodicity, Lyapunov exponent, rotor speed trend, regime.
+
+All functions take plain numpy arrays of the event table (``t``, ``phase``, ``v_rel``,
+``omega_after``, ``kind``; see :mod:`bouncedisk.engine`) so they serve any solver.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from math import isfinite, log, sqrt
+
+import numpy as np
+from numba import njit
+
+from ..engine import KIND_CHATTER, KIND_IMPACT
+from ..model import stator
+
+TWO_PI = 2.0 * math.pi
+
+
+def circular_distance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance between phases on the circle, in ``[0, π]``."""
+    d = np.mod(np.asarray(a) - np.asarray(b), TWO_PI)
+    return np.minimum(d, TWO_PI - d)
+
+
+@dataclass(frozen=True)
+class Periodicity:
+    """A periodic impact sequence: ``p`` impacts every ``q`` stator periods."""
+
+    p: int
+    q: int
+    phases: np.ndarray  # the p impact phases of one cycle, sorted
+
+    @property
+    def label(self) -> str:
+        """``period-p``, or ``period-p/q`` when the cycle spans q != p stator periods."""
+        return f"period-{self.p}" if self.p == self.q else f"period-{self.p}/{self.q}"
+
+
+def find_period(
+    t: np.ndarray,
+    phase: np.ndarray,
+    v_rel: np.ndarray,
+    kind: np.ndarray,
+    omega_s: float,
+    max_period: int = 16,
+    tail: int = 200,
+    tol: float = 1e-6,
+) -> Periodicity | None:
+    """Smallest ``p <= max_period`` with ``(φ, V)_{k+p} = (φ, V)_k`` over the last ``tail`` impacts.
+
+    Parameters
+    ----------
+    t, phase, v_rel, kind : ndarray
+        Event table of a run (after transients).
+    omega_s : float
+        Stator frequency, to count stator periods per cycle.
+    tol : float
+        Tolerance on phase (radians) and relative velocity.
+
+    Returns
+    -------
+    Periodicity or None
+        ``None`` when no period up to ``max_period`` fits, or the tail has chattering rows.
+    """
+    n = min(tail, len(t))
+    if n < 2 * max_period + 2:
+        n = len(t)
+    if n < 4:
+        return None
+    sl = slice(len(t) - n, len(t))
+    ph, vr, tt, kd = phase[sl], v_rel[sl], t[sl], kind[sl]
+    for p in range(1, max_period + 1):
+        if n <= 2 * p:
+            break
+        dph = circular_distance(ph[p:], ph[:-p])
+        dv = np.abs(vr[p:] - vr[:-p])
+        same_kind = np.all(kd[p:] == kd[:-p])
+        if same_kind and np.all(dph < tol) and np.all(dv < tol * (1.0 + np.abs(vr[:-p]))):
+            q = int(round((tt[-1] - tt[-1 - p]) * omega_s / TWO_PI))
+            return Periodicity(p=p, q=q, phases=np.sort(ph[-p:]))
+    return None
+
+
+@dataclass(frozen=True)
+class ImpactJacobian:
+    """Jacobian of the impact map ``(t_k, v_k) → (t_{k+1}, v_{k+1})`` for one free flight."""
+
+    matrix: np.ndarray
+
+    @property
+    def trace(self) -> float:
+        """Trace of the Jacobian."""
+        return float(np.trace(self.matrix))
+
+    @property
+    def det(self) -> float:
+        """Determinant of the Jacobian (``e²`` for any free flight between impacts)."""
+        return float(np.linalg.det(self.matrix))
+
+
+def impact_jacobians(
+    t: np.ndarray, phase: np.ndarray, v_rel: np.ndarray, kind: np.ndarray, e: float, omega_s: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Jacobians of the exact impact map for consecutive free-flight impacts.
+
+    With ``v_k = v_s(t_k) + e V_k`` the rotor velocity after impact ``k``, flight time ``Δ`` and
+    relative impact velocity ``V_{k+1}``, differentiating the first-root condition (eq. 20) and
+    the restitution law (eq. 4) gives::
+
+        ∂t'/∂t = (v_s(t_k) − v_k + Δ)/V_{k+1},   ∂t'/∂v = Δ/V_{k+1},
+        c = e − (1 + e) w² sin φ_{k+1},
+        ∂v'/∂t = c ∂t'/∂t − e,                   ∂v'/∂v = c ∂t'/∂v − e.
+
+    At a period-1 fixed point this gives ``det J = e²`` and
+    ``trace J = 1 + e² − (1 + e)² Γ sin φ`` (MODEL.md "Impact map Jacobian").
+
+    Returns
+    -------
+    jac : ndarray, shape (m, 2, 2)
+        One matrix per valid pair.
+    index : ndarray, shape (m,)
+        Index ``k`` of the first impact of each pair. A pair is valid when both rows are impacts
+        and the free flight from ``k`` lands at ``k + 1`` (no contact in between).
+    """
+    w = omega_s
+    if len(t) < 2:
+        return np.empty((0, 2, 2)), np.empty(0, dtype=int)
+    vs = stator.velocity(phase, w)
+    v_post = vs + e * v_rel
+    dt = np.diff(t)
+    u0 = stator.position(phase[:-1])
+    landing = u0 + v_post[:-1] * dt - 0.5 * dt**2
+    ok = (
+        (kind[:-1] == KIND_IMPACT)
+        & (kind[1:] == KIND_IMPACT)
+        & (np.abs(landing - stator.position(phase[1:])) < 1e-7 * (1.0 + dt**2))
+        & (v_rel[1:] > 0.0)
+    )
+    idx = np.nonzero(ok)[0]
+    V = v_rel[idx + 1]
+    d = dt[idx]
+    a = (vs[idx] - v_post[idx] + d) / V
+    b = d / V
+    c = e - (1.0 + e) * w * w * np.sin(phase[idx + 1])
+    jac = np.empty((len(idx), 2, 2))
+    jac[:, 0, 0] = a
+    jac[:, 0, 1] = b
+    jac[:, 1, 0] = c * a - e
+    jac[:, 1, 1] = c * b - e
+    return jac, idx
+
+
+@njit(cache=True, nogil=True)
+def benettin(jac, idx, vec, prev, skip):
+    """Benettin's tangent-vector iteration over impact-map Jacobians, resetting at every reset.
+
+    ``jac[j]`` maps the tangent vector across the free flight from impact ``idx[j]`` to
+    ``idx[j] + 1``. A pair that does not follow the previous one (``idx[j] != prev + 1``: contact
+    or a complete chatter in between) starts a fresh vector: the chatter's Jacobian is zero
+    (MODEL.md "Long-run statistics"), so growth is only measured between resets.
+
+    Parameters
+    ----------
+    jac : ndarray, shape (m, 2, 2)
+    idx : ndarray of int64, shape (m,)
+        Global index of the first impact of each pair.
+    vec : ndarray, shape (2,)
+        Tangent vector carried in (updated in place, so a stream can continue).
+    prev : int
+        Global index of the pair before ``idx[0]`` (``-2`` for none).
+    skip : int
+        Leading pairs left out of the sum (transient of the vector's alignment).
+
+    Returns
+    -------
+    total, count, prev
+        Sum of ``log |J v|`` and number of terms, and the last pair's index.
+    """
+    total = 0.0
+    count = 0
+    c = 1.0 / sqrt(2.0)
+    for j in range(len(idx)):
+        k = idx[j]
+        if k != prev + 1:
+            vec[0] = c
+            vec[1] = c
+        prev = k
+        x = jac[j, 0, 0] * vec[0] + jac[j, 0, 1] * vec[1]
+        y = jac[j, 1, 0] * vec[0] + jac[j, 1, 1] * vec[1]
+        norm = sqrt(x * x + y * y)
+        if norm == 0.0 or not isfinite(norm):
+            vec[0] = c
+            vec[1] = c
+            continue
+        vec[0] = x / norm
+        vec[1] = y / norm
+        if j >= skip:
+            total += log(norm)
+            count += 1
+    return total, count, prev
+
+
+def lyapunov_exponent(
+    t: np.ndarray,
+    phase: np.ndarray,
+    v_rel: np.ndarray,
+    kind: np.ndarray,
+    e: float,
+    omega_s: float,
+    skip: int = 100,
+) -> tuple[float, float]:
+    """Largest Lyapunov exponent of the impact map between resets (Benettin, exact Jacobian).
+
+    Contact and chattering episodes collapse all perturbations (:func:`benettin`); they are
+    left out of the average, so the value is the mean expansion rate over free flights.
+
+    Returns
+    -------
+    per_impact, per_time : float
+        Exponent per impact and per unit nondimensional time (``nan`` if too few free flights).
+    """
+    jac, idx = impact_jacobians(t, phase, v_rel, kind, e, omega_s)
+    if len(idx) <= skip + 10:
+        return math.nan, math.nan
+    vec = np.full(2, 1.0 / math.sqrt(2.0))
+    total, count, _ = benettin(jac, idx.astype(np.int64), vec, -2, skip)
+    if count == 0:
+        return math.nan, math.nan
+    elapsed = float(np.sum(t[idx[skip:] + 1] - t[idx[skip:]]))
+    return total / count, total / elapsed
+
+
+def mean_rotor_speed(t: np.ndarray, omega_after: np.ndarray, t_from: float = 0.0) -> float:
+    """Time average of the rotor angular velocity from the events, ``Σ Ω_k Δt_k / Σ Δt_k``.
+
+    ``Ω`` is constant in flight (MODEL.md "Flight"), so this is exact for runs without contact
+    and a first-order approximation of the contact segments otherwise.
+    """
+    sel = t[:-1] >= t_from
+    dt = np.diff(t)[sel]
+    if dt.sum() <= 0:
+        return math.nan
+    return float(np.sum(omega_after[:-1][sel] * dt) / dt.sum())
+
+
+@dataclass(frozen=True)
+class FirstOrderTrend:
+    """``Ω(t) ≈ Ω∞ (1 − exp(−(t − t0)/τ)) + Ω0 exp(−(t − t0)/τ)`` fitted to a speed record."""
+
+    steady: float
+    tau: float
+    omega0: float
+    t0: float
+    ripple_rms: float
+
+    def __call__(self, t: np.ndarray) -> np.ndarray:
+        x = np.exp(-(np.asarray(t) - self.t0) / self.tau)
+        return self.steady * (1.0 - x) + self.omega0 * x
+
+
+def _line_fit(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
+    """Least-squares line ``y ≈ a + b x`` in closed form: ``(a, b, Σ r²)``.
+
+    Centred sums (stable when ``x`` barely varies), each a fixed-order ``np.add.reduce`` of
+    elementwise products: no BLAS call, so the result does not depend on which kernel a CPU picks
+    or on the thread count (README, "Reproducible"). A constant ``x`` gives ``b = 0``.
+    """
+    xm, ym = float(np.add.reduce(x)) / len(x), float(np.add.reduce(y)) / len(y)
+    dx, dy = x - xm, y - ym
+    sxx = float(np.add.reduce(dx * dx))
+    b = float(np.add.reduce(dx * dy)) / sxx if sxx > 0.0 else 0.0
+    a = ym - b * xm
+    r = y - (a + b * x)
+    return a, b, float(np.add.reduce(r * r))
+
+
+def first_order_trend(t: np.ndarray, omega: np.ndarray) -> FirstOrderTrend:
+    """Least-squares first-order response (steady value and time constant) through ``(t, Ω)``.
+
+    For a fixed ``τ`` the model ``Ω∞ (1 − x) + Ω0 x`` with ``x = exp(−(t − t0)/τ)`` is the line
+    ``Ω∞ + (Ω0 − Ω∞) x`` (:func:`_line_fit`, closed form), so the fit is a bounded 1-D search over
+    ``log τ`` with that solve inside (variable projection). Times enter only as ``t − t0``: the
+    time origin does not matter. The ripple is the RMS of the residual about the trend.
+    """
+    from scipy.optimize import minimize_scalar
+
+    t = np.asarray(t, float)
+    y = np.asarray(omega, float)
+    t0 = float(t[0])
+    span = float(t[-1] - t0) or 1.0
+    dt = t - t0
+
+    def solve(log_tau: float) -> tuple[float, float, float]:
+        a, b, cost = _line_fit(np.exp(-dt / math.exp(log_tau)), y)
+        return cost, a, a + b
+
+    lo, hi = math.log(1e-4 * span), math.log(10.0 * span)
+    grid = np.linspace(lo, hi, 25)
+    costs = [solve(g)[0] for g in grid]
+    k = int(np.argmin(costs))
+    a, b = grid[max(0, k - 1)], grid[min(len(grid) - 1, k + 1)]
+    best = minimize_scalar(
+        lambda g: solve(g)[0], bounds=(a, b), method="bounded", options={"xatol": 1e-6}
+    )
+    log_tau = float(best.x) if best.fun <= costs[k] else float(grid[k])
+    _cost, s, o0 = solve(log_tau)
+    tau = math.exp(log_tau)
+    resid = y - (s * (1.0 - np.exp(-dt / tau)) + o0 * np.exp(-dt / tau))
+    return FirstOrderTrend(
+        steady=float(s), tau=tau, omega0=float(o0), t0=t0, ripple_rms=float(np.std(resid))
+    )
+
+
+#: Regime codes and names (MODEL.md "Long-run statistics of chaotic motion"); ``unresolved``:
+#: no period up to the search limit, no chatter and no positive exponent (run longer).
+REGIMES: dict[int, str] = {
+    0: "unresolved",
+    1: "periodic",
+    2: "chattering-periodic",
+    3: "chaotic-reinjection",
+    4: "chaotic",
+    5: "rest",
+}
+REGIME_CODES: dict[str, int] = {name: code for code, name in REGIMES.items()}
+
+
+def regime_flags(dtype: type | str = np.int64) -> dict:
+    """CF ``flag_values``/``flag_meanings`` of a ``regime`` variable (:data:`REGIMES`).
+
+    CF flag meanings are single words, so ``chattering-periodic`` is written
+    ``chattering_periodic``.
+    """
+    return {
+        "flag_values": np.array(list(REGIMES), dtype=dtype),
+        "flag_meanings": " ".join(n.replace("-", "_") for n in REGIMES.values()),
+    }
+
+
+@dataclass(frozen=True)
+class Regime:
+    """Dynamical regime of a run's tail: a name of :data:`REGIMES`, and ``[p, q]`` if periodic."""
+
+    name: str
+    p: int = 0  # impacts per cycle (chatter tails not counted)
+    q: int = 0  # stator periods per cycle
+
+    @property
+    def code(self) -> int:
+        """The regime's code in :data:`REGIMES`."""
+        return REGIME_CODES[self.name]
+
+
+def chatter_cycle(
+    t: np.ndarray,
+    phase: np.ndarray,
+    v_rel: np.ndarray,
+    kind: np.ndarray,
+    omega_s: float,
+    tol: float = 1e-6,
+) -> tuple[int, int] | None:
+    """``(p, q)`` if the tail repeats one chatter-to-chatter cycle, else ``None``.
+
+    A complete chatter resets the state (MODEL.md), so a cycle that contains one repeats exactly:
+    the last three chatters must be equally spaced in events, and the events of the last two
+    cycles must agree in kind, phase and relative velocity within ``tol``.
+    """
+    where = np.nonzero(kind == KIND_CHATTER)[0]
+    if len(where) < 3:
+        return None
+    a, b, c = where[-3], where[-2], where[-1]
+    if c - b != b - a:
+        return None
+    m = c - b
+    dph = circular_distance(phase[b + 1 : c + 1], phase[a + 1 : b + 1])
+    dv = np.abs(v_rel[b + 1 : c + 1] - v_rel[a + 1 : b + 1])
+    if np.any(kind[b + 1 : c + 1] != kind[a + 1 : b + 1]) or np.any(dph > tol) or np.any(dv > tol):
+        return None
+    q = int(round((t[c] - t[b]) * omega_s / TWO_PI))
+    return int(m - 1), q
+
+
+def classify(
+    t: np.ndarray,
+    phase: np.ndarray,
+    v_rel: np.ndarray,
+    kind: np.ndarray,
+    omega_s: float,
+    lyapunov: float,
+    chatters: int | None = None,
+    max_period: int = 32,
+) -> Regime:
+    """Classify the tail of a run (MODEL.md "Regimes").
+
+    Parameters
+    ----------
+    t, phase, v_rel, kind : ndarray
+        The last events of a run, after its transient.
+    lyapunov : float
+        Exponent per impact between resets (:func:`lyapunov_exponent`), ``nan`` if unknown.
+    chatters : int, optional
+        Complete chatters over the whole averaging window, when longer than the tail (a rare
+        reinjection may fall outside the tail); default: those in the tail.
+
+    Returns
+    -------
+    Regime
+        ``rest`` (no event), ``periodic`` (``p`` impacts every ``q`` periods, no chatter in the
+        tail), ``chattering-periodic`` (one chatter-to-chatter cycle repeating),
+        ``chaotic-reinjection`` (chatters, no repeating cycle), ``chaotic`` (positive exponent),
+        else ``unresolved``.
+    """
+    if len(t) == 0:
+        return Regime("rest")
+    in_tail = bool(np.any(kind == KIND_CHATTER))
+    if in_tail:
+        cyc = chatter_cycle(t, phase, v_rel, kind, omega_s)
+        if cyc is not None:
+            return Regime("chattering-periodic", *cyc)
+        return Regime("chaotic-reinjection")
+    per = find_period(t, phase, v_rel, kind, omega_s, max_period=max_period, tail=len(t))
+    if per is not None:
+        return Regime("periodic", per.p, per.q)
+    if chatters:
+        return Regime("chaotic-reinjection")
+    if math.isfinite(lyapunov) and lyapunov > 0.0:
+        return Regime("chaotic")
+    return Regime("unresolved")
+
+
+def period_n_threshold(n: int, e: float) -> float:
+    """``Γ_n = nπ(1 − e)/(1 + e)``: smallest ``Γ`` with a period-n orbit (MODEL.md)."""
+    return n * math.pi * (1.0 - e) / (1.0 + e)
+
+
+def period_doubling_threshold(n: int, e: float) -> float:
+    """``Γ = sqrt(Γ_n² + (2(1 + e²)/(1 + e)²)²)``: the period-n orbit doubles (MODEL.md)."""
+    g = period_n_threshold(n, e)
+    return math.sqrt(g * g + (2.0 * (1.0 + e * e) / (1.0 + e) ** 2) ** 2)
+
+
+def period_n_fixed_point(n: int, e: float, omega_s: float) -> tuple[float, float]:
+    """Stable period-n orbit: impact phase ``φ`` (``cos φ = Γ_n/Γ``, ``sin φ > 0``) and the rotor
+    velocity just after impact ``v⁺ = T/2`` with ``T = 2πn/w``."""
+    g = omega_s**2
+    c = period_n_threshold(n, e) / g
+    if c > 1.0:
+        raise ValueError(f"no period-{n} orbit below Γ_{n} = {period_n_threshold(n, e):.6g}")
+    return math.acos(c), math.pi * n / omega_s

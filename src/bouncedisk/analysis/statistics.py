@@ -1,0 +1,278 @@
+"""Ensemble statistics with confidence intervals (``bouncedisk stats``; INTERFACES.md "Statistics").
+
+A long-run number of a chaotic scene is an ensemble average (MODEL.md "Long-run statistics of
+chaotic motion"): every member's time average over ``[t0 + discard, t_end]`` is one sample, and
+the 95 % interval is Student's ``t`` across members, ``mean ± t_{0.975, K−1} s / sqrt(K)``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, fields
+
+import numpy as np
+import xarray as xr
+from scipy.special import stdtrit
+
+from ..io.provenance import base_attrs, new_run_id
+from ..model.engine_config import engine_config
+from ..model.errors import InputError
+from ..model.params import Scales
+from ..model.scene import Scene
+from ..run.runner import scene_attrs
+from . import observables as ob
+from .ensembles import MemberStats, run_ensemble
+
+#: Ensemble statistics: field -> (long name, units) in nondimensional units (INTERFACES.md).
+QUANTITIES: dict[str, tuple[str, str]] = {
+    "mean_omega": ("time-averaged rotor angular velocity", "1"),
+    "mean_slip": ("time-averaged slip s = r_phi * omega - omega_stator", "1"),
+    "impact_rate": ("impacts per unit time (chattering tails not counted)", "1"),
+    "chatter_rate": ("complete chattering sequences per unit time", "1"),
+    "chatter_interval": (
+        "mean time between complete chattering sequences (members with two or more)",
+        "1",
+    ),
+    "lyapunov": ("largest Lyapunov exponent of the impact map per impact, between resets", "1"),
+    "power_torsion_in": ("mean power the stator puts in through friction", "1"),
+    "power_axial_in": ("mean power the stator puts in through the normal force", "1"),
+    "power_chatter_axial": ("mean axial power left to summed chattering tails", "1"),
+    "power_out": ("mean output power tau_L * mean omega", "1"),
+    "efficiency_torsion": ("efficiency of the friction drive, power_out / power_torsion_in", "1"),
+}
+#: Quantities reported only for scenes with the ``load`` effect (zero by definition without it).
+LOAD_ONLY = ("power_out", "efficiency_torsion")
+#: Largest relative residuals of the energy balances over the members (MODEL.md).
+AUDIT = {
+    "audit_residual_axial": "largest relative residual of the axial energy balance",
+    "audit_residual_torsion": "largest relative residual of the torsional energy balance",
+}
+#: Powers converted to W for physical scenes: field -> attribute of Scales giving its unit.
+POWER_UNITS = {
+    "power_out": "torsion_power",
+    "power_torsion_in": "torsion_power",
+    "power_axial_in": "axial_power",
+}
+LEVEL = 0.95
+#: Quantities that cannot be negative: their intervals are cut at 0 (the parameter space).
+NONNEGATIVE = ("impact_rate", "chatter_rate", "chatter_interval")
+
+
+def confidence_interval(
+    values: Sequence[float], level: float = LEVEL
+) -> tuple[float, float, float]:
+    """Mean and Student-t interval ``mean ± t_{(1+level)/2, K−1} s/√K`` of the finite values.
+
+    Returns ``(mean, low, high)``; the interval is ``nan`` with fewer than two finite values and
+    has zero width when all values are equal (a periodic attractor).
+    """
+    x = np.asarray(values, float)
+    x = x[np.isfinite(x)]
+    if len(x) == 0:
+        return math.nan, math.nan, math.nan
+    mean = float(np.mean(x))
+    if len(x) < 2:
+        return mean, math.nan, math.nan
+    # the t quantile t_{(1+level)/2, K-1}: scipy.stats.t.ppf's own formula, without importing
+    # scipy.stats (about half a second of every pipeline job that reads an ensemble)
+    half = float(stdtrit(len(x) - 1, 0.5 + level / 2.0) * np.std(x, ddof=1) / math.sqrt(len(x)))
+    return mean, mean - half, mean + half
+
+
+@dataclass(frozen=True)
+class EnsembleStats:
+    """An ensemble's members and their summary (INTERFACES.md fields)."""
+
+    members: list[MemberStats]
+    discard: float
+    duration: float
+    load: bool = False
+    scales: Scales | None = None
+
+    def column(self, name: str) -> np.ndarray:
+        """One per-member quantity as an array in member order."""
+        return np.array([getattr(m, name) for m in self.members], dtype=float)
+
+    @property
+    def regime(self) -> tuple[str, float, list[int] | None]:
+        """Most common member regime, the fraction of members in it, and its ``[p, q]``."""
+        counts = Counter((m.regime, m.period_p, m.period_q) for m in self.members)
+        by_regime = Counter(m.regime for m in self.members)
+        code, n = by_regime.most_common(1)[0]
+        (_, p, q), _ = next((k, c) for k, c in counts.most_common() if k[0] == code)
+        period = [p, q] if p > 0 else None
+        return ob.REGIMES[code], n / len(self.members), period
+
+    @property
+    def regime_tie(self) -> list[str]:
+        """The regimes that share the largest number of members, when several do (else ``[]``).
+
+        :attr:`regime` then names the first of them met in member order.
+        """
+        by_regime = Counter(m.regime for m in self.members)
+        top = max(by_regime.values())
+        tied = [ob.REGIMES[code] for code, n in by_regime.items() if n == top]
+        return tied if len(tied) > 1 else []
+
+    def summary(self) -> dict:
+        """The JSON object of ``bouncedisk stats --json`` (non-finite numbers as ``null``)."""
+        out: dict = {
+            "members": len(self.members),
+            "discard": self.discard,
+            "duration": self.duration,
+        }
+        for name in QUANTITIES:
+            if name in LOAD_ONLY and not self.load:
+                continue
+            mean, low, high = confidence_interval(self.column(name))
+            if name in NONNEGATIVE and low < 0.0:
+                low = 0.0
+            out[name] = _finite_or_none(mean)
+            out[f"{name}_ci95"] = [_finite_or_none(low), _finite_or_none(high)]
+        for name in AUDIT:
+            out[name] = _finite_or_none(float(np.nanmax(self.column(name), initial=-np.inf)))
+        if self.scales is not None:
+            out.update(self._physical_powers())
+        lam = self.column("lyapunov")
+        reset = float(np.mean(np.isneginf(lam)))
+        out["lyapunov_reset_fraction"] = reset
+        name, frac, period = self.regime
+        out["regime"] = name
+        out["regime_fraction"] = frac
+        out["regime_tie"] = self.regime_tie
+        out["period"] = period
+        return out
+
+    def _physical_powers(self) -> dict:
+        """Powers in W and the motor's mechanical efficiency ``η = P_out / (P_ax + P_t)``
+        (MODEL.md "The motor under load"), each with its interval across members."""
+        sc = self.scales
+        out: dict = {}
+        watts = {}
+        for name, unit in POWER_UNITS.items():
+            if name in LOAD_ONLY and not self.load:
+                continue
+            watts[name] = self.column(name) * getattr(sc, unit)
+            mean, low, high = confidence_interval(watts[name])
+            out[f"{name}_W"] = _finite_or_none(mean)
+            out[f"{name}_W_ci95"] = [_finite_or_none(low), _finite_or_none(high)]
+        if self.load:
+            with np.errstate(invalid="ignore", divide="ignore"):
+                eta = watts["power_out"] / (watts["power_axial_in"] + watts["power_torsion_in"])
+            mean, low, high = confidence_interval(eta)
+            out["efficiency"] = _finite_or_none(mean)
+            out["efficiency_ci95"] = [_finite_or_none(low), _finite_or_none(high)]
+        return out
+
+
+def _finite_or_none(x: float) -> float | None:
+    return float(x) if math.isfinite(x) else None
+
+
+def ensemble_window(scene: Scene) -> tuple[float, float]:
+    """``(t_from, t_end)`` of a scene's averages: after ``stats.discard``, to ``stop.time``.
+
+    Raises
+    ------
+    InputError
+        No time stop, or an averaging window shorter than one stator period ``2 pi / omega_s``.
+    """
+    if scene.stop.time is None:
+        raise InputError(
+            scene.source,
+            "stop",
+            "statistics are time averages: give stop.time or stop.periods, not stop.impacts",
+        )
+    t_from, t_end = scene.initial.t + scene.stats.discard, scene.stop.time
+    period = 2.0 * math.pi / scene.params.omega_s
+    if t_end - t_from < period:
+        raise InputError(
+            scene.source,
+            "stats.discard",
+            f"leaves {t_end - t_from:.3g} time units to average over, less than one stator "
+            f"period ({period:.4g}): too short to hold an impact or a cycle, so no regime or rate "
+            "can be measured; lower stats.discard or raise stop.time",
+        )
+    return t_from, t_end
+
+
+def run_stats(
+    scene: Scene,
+    cores: int = 1,
+    on_member: Callable[[int, int], None] | None = None,
+    should_stop: Callable[[], bool] | None = None,
+) -> EnsembleStats:
+    """Run a scene's ensemble (``ensemble.members`` members) and reduce it.
+
+    Raises
+    ------
+    InputError
+        When the scene does not stop on time, or is not the exact bouncing model.
+    """
+    t_from, t_end = ensemble_window(scene)
+    if scene.solver.method != "exact" or scene.model != "bouncing":
+        raise InputError(
+            scene.source, "solver.method", "statistics run the exact bouncing model only"
+        )
+    cfg = engine_config(scene)
+    members = run_ensemble(
+        cfg,
+        scene.initial,
+        scene.ensemble.members,
+        t_from,
+        cores=cores,
+        on_member=on_member,
+        should_stop=should_stop,
+    )
+    return EnsembleStats(
+        members, scene.stats.discard, t_end - t_from, "load" in scene.effects, scene.scales
+    )
+
+
+def to_dataset(scene: Scene, result: EnsembleStats, wall_time_s: float) -> xr.Dataset:
+    """Per-member values (dimension ``member``) with the summary and provenance as attributes."""
+    data = {}
+    for f in fields(MemberStats):
+        if f.name == "member":
+            continue
+        values = result.column(f.name)
+        long_name, units = QUANTITIES.get(
+            f.name, (AUDIT.get(f.name, f.name.replace("_", " ")), "1")
+        )
+        if f.name in ("regime", "period_p", "period_q", "n_impacts", "n_chatter"):
+            values = values.astype(np.int64)
+        data[f.name] = ("member", values, {"long_name": long_name, "units": units})
+    data["regime"][2].update(
+        {
+            "long_name": "dynamical regime of the member",
+            **ob.regime_flags(np.int64),
+        }
+    )
+    data["period_p"][2]["long_name"] = "impacts per cycle (periodic regimes; 0 otherwise)"
+    data["period_q"][2]["long_name"] = "stator periods per cycle (periodic regimes; 0 otherwise)"
+    data["duration"][2]["long_name"] = "averaging time of the member"
+    members = np.array([m.member for m in result.members], dtype=np.int64)
+    ds = xr.Dataset(data, coords={"member": ("member", members, {"long_name": "ensemble member"})})
+    ds.attrs.update(base_attrs(f"bouncedisk ensemble statistics of scene '{scene.name}'"))
+    ds.attrs.update(scene_attrs(scene))
+    summary = result.summary()
+    for k, v in summary.items():
+        if isinstance(v, list) and v and isinstance(v[0], str):
+            v = ",".join(v)  # regime_tie: names of the tied regimes
+        elif isinstance(v, list):
+            v = [math.nan if x is None else x for x in v] if v else "none"
+        ds.attrs[f"stats_{k}"] = math.nan if v is None else v
+    ds.attrs.update(
+        {
+            "ensemble_members": len(result.members),
+            "ensemble_seed": scene.ensemble.seed,
+            "confidence_level": LEVEL,
+            "run_id": new_run_id(f"{scene.name}-stats", scene.sha256),
+            "wall_time_s": round(wall_time_s, 6),
+            "n_impacts": int(sum(m.n_impacts for m in result.members)),
+            "status": "completed",
+        }
+    )
+    return ds

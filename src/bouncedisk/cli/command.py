@@ -1,0 +1,192 @@
+"""The ``bouncedisk`` command (INTERFACES.md "Package and commands").
+
+Errors a user can cause print one line ``bouncedisk: error: FILE: FIELD: what is wrong`` and
+exit with status 2; nothing is written then. An interrupted run (Ctrl-C) leaves no output and
+exits 130.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import os
+import signal
+import sys
+
+from .. import __version__
+from ..model.errors import InputError
+from .check import _add_check
+from .common import EXIT_FAIL, EXIT_INTERRUPT, EXIT_USER, flush_stdout
+from .fit import _add_fit
+from .info import _add_info
+from .runs import _add_runs
+from .simulate import _add_simulate
+from .stats import _add_stats
+from .torque_speed import _add_torque_speed
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """Argument errors as one line ``bouncedisk: error: ...`` and exit status 2 (no usage block).
+
+    Subparsers inherit the class (``add_subparsers`` uses the parent's type).
+    """
+
+    def error(self, message: str):
+        """Print one line naming the command and the problem, then exit 2."""
+        message = " ".join(message.split())
+        self.exit(
+            EXIT_USER, f"bouncedisk: error: {self.prog}: {message} (see {self.prog} --help)\n"
+        )
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``bouncedisk`` command and its subcommands."""
+    parser = OneLineParser(
+        prog="bouncedisk",
+        description="Exact event-driven simulation of a rotor bouncing on a vibrating, "
+        "twisting stator.",
+    )
+    parser.add_argument("--version", action="version", version=f"bouncedisk {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for add in (_add_simulate, _add_stats, _add_info, _add_runs, _add_check, _add_fit):
+        add(sub)
+    _add_torque_speed(sub)
+    return parser
+
+
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt
+
+
+def _install_signal_handlers() -> None:
+    """Ctrl-C (SIGINT) and SIGTERM stop a run cleanly: temporaries removed, no output written.
+
+    SIGINT is set explicitly because a process started in the background by a non-interactive
+    shell inherits it ignored, and Python then installs no handler of its own.
+    """
+    try:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGTERM, _interrupt)
+    except ValueError:  # not the main thread (embedded use): leave the host's handlers alone
+        pass
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the console script."""
+    _install_signal_handlers()
+    parser = build_parser()
+    args, extra = parser.parse_known_args(argv)
+    if extra and args.command == "runs":  # run ids after options: `runs diff A --json B`
+        bad = [x for x in extra if x.startswith("-")]
+        if bad:
+            print(f"bouncedisk: error: runs: unknown option {bad[0]}", file=sys.stderr)
+            return EXIT_USER
+        args.words += extra
+    elif extra:
+        parser.error(f"unrecognized arguments: {' '.join(extra)}")
+    from ..io import atomic
+
+    stdout, sys.stdout = sys.stdout, _NamedStdout(sys.stdout)
+    try:
+        with atomic.recording_outputs():
+            code, kept = _run_command(args)
+    finally:
+        sys.stdout = stdout
+    if kept:  # interrupted or failed while recording the run: the outputs stay
+        names = ", ".join(str(p) for p in kept)
+        print(f"bouncedisk: the outputs were written and kept: {names}", file=sys.stderr)
+    return code
+
+
+def _discard_stdout() -> None:
+    """Point standard output at /dev/null: what could not be written raises no second error
+    when Python flushes it at exit."""
+    if getattr(sys.stdout, "_stream", sys.stdout) is not sys.__stdout__:
+        return  # a caller's stream (tests, embedding): theirs to handle
+    with contextlib.suppress(OSError, ValueError, io.UnsupportedOperation):
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.__stdout__.fileno())
+
+
+class _NamedStdout:
+    """Standard output whose write errors name it: ``OSError`` with filename ``<stdout>``."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def __getattr__(self, name: str):
+        return getattr(self._stream, name)
+
+    def _call(self, name: str, *a):
+        try:
+            return getattr(self._stream, name)(*a)
+        except BrokenPipeError:
+            raise
+        except OSError as ex:
+            raise OSError(ex.errno, ex.strerror or str(ex), "<stdout>") from None
+
+    def write(self, text: str) -> int:
+        return self._call("write", text)
+
+    def flush(self) -> None:
+        self._call("flush")
+
+
+def _run_command(args: argparse.Namespace) -> tuple[int, list]:
+    """Run a subcommand; on any failure remove the outputs it wrote (``atomic``).
+
+    Standard output is flushed before the command counts as done, so that a full disk or a
+    closed pipe there is an error too. Returns the exit status and the outputs that were
+    declared final (by tracking) before a failure, to be named to the user.
+    """
+    from ..io import atomic
+
+    try:
+        code = args.func(args)
+        flush_stdout()
+        return code, []
+    except BaseException as ex:
+        if not isinstance(ex, BrokenPipeError | SystemExit):  # a reader that stopped early: done
+            atomic.remove_outputs()
+        code = _report(ex)
+        kept = getattr(ex, "kept_outputs", [])
+        return code, kept
+
+
+def _report(exc: BaseException) -> int:
+    """Print one line for a failed command; return its exit status (or re-raise)."""
+    try:
+        raise exc
+    except InputError as ex:
+        print(f"bouncedisk: error: {ex.line()}", file=sys.stderr)
+        return EXIT_USER
+    except KeyboardInterrupt as ex:
+        if getattr(ex, "kept_outputs", None):
+            print("bouncedisk: interrupted while recording the run", file=sys.stderr)
+        else:
+            print("bouncedisk: interrupted; no output written", file=sys.stderr)
+        return EXIT_INTERRUPT
+    except BrokenPipeError:
+        _discard_stdout()
+        return 0
+    except MemoryError:
+        print(
+            "bouncedisk: error: out of memory: the request needs more memory than this machine "
+            "has; ask for less (fewer impacts, a larger outputs.trajectory.dt)",
+            file=sys.stderr,
+        )
+        return EXIT_USER
+    except OSError as ex:  # a file the user named cannot be read or written
+        if ex.filename == "<stdout>":
+            _discard_stdout()
+        where = f"{ex.filename}: " if ex.filename else ""
+        reason = ex.strerror or " ".join(str(ex).split()) or type(ex).__name__
+        print(f"bouncedisk: error: {where}{reason}", file=sys.stderr)
+        return EXIT_USER
+    except Exception as ex:  # engine failures: one line, no traceback
+        from ..engine import EngineError
+
+        if isinstance(ex, EngineError):
+            print(f"bouncedisk: error: {ex}", file=sys.stderr)
+            return EXIT_FAIL
+        raise

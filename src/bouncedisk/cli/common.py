@@ -1,0 +1,30 @@
+"""What every subcommand shares: exit statuses, ``--set``, flushing stdout."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+EXIT_USER = 2
+EXIT_FAIL = 1
+EXIT_INTERRUPT = 130
+
+
+def _add_set_option(p: argparse.ArgumentParser, example: str) -> None:
+    """``--set KEY=VALUE`` (repeatable): override a scene field."""
+    p.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        help=f"override a scene field, e.g. --set {example} (repeatable)",
+    )
+
+
+def flush_stdout() -> None:
+    """Flush standard output; a failure (``> /dev/full``) is an ``OSError`` naming ``<stdout>``."""
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        raise
+    except OSError as ex:
+        raise OSError(ex.errno, ex.strerror or str(ex), "<stdout>") from None

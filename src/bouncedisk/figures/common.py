@@ -1,0 +1,40 @@
+"""What every figure shares: colours, parameter labels, saving atomically."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import xarray as xr
+from matplotlib.figure import Figure
+
+from ..io.atomic import atomic_path
+from .joint_fit import fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
+from .load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
+
+TWO_PI = 2 * math.pi
+COLORS = {"rotor": "#1f77b4", "stator": "#7f7f7f", "fit": "#d62728", "data": "#2ca02c"}
+
+
+def save_figure(fig: Figure, *paths: str | Path, dpi: int = 150) -> None:
+    """Save ``fig`` to each path (format from the suffix), atomically."""
+    for p in paths:
+        with atomic_path(p) as tmp:
+            fig.savefig(tmp, dpi=dpi, format=Path(p).suffix.lstrip("."), bbox_inches="tight")
+
+
+def _param(ds: xr.Dataset, name: str) -> float:
+    """A parameter from the attributes, or from a scalar coordinate (a slice of a sweep)."""
+    if name in ds.attrs:
+        return float(ds.attrs[name])
+    if name in ds.coords and ds[name].size == 1:
+        return float(ds[name].values)
+    return math.nan
+
+
+def _title(ds: xr.Dataset) -> str:
+    a = ds.attrs
+    return (
+        f"e = {a.get('e'):.3g}, ω_s = {a.get('omega_s'):.3g}, R_φ = {a.get('r_phi'):.3g}, "
+        f"ψ = {a.get('psi'):.3g}"
+    )

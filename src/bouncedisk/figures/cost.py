@@ -1,0 +1,92 @@
+"""What accuracy and statistics cost: work–precision, scaling, stats cost."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
+
+from .common import COLORS
+from .joint_fit import fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
+from .load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
+
+
+def fig_work_precision(table: pd.DataFrame) -> Figure:
+    """Error against CPU time, one line per solver and case (log–log)."""
+    cases = list(dict.fromkeys(table["case"]))
+    fig = Figure(figsize=(5.5 * len(cases), 4.5), layout="constrained")
+    axes = fig.subplots(1, len(cases), squeeze=False)[0]
+    for ax, case in zip(axes, cases, strict=True):
+        sub = table[table["case"] == case]
+        for solver, g in sub.groupby("solver", sort=False):
+            g = g.sort_values("cpu_s")
+            ax.loglog(g["cpu_s"], g["error"].clip(lower=1e-17), "o-", ms=4, lw=1, label=solver)
+        ax.set_xlabel("CPU time [s]")
+        ax.set_ylabel("max error in impact times (first 20)")
+        ax.set_title(case, fontsize=10)
+        ax.grid(True, which="both", lw=0.3)
+        ax.legend(fontsize=8)
+    return fig
+
+
+def fig_scaling(table: pd.DataFrame) -> Figure:
+    """Cost per impact against omega_s, total time and memory against the number of impacts."""
+    fig = Figure(figsize=(13.0, 4.0), layout="constrained")
+    a1, a2, a3 = fig.subplots(1, 3)
+    w = table[table["study"] == "omega"]
+    a1.semilogx(w["omega_s"], 1e9 * w["s_per_impact"], "o-")
+    a1.set_xlabel(r"$\omega_s$")
+    a1.set_ylabel("time per impact [ns]")
+    a1.set_ylim(bottom=0)
+    n = table[table["study"] == "impacts"]
+    a2.loglog(n["n_impacts"], n["seconds"], "o-", label="measured")
+    if len(n):
+        x = n["n_impacts"].values
+        a2.loglog(x, n["seconds"].values[-1] * x / x[-1], "--", color="k", lw=0.8, label="linear")
+    a2.set_xlabel("impacts")
+    a2.set_ylabel("wall time [s]")
+    a2.legend(fontsize=8)
+    m = table[table["study"] == "memory"]
+    a3.loglog(m["n_impacts"], m["peak_mb"], "o-")
+    a3.set_xlabel("impacts (events only, streamed to netCDF)")
+    a3.set_ylabel("peak memory [MB]")
+    return fig
+
+
+def fig_stats_cost(table: pd.DataFrame, singles: pd.DataFrame) -> Figure:
+    """What statistics cost: CI half-width of the mean rotor speed against CPU time.
+
+    Left: the half-width for each averaging time against the CPU time of the ensemble (members ×
+    duration), with the ``1/sqrt(cost)`` slope; the grey band is ± the standard deviation of
+    single runs whose ``e`` differs by 1e-9 steps. Right: those single runs' averages beside the
+    largest ensemble's mean and 95 % interval.
+    """
+    fig = Figure(figsize=(11.0, 4.3), layout="constrained")
+    ax, ax2 = fig.subplots(1, 2)
+    for d, grp in table.groupby("duration"):
+        ax.loglog(grp["cpu_s"], grp["half_width"], "o-", ms=4, label=f"duration {d:g}")
+    x = np.array([table["cpu_s"].min(), table["cpu_s"].max()])
+    ref = table.loc[table["cpu_s"].idxmin()]
+    ax.loglog(x, ref["half_width"] * np.sqrt(ref["cpu_s"] / x), "k--", lw=0.8,
+              label=r"$\propto 1/\sqrt{\mathrm{CPU}}$")  # fmt: skip
+    sd = float(singles["mean_omega"].std(ddof=1))
+    ax.axhspan(sd * 0.98, sd * 1.02, color="0.5", alpha=0.5,
+               label=f"scatter of single runs (sd {sd:.2f})")  # fmt: skip
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.yaxis.set_minor_formatter(NullFormatter())
+    ax.set_xlabel("CPU time of the ensemble [s] (one core)")
+    ax.set_ylabel(r"95% half-width of the mean rotor speed $\bar\Omega$")
+    ax.legend(fontsize=7)
+    ax.set_title("cost of a confidence interval", fontsize=10)
+    best = table.loc[table["member_time"].idxmax()]
+    ax2.axhspan(best["ci_low"], best["ci_high"], color=COLORS["fit"], alpha=0.3,
+                label=f"ensemble: {int(best['members'])} members × {best['duration']:g}, 95%")  # fmt: skip
+    ax2.axhline(best["mean_omega"], color=COLORS["fit"], lw=1)
+    ax2.plot(singles["de"] * 1e9, singles["mean_omega"], "o", color=COLORS["rotor"],
+             label="single runs (no noise)")  # fmt: skip
+    ax2.set_xlabel(r"change of $e$ [$10^{-9}$]")
+    ax2.set_ylabel(r"time-averaged rotor speed $\bar\Omega$")
+    ax2.set_title("single runs jump; the ensemble statistic does not", fontsize=10)
+    ax2.legend(fontsize=7)
+    return fig

@@ -1,0 +1,135 @@
+"""The motor's run-up against a measured curve (Fig. 5) and fit profiles."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+from matplotlib.figure import Figure
+
+from .common import COLORS
+from .joint_fit import fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
+from .load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
+
+
+def fig5_motor(
+    curve: pd.DataFrame,
+    simulated: pd.DataFrame | None = None,
+    fitted: xr.Dataset | None = None,
+    sim_label: str = "simulation",
+) -> Figure:
+    """Paper Fig. 5: measured rotor speed beside the bouncing-disk model fitted to it.
+
+    Parameters
+    ----------
+    curve : DataFrame
+        Measured ``time_s``, ``omega_rad_s`` (for a fit of several run-ups, the fit file's
+        ``omega_measured``, their mean, is drawn instead: the data the fit compares with).
+    simulated : DataFrame, optional
+        Model speed ``time_s``, ``omega_rad_s`` (unfitted scales) when no fit is given.
+    fitted : Dataset, optional
+        A fit file (INTERFACES.md): ``omega_measured``, ``omega_fitted`` (the fitted model's
+        ensemble mean) on ``time``, with ``omega_fitted_low``/``omega_fitted_high`` (its 95 %
+        interval) and both first-order trends when present. The residual panel shows the data
+        minus the ensemble mean, with the members' central 95 % (plus the measurement noise)
+        as the band a single realization should stay in.
+    """
+    fig = Figure(figsize=(8.0, 5.5 if fitted is not None else 4.0), layout="constrained")
+    if fitted is not None:
+        ax, axr = fig.subplots(2, 1, sharex=True, height_ratios=[3, 1])
+    else:
+        ax, axr = fig.add_subplot(), None
+    runs = int(fitted.attrs.get("runs", 1)) if fitted is not None else 1
+    if runs > 1:  # run-ups fitted together: the data the fit compares with is their mean
+        ax.plot(fitted["time"], fitted["omega_measured"], color=COLORS["data"], lw=0.6,
+                label=f"measured: mean of {runs} run-ups")  # fmt: skip
+    else:
+        ax.plot(curve["time_s"], curve["omega_rad_s"], color=COLORS["data"], lw=0.6,
+                label="measured (prototype curve)")  # fmt: skip
+    if fitted is not None:
+        _fig5_fitted(ax, axr, fitted)
+    elif simulated is not None:
+        ax.plot(simulated["time_s"], simulated["omega_rad_s"], color=COLORS["rotor"], lw=0.8,
+                label=sim_label)  # fmt: skip
+        ax.set_xlabel("time [s]")
+    ax.set_ylabel("rotor angular velocity [rad/s]")
+    ax.legend(loc="lower right", fontsize=8)
+    return fig
+
+
+def _fig5_fitted(ax, axr, fitted: xr.Dataset) -> None:
+    """Fig. 5's fitted model, trends and residual panel."""
+    t = fitted["time"].values
+    mean = fitted["omega_fitted"].values
+    if "omega_fitted_low" in fitted:
+        ax.fill_between(t, fitted["omega_fitted_low"].values, fitted["omega_fitted_high"].values,
+                        color=COLORS["fit"], alpha=0.35, lw=0,
+                        label="fitted model: 95% interval of the ensemble mean")  # fmt: skip
+    ax.plot(t, mean, color=COLORS["fit"], lw=0.9, label="fitted model: ensemble mean")
+    for name, style, label in (
+        ("trend_measured", "--", "first-order trend of the data"),
+        ("trend_fitted", ":", "first-order trend of the fitted model"),
+    ):
+        if name in fitted:
+            ax.plot(t, fitted[name].values, style, color="k", lw=1, label=label)
+    resid = fitted["omega_measured"].values - mean
+    if "residual_band_low" in fitted:
+        axr.fill_between(t, fitted["residual_band_low"].values,
+                         fitted["residual_band_high"].values, color=COLORS["fit"], alpha=0.3,
+                         lw=0, label="95% of the members + noise")  # fmt: skip
+        if "residual_outside_fraction" in fitted.attrs:
+            a = fitted.attrs
+            axr.set_title(f"outside the band: {100 * a['residual_outside_fraction']:.1f} % of the "
+                          f"samples, longest run {1e3 * a['residual_longest_run_s']:.2g} ms",
+                          fontsize=7)  # fmt: skip
+        axr.legend(loc="upper right", fontsize=7)
+    axr.plot(t, resid, color="k", lw=0.4)
+    axr.axhline(0, color=COLORS["fit"], lw=0.8)
+    axr.set_ylabel("data − model [rad/s]")
+    axr.set_xlabel("time [s]")
+    a = fitted.attrs
+    ax.set_title(
+        f"data: S = {a.get('steady_speed_rad_s', float('nan')):.4g} rad/s, "
+        f"τ = {a.get('time_constant_s', float('nan')):.3g} s; fitted model: "
+        f"S = {a.get('model_steady_speed_rad_s', float('nan')):.4g} rad/s, "
+        f"τ = {a.get('model_time_constant_s', float('nan')):.3g} s; "
+        f"not identified: {a.get('not_identified', '?')}"
+        + (
+            f"\nFIT INADEQUATE: chi2 {a.get('chi2', float('nan')):.4g} on "
+            f"{a.get('n_statistics', '?')} statistics (p = {a.get('chi2_p_value', float('nan')):.2g})"
+            if not a.get("fit_adequate", 1)
+            else ""
+        ),
+        fontsize=8,
+        color="black" if a.get("fit_adequate", 1) else "darkred",
+    )
+
+
+def fig_fit_profiles(fitted: xr.Dataset) -> Figure:
+    """Profile likelihoods of the fitted parameters: ``Δχ²`` against each parameter.
+
+    The dashed line is the 95 % threshold ``χ²₁(0.95) = 3.84``; the shaded span is the reported
+    interval, the marker the estimate. A profile that stays under the line over the whole search
+    range is "not identified".
+    """
+    names = [n for n in ("e", "r_phi", "psi", "omega_s", "speed_scale")
+             if f"profile_chi2_{n}" in fitted]  # fmt: skip
+    fig = Figure(figsize=(3.0 * max(1, len(names)), 3.2), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(1, max(1, len(names)), squeeze=False)[0])
+    for ax, n in zip(axes, names, strict=False):
+        x = fitted[f"profile_{n}"].values
+        y = fitted[f"profile_chi2_{n}"].values
+        a = fitted[n].attrs
+        ax.axvspan(a["ci_low"], a["ci_high"], color=COLORS["fit"], alpha=0.2, lw=0)
+        ax.plot(x, y, "o-", color=COLORS["fit"], ms=3, lw=1)
+        ax.axhline(3.841, ls="--", color="k", lw=0.8)
+        ax.plot([float(fitted[n])], [0.0], "k*", ms=8)
+        ax.set_xlim(a["search_low"], a["search_high"])
+        if n in ("r_phi", "speed_scale"):
+            ax.set_xscale("log")
+        ax.set_ylim(-0.5, max(10.0, min(float(np.nanmax(y)) * 1.05, 50.0)))
+        ax.set_xlabel(f"{n} [{a['units']}]")
+        tag = "" if a.get("identified", 1) else " (not identified)"
+        ax.set_title(f"{n}: 95% [{a['ci_low']:.3g}, {a['ci_high']:.3g}]{tag}", fontsize=8)
+    axes[0].set_ylabel("Δχ² (profile)")
+    return fig

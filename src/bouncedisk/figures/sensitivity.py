@@ -1,0 +1,112 @@
+"""The global sensitivity study: Sobol' indices, scatter, design maps."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import xarray as xr
+from matplotlib.figure import Figure
+from matplotlib.patches import Rectangle
+
+from .dynamics import REGIME_COLORS
+from .joint_fit import fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
+from .load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
+
+
+def _short(output: str) -> str:
+    """An output's name as an axis label."""
+    return output.replace("_", " ")
+
+
+def fig_sensitivity_indices(ds: xr.Dataset) -> Figure:
+    """First-order and total Sobol' indices of every output with SALib's 95 % bootstrap
+    intervals, and the share of each output's variance that is ensemble noise."""
+    outputs = ds["output"].values.tolist()
+    names = ds["parameter"].values.tolist()
+    ncol = min(3, len(outputs))
+    nrow = math.ceil(len(outputs) / ncol)
+    fig = Figure(figsize=(4.6 * ncol, 3.4 * nrow), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(nrow, ncol, squeeze=False).ravel())
+    pos = np.arange(len(names))
+    for ax, o in zip(axes, outputs, strict=False):
+        row = ds.sel(output=o)
+        for k, (key, color) in enumerate((("S1", "#1f77b4"), ("ST", "#ff7f0e"))):
+            ax.bar(pos + (k - 0.5) * 0.38, row[key].values, 0.38, color=color,
+                   yerr=row[f"{key}_conf"].values, capsize=3, label=key)  # fmt: skip
+        share = float(row["noise_share"])
+        undefined = int(row["n_undefined"])
+        note = (f"undefined at {undefined} points: no indices" if undefined
+                else f"ensemble noise: {100 * share:.1f} % of the variance")  # fmt: skip
+        ax.set_title(f"{_short(o)}\n{note}", fontsize=9)
+        ax.set_xticks(pos, names, fontsize=8)
+        ax.axhline(0, color="k", lw=0.5)
+        ax.set_ylim(-0.1, 1.1)
+    for ax in axes[len(outputs) :]:
+        ax.set_visible(False)
+    axes[0].legend(fontsize=8)
+    axes[0].set_ylabel("Sobol' index (95 % bootstrap interval)")
+    fig.suptitle(f"Sobol' indices over {ds.attrs.get('n_points', '?')} points (SALib)", fontsize=10)
+    return fig
+
+
+def fig_sensitivity_scatter(ds: xr.Dataset) -> Figure:
+    """Each output against each sampled parameter, every point coloured by its regime."""
+    from ..analysis.observables import REGIMES
+
+    outputs = [o for o in str(ds.attrs["outputs"]).split(",") if o]
+    names = ds["parameter"].values.tolist()
+    fig = Figure(figsize=(3.0 * len(names), 2.3 * len(outputs)), layout="constrained")
+    axes = fig.subplots(len(outputs), len(names), squeeze=False)
+    regime = ds["regime"].values
+    colors = [REGIME_COLORS.get(int(c), "k") for c in regime]
+    for i, o in enumerate(outputs):
+        for j, p in enumerate(names):
+            ax = axes[i, j]
+            ax.scatter(ds["x"].sel(parameter=p).values, ds[o].values, s=5, c=colors, lw=0)
+            if i == len(outputs) - 1:
+                ax.set_xlabel(p)
+            if j == 0:
+                ax.set_ylabel(_short(o), fontsize=8)
+    handles = [
+        Rectangle((0, 0), 1, 1, color=REGIME_COLORS[c], label=REGIMES[c])
+        for c in sorted(set(int(c) for c in regime))
+    ]
+    fig.legend(handles=handles, loc="outside upper center", ncol=len(handles), fontsize=8)
+    return fig
+
+
+def fig_design_maps(ds: xr.Dataset) -> Figure:
+    """No-load speed, stall torque and efficiency over ``(psi, log10 R_phi)`` for each map's
+    ``e``, with the best operating point and its 95 % interval (hollow: not resolved from it)."""
+    from ..studies.sensitivity import BEST_BY, MAP_OUTPUTS, best_point
+
+    outputs = [o for o in MAP_OUTPUTS if o in ds]
+    n_psi, n_r = int(ds.attrs["map_n_psi"]), int(ds.attrs["map_n_r_phi"])
+    maps = [ds.isel(map=k) for k in range(ds.sizes["map"])]
+    best_by = next(b for b in BEST_BY if b in ds)
+    w = ds.attrs.get("map_omega_s")
+    w_label = rf"$\omega_s$ = {float(w):g}" if w is not None else ""
+    fig = Figure(figsize=(4.8 * len(maps), 3.4 * len(outputs)), layout="constrained")
+    axes = fig.subplots(len(outputs), len(maps), squeeze=False)
+    for j, m in enumerate(maps):
+        xp, xr_ = (m["x"].sel(parameter=p).values for p in ("psi", "log10_r_phi"))
+        psi, lr = xp.reshape(n_psi, n_r)[:, 0], xr_.reshape(n_psi, n_r)[0]
+        best = best_point(m, best_by)
+        for i, o in enumerate(outputs):
+            ax = axes[i, j]
+            z = m[o].values.reshape(n_psi, n_r).T
+            mesh = ax.pcolormesh(psi, lr, z, shading="nearest", cmap="viridis")
+            fig.colorbar(mesh, ax=ax, label=_short(o))
+            if best["index"] is not None:
+                near = [k for k in best["indistinguishable"] if k != best["index"]]
+                ax.scatter(xp[near], xr_[near], s=14, facecolors="none", edgecolors="w", lw=0.7)
+                ax.plot(xp[best["index"]], xr_[best["index"]], "r*", ms=12)
+            ax.set_xlabel(r"$\psi$")
+            ax.set_ylabel(r"$\log_{10} R_\phi$")
+            ax.set_title(f"e = {float(m['map_e']):g}, {w_label}", fontsize=9)
+        if best["index"] is not None:
+            lo, hi = best["ci95"]
+            axes[0, j].text(0.02, 0.02, f"best {_short(best_by)}: {best['value']:.3g} [{lo:.3g}, {hi:.3g}]",
+                            transform=axes[0, j].transAxes, fontsize=7, color="w")  # fmt: skip
+    return fig

@@ -1,0 +1,58 @@
+"""A run's trajectory (paper Fig. 3), with its ensemble band."""
+
+from __future__ import annotations
+
+import xarray as xr
+from matplotlib.figure import Figure
+
+from .common import COLORS, _title
+from .joint_fit import fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
+from .load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
+
+
+def _band(ax, t, low, high, color, label, alpha=0.25) -> None:
+    """A shaded band between ``low`` and ``high``."""
+    ax.fill_between(t, low, high, color=color, alpha=alpha, lw=0, label=label)
+
+
+def fig_trajectory(ds: xr.Dataset, band: xr.Dataset | None = None, window: float = 40.0) -> Figure:
+    """Paper Figs. 3–4: rotor and stator flight paths and the rotor angular velocity.
+
+    With ``band`` (:func:`bouncedisk.analysis.bands.omega_band`), the ensemble's spread of ``Ω`` (central
+    95 % of the members) and the 95 % interval of its mean are drawn behind the single run.
+    """
+    t = ds["time"].values
+    fig = Figure(figsize=(8.0, 7.0), layout="constrained")
+    axes = fig.subplots(3, 1)
+    first = t <= t[0] + window
+    last = t >= t[-1] - window
+    for ax, sel, label in ((axes[0], first, "start"), (axes[1], last, "end of the run")):
+        ax.plot(t[sel], ds["u_stator"].values[sel], color=COLORS["stator"], lw=0.8, label="stator")
+        ax.plot(t[sel], ds["u_rotor"].values[sel], color=COLORS["rotor"], lw=1.0, label="rotor")
+        ax.set_ylabel("axial position $u/U_0$")
+        ax.set_title(f"flight paths, {label}", fontsize=10)
+        ax.legend(loc="upper right", fontsize=8)
+    axes[1].set_xlabel("time $t/t_c$")
+    if "omega_rotor" in ds:
+        if band is not None:
+            bt = band["time"].values
+            k = band.sizes["member"]
+            _band(axes[2], bt, band["omega_p025"], band["omega_p975"], "0.6",
+                  f"central 95% of {k} members", alpha=0.3)  # fmt: skip
+            _band(axes[2], bt, band["omega_ci_low"], band["omega_ci_high"], COLORS["fit"],
+                  "95% interval of the ensemble mean", alpha=0.45)  # fmt: skip
+        axes[2].plot(t, ds["omega_rotor"].values, color=COLORS["rotor"], lw=0.8, label="this run")
+        if "t_impact" in ds:
+            axes[2].plot(
+                ds["t_impact"].values,
+                ds["omega_after"].values,
+                ".",
+                ms=2,
+                color="k",
+                label="after each impact",
+            )
+        axes[2].legend(loc="lower right", fontsize=7)
+        axes[2].set_ylabel(r"rotor angular velocity $\Omega$")
+    axes[2].set_xlabel("time $t/t_c$")
+    fig.suptitle(f"Bouncing disk: {_title(ds)}", fontsize=11)
+    return fig

@@ -1,0 +1,194 @@
+"""Measured load curves: speed against load torque, CSV + YAML sidecar, read and validated.
+
+INTERFACES.md: CSV columns ``torque_Nm`` (load torque, N·m, >= 0, no repeats), ``speed_rad_s``
+(mean rotor speed, rad/s) and optional ``speed_sd_rad_s`` (spread of repeated readings). The
+sidecar (same stem, ``.yaml``) holds the drive as a run-up's does, the rotor and the window::
+
+    source: "bench test of prototype #2, brake at constant current"
+    synthetic: false
+    units: {torque: N m, speed: rad/s}
+    motor: {drive_frequency_hz: 20000.0, Phi0_rad: 2.0e-4}
+    rotor: {m_r_kg: 0.01, r_g_m: 0.004, r_c_m: 0.002}
+    preload_N: 0.77                  # optional (a spring preload acts as extra gravity)
+    window_s: [0.06, 0.12]           # each reading: mean speed over [t0, t1] after a start from rest
+    repeats: 5                       # optional: readings averaged per row (default 1)
+    protocol: "5 repeats per load"   # informative
+
+The torque scale ``μ m_r g_eff r_eff`` follows from the rotor and the fitted ``R_φ``
+(MODEL.md: ``R_φ = (r_eff/r_g)² μ / R_d``; :meth:`bouncedisk.model.params.PhysicalParameters.
+from_nondimensional`), so a load curve is predicted by the model at any ``(e, ω_s, R_φ, ψ)``:
+:func:`bouncedisk.studies.torque_speed.readings_from_rest`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..model.errors import InputError
+from ..model.params import number
+from ..model.scene import read_yaml
+
+COLUMNS = ("torque_Nm", "speed_rad_s")
+OPTIONAL_COLUMNS = ("speed_sd_rad_s",)
+SIDECAR_KEYS = (
+    "source", "synthetic", "units", "motor", "rotor", "preload_N", "window_s", "protocol",
+    "description", "generating_parameters", "generator", "repeats",
+)  # fmt: skip
+ROTOR_KEYS = ("m_r_kg", "r_g_m", "r_c_m")
+MIN_LOADS = 3
+
+
+@dataclass(frozen=True)
+class LoadCurveData:
+    """A validated measured load curve and the motor constants it states (SI units)."""
+
+    torque: np.ndarray  # N·m, increasing
+    speed: np.ndarray  # rad/s
+    speed_sd: np.ndarray | None  # rad/s, spread of repeated readings
+    drive_frequency_hz: float
+    phi0_rad: float
+    rotor: dict[str, float]
+    preload_n: float
+    window_s: tuple[float, float]
+    synthetic: bool
+    path: str
+    sidecar: dict = field(default_factory=dict, compare=False)
+
+
+def _sidecar(path: Path) -> dict:
+    """Read and check a load curve's sidecar (one line naming the file and field)."""
+    src = str(path)
+    data = read_yaml(path)
+    for k in data:
+        if k not in SIDECAR_KEYS:
+            raise InputError(src, str(k), f"unknown key (known: {', '.join(SIDECAR_KEYS)})")
+    motor = data.get("motor")
+    if not isinstance(motor, dict):
+        raise InputError(src, "motor", "is required: {drive_frequency_hz, Phi0_rad}")
+    for k in ("drive_frequency_hz", "Phi0_rad"):
+        if k not in motor:
+            raise InputError(src, f"motor.{k}", "is required")
+        number(src, f"motor.{k}", motor[k], positive=True)
+    rotor = data.get("rotor")
+    if not isinstance(rotor, dict):
+        raise InputError(src, "rotor", f"is required: {{{', '.join(ROTOR_KEYS)}}}")
+    for k in rotor:
+        if k not in ROTOR_KEYS:
+            raise InputError(src, f"rotor.{k}", f"unknown key (known: {', '.join(ROTOR_KEYS)})")
+    for k in ROTOR_KEYS:
+        if k not in rotor:
+            raise InputError(src, f"rotor.{k}", "is required")
+        number(src, f"rotor.{k}", rotor[k], positive=True)
+    number(src, "preload_N", data.get("preload_N", 0.0), nonneg=True)
+    win = data.get("window_s")
+    if not isinstance(win, list) or len(win) != 2:
+        raise InputError(src, "window_s", "is required: [t0, t1] in seconds after the start")
+    t0 = number(src, "window_s[0]", win[0], nonneg=True)
+    t1 = number(src, "window_s[1]", win[1], positive=True)
+    if not t1 > t0:
+        raise InputError(src, "window_s", f"must have t1 > t0, got {win}")
+    rep = data.get("repeats", 1)
+    if isinstance(rep, bool) or not isinstance(rep, int) or rep < 1:
+        raise InputError(src, "repeats", f"must be a whole number >= 1, got {rep!r}")
+    if not isinstance(data.get("synthetic", False), bool):
+        raise InputError(src, "synthetic", f"must be true or false, got {data['synthetic']!r}")
+    return data
+
+
+def _column(df: pd.DataFrame, src: str, col: str) -> np.ndarray:
+    """A numeric column: every row a finite number (one line naming the row otherwise)."""
+    raw = df[col]
+    if raw.map(lambda x: isinstance(x, bool)).any():
+        raise InputError(src, col, "holds true/false values, not numbers")
+    values = pd.to_numeric(raw, errors="coerce")
+    bad = values.isna() & raw.notna()
+    if bad.any():
+        row = int(np.argmax(bad.values))
+        raise InputError(src, col, f"row {row + 2}: not a number: {raw.iloc[row]!r}")
+    finite = np.isfinite(values.to_numpy(dtype=float))
+    if not finite.all():
+        row = int(np.argmax(~finite))
+        raise InputError(src, col, f"row {row + 2}: missing or non-finite value")
+    return values.to_numpy(dtype=float)
+
+
+def read_load_curve(path: str | Path) -> LoadCurveData:
+    """Read and validate a load curve CSV and its sidecar (module docstring).
+
+    Raises
+    ------
+    InputError
+        One line naming the file, row and column: a missing file, sidecar, column or rotor key;
+        text, NaN or a negative value where a torque or spread is due; a repeated torque; fewer
+        than :data:`MIN_LOADS` loads; a bad window or unit.
+    """
+    p = Path(path)
+    src = str(path)
+    if not p.is_file():
+        raise InputError(src, "", "file not found")
+    side = p.with_suffix(".yaml")
+    if not side.is_file():
+        raise InputError(str(side), "", "sidecar not found (motor, rotor and window_s)")
+    meta = _sidecar(side)
+    try:
+        df = pd.read_csv(p, comment="#", skipinitialspace=True)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as ex:
+        raise InputError(src, "", f"not a readable CSV: {str(ex).splitlines()[0]}") from None
+    names = [str(c).strip() for c in df.columns]
+    for col in set(names):
+        if names.count(col) > 1 or col.endswith(tuple(f".{i}" for i in range(1, 9))):
+            raise InputError(src, col.split(".")[0], "column given more than once")
+    df.columns = names
+    for col in COLUMNS:
+        if col not in df.columns:
+            raise InputError(src, col, f"missing column (have: {', '.join(names)})")
+    torque = _column(df, src, "torque_Nm")
+    speed = _column(df, src, "speed_rad_s")
+    sd = _column(df, src, "speed_sd_rad_s") if "speed_sd_rad_s" in df.columns else None
+    for name, values in (("torque_Nm", torque), ("speed_sd_rad_s", sd)):
+        if values is not None and np.any(values < 0):
+            row = int(np.argmax(values < 0))
+            raise InputError(src, name, f"row {row + 2}: must be >= 0, got {values[row]!r}")
+    _, first = np.unique(torque, return_index=True)
+    if len(first) < len(torque):
+        row = int(np.setdiff1d(np.arange(len(torque)), first)[0])
+        raise InputError(src, "torque_Nm", f"row {row + 2}: repeats the load {torque[row]!r}")
+    if len(torque) < MIN_LOADS:
+        raise InputError(src, "", f"has {len(torque)} loads; at least {MIN_LOADS} are needed")
+    order = np.argsort(torque)
+    motor, rotor = meta["motor"], meta["rotor"]
+    return LoadCurveData(
+        torque=torque[order],
+        speed=speed[order],
+        speed_sd=None if sd is None else sd[order],
+        drive_frequency_hz=float(motor["drive_frequency_hz"]),
+        phi0_rad=float(motor["Phi0_rad"]),
+        rotor={k: float(rotor[k]) for k in ROTOR_KEYS},
+        preload_n=float(meta.get("preload_N", 0.0)),
+        window_s=(float(meta["window_s"][0]), float(meta["window_s"][1])),
+        synthetic=bool(meta.get("synthetic", False)),
+        path=src,
+        sidecar=meta,
+    )
+
+
+def check_same_setup(
+    load: LoadCurveData, drive_frequency_hz: float, phi0_rad: float | None
+) -> None:
+    """A load curve and the run-ups fitted with it must share the drive (one line otherwise)."""
+    side = str(Path(load.path).with_suffix(".yaml"))
+    if not np.isclose(load.drive_frequency_hz, drive_frequency_hz, rtol=1e-9):
+        raise InputError(
+            side, "motor.drive_frequency_hz",
+            f"{load.drive_frequency_hz:.6g} Hz differs from the run-ups' {drive_frequency_hz:.6g} Hz",
+        )  # fmt: skip
+    if phi0_rad is not None and not np.isclose(load.phi0_rad, phi0_rad, rtol=1e-9):
+        raise InputError(
+            side,
+            "motor.Phi0_rad",
+            f"{load.phi0_rad:.6g} rad differs from the run-ups' {phi0_rad:.6g}",
+        )

@@ -1,0 +1,568 @@
+"""Scenes: parameters, initial state, effects, stop rule, outputs and solver (INTERFACES.md).
+
+A scene is read from YAML, ``--set key=value`` overrides are applied to the raw mapping, and the
+result is validated field by field; every problem raises :class:`~bouncedisk.model.errors.InputError`
+naming the file and the dotted field.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import yaml
+
+from . import stator, yamlio
+from .errors import InputError
+from .params import Parameters, PhysicalParameters, Scales, number, whole_number
+
+#: Effects a scene may name (MODEL.md "Optional effects").
+EFFECTS = (
+    "impacts",
+    "contact",
+    "torsion",
+    "impulse_cap",
+    "stator_inertia",
+    "kinetic_static",
+    "restitution_noise",
+    "load",
+)
+#: Solver methods: the exact engine, and comparators for the accuracy study.
+SOLVERS = ("exact", "rk45", "dop853", "lsoda", "moreau")
+#: Contact models: the bouncing disk (the paper) and the earlier clipped-sinusoid spring contact.
+MODELS = ("bouncing", "clipped")
+DEFAULT_MAX_EVENTS = 100_000_000
+TOP_KEYS = (
+    "name",
+    "description",
+    "model",
+    "parameters",
+    "physical",
+    "initial",
+    "effects",
+    "stop",
+    "outputs",
+    "solver",
+    "ensemble",
+    "stats",
+)
+#: Largest ensemble a scene may ask for (members run one after another on each core).
+MAX_MEMBERS = 100_000
+#: Smallest restitution noise, in units in the last place of ``e``, that can perturb ``e``: below
+#: it ``e + e_sigma * xi`` rounds back to ``e`` for most deviates ``|xi| <~ 2`` (MODEL.md).
+NOISE_MIN_ULPS = 4
+_NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+
+if TYPE_CHECKING:  # the engine (numba) is imported only when a scene is validated
+    from ..engine import InitialState
+
+
+@dataclass(frozen=True)
+class Stop:
+    """When a run ends: after ``impacts`` events, or at ``time`` (``periods`` is converted).
+
+    ``max_events`` is the safety cap that always applies.
+    """
+
+    impacts: int | None = None
+    time: float | None = None
+    max_events: int = DEFAULT_MAX_EVENTS
+
+    @property
+    def kind(self) -> str:
+        """``impacts`` or ``time``: what ends the run."""
+        return "impacts" if self.impacts is not None else "time"
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Dense trajectory sampling on ``t_start, t_start + dt, …`` up to ``t_stop``."""
+
+    dt: float
+    t_start: float | None = None
+    t_stop: float | None = None
+
+
+@dataclass(frozen=True)
+class Outputs:
+    """What a run writes: events, a dense trajectory, a stroboscopic section."""
+
+    events: bool = True
+    trajectory: Trajectory | None = None
+    stroboscopic: bool = False
+
+
+@dataclass(frozen=True)
+class Solver:
+    """The solver: ``exact`` (root tolerance ``tol``) or a comparator (``tol`` or ``step``)."""
+
+    method: str = "exact"
+    tol: float = 1e-12
+    step: float | None = None  # fixed step of the Moreau–Jean comparator
+
+
+@dataclass(frozen=True)
+class Ensemble:
+    """Ensemble of ``members`` runs differing by their restitution-noise streams under ``seed``."""
+
+    members: int = 1
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class StatsSettings:
+    """Long-run statistics: the transient ``discard`` (time) left out of every average."""
+
+    discard: float = 0.0
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene. ``raw`` is the resolved mapping (after overrides) that ``sha256`` hashes."""
+
+    name: str
+    params: Parameters
+    initial: InitialState
+    effects: frozenset[str]
+    stop: Stop
+    outputs: Outputs
+    solver: Solver
+    physical: PhysicalParameters | None = None
+    description: str = ""
+    model: str = "bouncing"
+    ensemble: Ensemble = Ensemble()
+    stats: StatsSettings = StatsSettings()
+    source: str = "<scene>"
+    raw: dict = field(default_factory=dict, compare=False)
+
+    @property
+    def sha256(self) -> str:
+        """Hash of the resolved scene (canonical JSON), so overrides change it."""
+        blob = json.dumps(self.raw, sort_keys=True, default=str).encode()
+        return hashlib.sha256(blob).hexdigest()
+
+    @property
+    def scales(self) -> Scales | None:
+        """SI scales when the scene was given in physical units."""
+        return self.physical.scales() if self.physical else None
+
+    def has(self, effect: str) -> bool:
+        """Whether the scene asked for ``effect``."""
+        return effect in self.effects
+
+
+# ------------------------------------------------------------------------------------ helpers
+def _mapping(src: str, name: str, v: Any, keys: tuple[str, ...]) -> dict:
+    if v is None:
+        return {}
+    if not isinstance(v, dict):
+        raise InputError(src, name, f"must be a mapping, got {type(v).__name__}")
+    for k in v:
+        if k not in keys:
+            raise InputError(src, f"{name}.{k}", f"unknown key (known: {', '.join(keys)})")
+    return v
+
+
+def _bool(src: str, name: str, v: Any) -> bool:
+    if not isinstance(v, bool):
+        raise InputError(src, name, f"must be true or false, got {v!r}")
+    return v
+
+
+def apply_overrides(raw: dict, overrides: list[str], source: str = "--set") -> dict:
+    """Apply ``key.sub=value`` overrides (values parsed as YAML) to a copy of ``raw``."""
+    out = json.loads(json.dumps(raw, default=str)) if raw else {}
+    for item in overrides:
+        if "=" not in item:
+            raise InputError(source, item, "expected KEY=VALUE, e.g. parameters.e=0.6")
+        key, _, text = item.partition("=")
+        key = key.strip()
+        if not key or any(not part for part in key.split(".")):
+            raise InputError(source, item, "expected KEY=VALUE with a dotted key")
+        try:
+            value = yamlio.load(text, source, key) if text.strip() else None
+        except yaml.YAMLError:
+            raise InputError(source, key, f"cannot parse value {text!r}") from None
+        node = out
+        parts = key.split(".")
+        for part in parts[:-1]:
+            nxt = node.get(part)
+            if nxt is None:
+                nxt = node[part] = {}
+            if not isinstance(nxt, dict):
+                raise InputError(source, key, f"{part!r} is not a mapping")
+            node = nxt
+        node[parts[-1]] = value
+    return out
+
+
+def read_yaml(path: str | Path) -> dict:
+    """Read a YAML mapping, turning every failure into one :class:`InputError` line."""
+    p = Path(path)
+    src = str(path)
+    if p.exists() and not p.is_dir() and not p.is_file():  # a FIFO would block in open()
+        raise InputError(src, "", "is not a regular file (a pipe or device?), not a scene file")
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError(src, "", "file not found") from None
+    except IsADirectoryError:
+        raise InputError(src, "", "is a directory, not a scene file") from None
+    except UnicodeDecodeError:
+        raise InputError(src, "", "not a text (UTF-8) file") from None
+    except OSError as ex:
+        raise InputError(src, "", f"cannot read: {ex.strerror}") from None
+    try:
+        data = yamlio.load(text, src)
+    except yaml.YAMLError as ex:
+        mark = getattr(ex, "problem_mark", None)
+        where = f"line {mark.line + 1}, column {mark.column + 1}" if mark else "YAML"
+        problem = getattr(ex, "problem", None) or "malformed YAML"
+        raise InputError(src, where, f"malformed YAML: {problem}") from None
+    if data is None:
+        raise InputError(src, "", "empty scene file")
+    if not isinstance(data, dict):
+        raise InputError(src, "", f"a scene must be a YAML mapping, got {type(data).__name__}")
+    return data
+
+
+# ------------------------------------------------------------------------------------ parsing
+def _effects(src: str, v: Any) -> frozenset[str]:
+    if v is None:
+        v = ["impacts", "contact"]
+    chosen: dict[str, bool] = {}
+    if isinstance(v, str):
+        v = [x.strip() for x in v.split(",") if x.strip()]
+    if isinstance(v, list):
+        for i, item in enumerate(v):
+            if not isinstance(item, str):
+                raise InputError(src, f"effects[{i}]", f"must be an effect name, got {item!r}")
+            chosen[item] = True
+    elif isinstance(v, dict):
+        for k, on in v.items():
+            chosen[str(k)] = _bool(src, f"effects.{k}", on)
+    else:
+        raise InputError(src, "effects", "must be a list of effect names")
+    for k in chosen:
+        if k not in EFFECTS:
+            raise InputError(src, f"effects.{k}", f"unknown effect (known: {', '.join(EFFECTS)})")
+    if chosen.get("impacts") is False:
+        raise InputError(src, "effects.impacts", "cannot be turned off")
+    on = {k for k, flag in chosen.items() if flag} | {"impacts"}
+    if "torsion" in on and chosen.get("impulse_cap") is not False:
+        on.add("impulse_cap")
+    for dep in ("impulse_cap", "stator_inertia", "kinetic_static", "load"):
+        if dep in on and "torsion" not in on:
+            raise InputError(src, f"effects.{dep}", "needs the 'torsion' effect")
+    if "kinetic_static" in on and "contact" not in on:
+        raise InputError(src, "effects.kinetic_static", "needs the 'contact' effect")
+    return frozenset(on)
+
+
+def scene_from_mapping(raw: dict, source: str = "<scene>") -> Scene:
+    """Validate a raw scene mapping into a :class:`Scene`, one section after another.
+
+    Raises
+    ------
+    InputError
+        Naming ``source`` and the dotted field at fault.
+    """
+    src = source
+    for k in raw:
+        if k not in TOP_KEYS:
+            raise InputError(src, str(k), f"unknown key (known: {', '.join(TOP_KEYS)})")
+    name, description = _name(src, raw)
+    params, physical = _parameters(src, raw)
+    effects = _effects(src, raw.get("effects"))
+    _check_effect_parameters(src, raw, effects, params)
+    initial = _initial(src, raw.get("initial"), params)
+    stop = _stop(src, raw.get("stop"), initial, params)
+    outputs = _outputs(src, raw.get("outputs"), initial, stop)
+    solver = _solver(src, raw.get("solver"))
+    model = _model(src, raw.get("model", "bouncing"), stop, solver)
+    ensemble = _ensemble(src, raw.get("ensemble"), effects, params)
+    stats = _stats(src, raw.get("stats"), stop, initial)
+    return Scene(
+        name=name,
+        model=model,
+        ensemble=ensemble,
+        stats=stats,
+        params=params,
+        initial=initial,
+        effects=effects,
+        stop=stop,
+        outputs=outputs,
+        solver=solver,
+        physical=physical,
+        description=description,
+        source=src,
+        raw=raw,
+    )
+
+
+def _name(src: str, raw: dict) -> tuple[str, str]:
+    """``name`` (default: the file's stem) and ``description``."""
+    default = Path(src).stem if src and not src.startswith("<") else "scene"
+    name = raw.get("name", default)
+    if not isinstance(name, str) or not _NAME_RE.match(name):
+        raise InputError(
+            src, "name", f"must be a simple name (letters, digits, _ . -), got {name!r}"
+        )
+    description = raw.get("description", "")
+    if not isinstance(description, str):
+        raise InputError(src, "description", "must be text")
+    return name, description
+
+
+def _parameters(src: str, raw: dict) -> tuple[Parameters, PhysicalParameters | None]:
+    """``parameters`` (nondimensional) or ``physical`` (SI, converted: MODEL.md eqs. 2, 13–15)."""
+    if "parameters" in raw and "physical" in raw:
+        raise InputError(src, "physical", "give either 'parameters' or 'physical', not both")
+    if "physical" in raw:
+        pm = _mapping(
+            src, "physical", raw["physical"], tuple(PhysicalParameters.__dataclass_fields__)
+        )
+        physical = PhysicalParameters.from_mapping(pm, src)
+        params = physical.to_nondimensional()
+        params.validate(src, "physical")
+        return params, physical
+    if "parameters" in raw:
+        pm = raw["parameters"]
+        if not isinstance(pm, dict):
+            raise InputError(src, "parameters", "must be a mapping")
+        return Parameters.from_mapping(pm, src), None
+    raise InputError(src, "parameters", "is required (or 'physical')")
+
+
+def _check_effect_parameters(
+    src: str, raw: dict, effects: frozenset[str], params: Parameters
+) -> None:
+    """The parameters an effect needs are given (MODEL.md "Optional effects")."""
+    if "stator_inertia" in effects and math.isinf(params.inertia_ratio):
+        raise InputError(
+            src, "parameters.inertia_ratio", "is required by the 'stator_inertia' effect"
+        )
+    if (
+        "kinetic_static" in effects
+        and params.mu_ratio == 1.0
+        and "mu_ratio" not in (raw.get("parameters") or {})
+    ):
+        raise InputError(src, "parameters.mu_ratio", "is required by the 'kinetic_static' effect")
+    _check_paired(src, raw, effects)
+
+
+def _initial(src: str, v: Any, params: Parameters) -> InitialState:
+    """``initial: {t, omega, u, v}``; ``u >= u_s(t)`` (eq. 1) for a start in flight.
+
+    The scene holds the engine's own :class:`~bouncedisk.engine.InitialState`.
+    """
+    from ..engine import InitialState
+
+    im = _mapping(src, "initial", v, ("t", "omega", "u", "v"))
+    t0 = number(src, "initial.t", im.get("t", 0.0))
+    om0 = number(src, "initial.omega", im.get("omega", 0.0))
+    u0 = im.get("u")
+    v0 = im.get("v")
+    if (u0 is None) != (v0 is None):
+        raise InputError(
+            src, "initial.u" if u0 is None else "initial.v", "give both u and v to start in flight"
+        )
+    if u0 is not None:
+        u0 = number(src, "initial.u", u0)
+        v0 = number(src, "initial.v", v0)
+        us = stator.position(params.omega_s * t0)
+        if u0 < us - 1e-12:
+            raise InputError(
+                src, "initial.u", f"must be >= u_s(t) = {us:.12g} (rotor above the stator)"
+            )
+    if abs(t0) > 1e12:
+        raise InputError(src, "initial.t", "must be within ±1e12")
+    return InitialState(t=t0, omega=om0, u=u0, v=v0)
+
+
+def _stop(src: str, v: Any, initial: InitialState, params: Parameters) -> Stop:
+    """``stop``: exactly one of ``impacts``, ``time``, ``periods``; the cap ``max_events``."""
+    sm = _mapping(src, "stop", v, ("impacts", "time", "periods", "max_events"))
+    given = [k for k in ("impacts", "time", "periods") if sm.get(k) is not None]
+    if len(given) != 1:
+        raise InputError(src, "stop", "give exactly one of impacts, time or periods")
+    max_ev = whole_number(src, "stop.max_events", sm.get("max_events", DEFAULT_MAX_EVENTS))
+    if given[0] == "impacts":
+        n = whole_number(src, "stop.impacts", sm["impacts"])
+        if n > max_ev:
+            raise InputError(
+                src,
+                "stop.impacts",
+                f"{n} is above the safety cap stop.max_events = {max_ev}; "
+                "ask for fewer impacts or raise stop.max_events",
+            )
+        return Stop(impacts=n, max_events=max_ev)
+    if given[0] == "time":
+        t_stop = number(src, "stop.time", sm["time"], positive=True)
+        return Stop(time=initial.t + t_stop, max_events=max_ev)
+    periods = number(src, "stop.periods", sm["periods"], positive=True)
+    return Stop(time=initial.t + periods * 2.0 * math.pi / params.omega_s, max_events=max_ev)
+
+
+def _outputs(src: str, v: Any, initial: InitialState, stop: Stop) -> Outputs:
+    """``outputs: {events, trajectory, stroboscopic}``."""
+    om = _mapping(src, "outputs", v, ("events", "trajectory", "stroboscopic"))
+    events = _bool(src, "outputs.events", om.get("events", True))
+    traj = _trajectory(src, om.get("trajectory"), initial, stop)
+    strobe = _bool(src, "outputs.stroboscopic", om.get("stroboscopic", False))
+    return Outputs(events=events, trajectory=traj, stroboscopic=strobe)
+
+
+def _trajectory(src: str, tm: Any, initial: InitialState, stop: Stop) -> Trajectory | None:
+    """``outputs.trajectory``: ``true`` (``dt = 0.01``) or ``{dt, t_start, t_stop}``."""
+    if tm is None or tm is False:
+        return None
+    if tm is True:
+        tm = {"dt": 0.01}
+    tm = _mapping(src, "outputs.trajectory", tm, ("dt", "t_start", "t_stop"))
+    if "dt" not in tm:
+        raise InputError(src, "outputs.trajectory.dt", "is required")
+    dt = number(src, "outputs.trajectory.dt", tm["dt"], positive=True)
+    ts = tm.get("t_start")
+    te = tm.get("t_stop")
+    ts = None if ts is None else number(src, "outputs.trajectory.t_start", ts)
+    te = None if te is None else number(src, "outputs.trajectory.t_stop", te)
+    if ts is not None and te is not None and te < ts:
+        raise InputError(src, "outputs.trajectory.t_stop", "must be >= t_start")
+    horizon = te if te is not None else stop.time
+    if horizon is not None and (horizon - (ts if ts is not None else initial.t)) / dt > 5e8:
+        raise InputError(src, "outputs.trajectory.dt", "would produce more than 5e8 samples")
+    return Trajectory(dt=dt, t_start=ts, t_stop=te)
+
+
+def _solver(src: str, v: Any) -> Solver:
+    """``solver: {method, tol, step}``."""
+    vm = _mapping(src, "solver", v, ("method", "tol", "step"))
+    method = vm.get("method", "exact")
+    if method not in SOLVERS:
+        raise InputError(
+            src, "solver.method", f"unknown method {method!r} (known: {', '.join(SOLVERS)})"
+        )
+    tol = number(src, "solver.tol", vm.get("tol", 1e-12), positive=True)
+    if tol > 1e-2:
+        raise InputError(src, "solver.tol", f"must be <= 1e-2, got {tol}")
+    step = vm.get("step")
+    if step is not None:
+        step = number(src, "solver.step", step, positive=True)
+    return Solver(method=method, tol=tol, step=step)
+
+
+def _model(src: str, model: Any, stop: Stop, solver: Solver) -> str:
+    """``model``: ``bouncing`` or ``clipped`` (time stop and exact solver only)."""
+    if model not in MODELS:
+        raise InputError(src, "model", f"unknown model {model!r} (known: {', '.join(MODELS)})")
+    if model == "clipped":
+        if stop.time is None:
+            raise InputError(
+                src, "stop", "the clipped model has no impacts: stop on time or periods"
+            )
+        if solver.method != "exact":
+            raise InputError(
+                src, "solver.method", "the clipped model runs with the exact solver only"
+            )
+    return model
+
+
+#: Parameters that go with one effect, both or neither: (parameter, effect).
+PAIRED_PARAMETERS = (("e_sigma", "restitution_noise"), ("load_torque", "load"))
+
+
+def _check_paired(src: str, raw: dict, effects: frozenset[str]) -> None:
+    """``parameters.e_sigma`` goes with ``restitution_noise`` and ``load_torque`` with ``load``
+    (``physical.load_torque`` in a physical scene), both or neither."""
+    for name, effect in PAIRED_PARAMETERS:
+        section = "physical" if "physical" in raw else "parameters"
+        given = name in (raw.get(section) or {})
+        if effect in effects and not given:
+            raise InputError(src, f"{section}.{name}", f"is required by the '{effect}' effect")
+        if given and effect not in effects:
+            raise InputError(src, f"{section}.{name}", f"needs the '{effect}' effect")
+
+
+def _ensemble(src: str, v: Any, effects: frozenset[str], params: Parameters) -> Ensemble:
+    """Validate ``ensemble: {members, seed}`` (INTERFACES.md)."""
+    em = _mapping(src, "ensemble", v, ("members", "seed"))
+    if isinstance(em.get("members"), str):  # a quoted '3' is text, not a count
+        raise InputError(
+            src, "ensemble.members", f"must be a whole number, got the text {em['members']!r}"
+        )
+    members = whole_number(src, "ensemble.members", em.get("members", 1))
+    if members > MAX_MEMBERS:
+        raise InputError(src, "ensemble.members", f"must be <= {MAX_MEMBERS}, got {members}")
+    seed = whole_number(src, "ensemble.seed", em.get("seed", 0), minimum=0)
+    if seed >= 2**63:
+        raise InputError(src, "ensemble.seed", f"must be < 2**63, got {seed}")
+    least = NOISE_MIN_ULPS * math.ulp(params.e)
+    if 0.0 < params.e_sigma < least:
+        raise InputError(
+            src,
+            "parameters.e_sigma",
+            f"{params.e_sigma:.3g} is below {NOISE_MIN_ULPS} ulp of e ({least:.3g}): e + e_sigma*xi "
+            "rounds back to e, so the noise perturbs nothing and every member is the same run; "
+            f"give e_sigma >= {least:.3g} (or 0 for a deterministic run)",
+        )
+    if members > 1 and ("restitution_noise" not in effects or params.e_sigma == 0.0):
+        raise InputError(
+            src,
+            "ensemble.members",
+            "members differ only by their restitution noise: add the 'restitution_noise' "
+            "effect and parameters.e_sigma > 0 (e.g. 1e-9)",
+        )
+    return Ensemble(members=members, seed=seed)
+
+
+def _stats(src: str, v: Any, stop: Stop, initial: InitialState) -> StatsSettings:
+    """Validate ``stats: {discard}``: a transient shorter than the run."""
+    sm = _mapping(src, "stats", v, ("discard",))
+    discard = number(src, "stats.discard", sm.get("discard", 0.0), nonneg=True)
+    if stop.time is not None and discard >= stop.time - initial.t:
+        raise InputError(
+            src,
+            "stats.discard",
+            f"must be shorter than the run ({stop.time - initial.t:g} time units), got {discard:g}",
+        )
+    return StatsSettings(discard=discard)
+
+
+def load_scene(path: str | Path, overrides: list[str] | None = None) -> Scene:
+    """Read, override and validate a scene file.
+
+    Raises
+    ------
+    InputError
+        Naming the file and the field at fault; a field that a ``--set`` option gave (or a
+        field inside it) also names the option: ``parameters.e (from --set parameters.e)``.
+    """
+    raw = read_yaml(path)
+    if not overrides:
+        return scene_from_mapping(raw, str(path))
+    raw = apply_overrides(raw, overrides)
+    try:
+        return scene_from_mapping(raw, str(path))
+    except InputError as ex:
+        key = override_of(ex.field, overrides)
+        if key is None:
+            raise
+        raise InputError(ex.source, f"{ex.field} (from --set {key})", ex.message) from None
+
+
+def override_of(field: str, overrides: list[str]) -> str | None:
+    """The key of the last ``--set KEY=VALUE`` that gave ``field``, a field inside it, or a
+    mapping that holds it; ``None`` when the scene file gave it."""
+    for item in reversed(overrides):
+        key = item.partition("=")[0].strip()
+        if not key or not field:
+            continue
+        if field == key or field.startswith((key + ".", key + "[")) or key.startswith(field + "."):
+            return key
+    return None

@@ -1,0 +1,558 @@
+"""The motor under load: torque–speed curves by continuation (``bouncedisk torque-speed``).
+
+A motor is read from its load characteristic (MODEL.md "The motor under load"): the ensemble's
+mean speed, output power and efficiency at each load torque ``τ_L``, with 95 % intervals across
+members, and the derived no-load speed, stall torque (the first zero of the mean speed) and
+maximum-power point. The loads are swept **up and down by continuation**: each member at each
+load starts from its own final state at the previous load, so a motor that can hold two speeds
+under one load shows both (the two branches differ there).
+
+Each load's run lasts the scene's ``stop.time − initial.t`` with its ``stats.discard`` left out
+of the averages. A continued run starts at time ``θ/w`` (the stator phase ``θ`` of the previous
+run's end, exact) with the previous final rotor state: the model is autonomous in the phase, so
+nothing but the clock's origin changes, and its rounding does not grow with the sweep's length.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..analysis.ensembles import MemberStats, run_member
+from ..analysis.statistics import EnsembleStats, confidence_interval, ensemble_window
+from ..engine import EngineConfig, InitialState
+from ..model.engine_config import engine_config
+from ..model.errors import InputError
+from ..model.scene import Scene
+
+#: Branches of the sweep: loads increasing, then decreasing from the top load's final states.
+BRANCHES = ("up", "down")
+#: Bootstrap resamples of the members for the derived quantities' intervals (fixed seed).
+BOOTSTRAP = 2000
+BOOTSTRAP_SEED = 20261123
+#: Relative difference of two branches' mean speeds below which they count as one speed.
+MATERIAL = 1e-3
+#: Largest number of loads one curve may ask for.
+MAX_LOADS = 1000
+
+
+def parse_loads(text: str, source: str = "<arguments>", field: str = "--loads") -> np.ndarray:
+    """Loads from ``START:STOP:N`` (``N`` evenly spaced, ends included) or ``A,B,C``.
+
+    Raises
+    ------
+    InputError
+        Naming ``source`` and ``field``: not numbers, negative or non-finite loads, ``N < 2``,
+        ``STOP <= START``, repeated loads, or more than :data:`MAX_LOADS`.
+    """
+    from ..model.params import number, whole_number
+
+    text = str(text).strip()
+    if ":" in text:
+        parts = text.split(":")
+        if len(parts) != 3:
+            raise InputError(source, field, f"must be START:STOP:N or A,B,C, got {text!r}")
+        start = number(source, field, parts[0], nonneg=True)
+        stop = number(source, field, parts[1], nonneg=True)
+        n = whole_number(source, field, parts[2], minimum=2)
+        if n > MAX_LOADS:
+            raise InputError(source, field, f"must ask for at most {MAX_LOADS} loads, got {n}")
+        if not stop > start:
+            raise InputError(source, field, f"STOP must be > START, got {text!r}")
+        return np.linspace(start, stop, n)
+    items = [x for x in text.split(",") if x.strip()]
+    if not items:
+        raise InputError(source, field, f"must be START:STOP:N or A,B,C, got {text!r}")
+    if len(items) > MAX_LOADS:
+        raise InputError(source, field, f"must ask for at most {MAX_LOADS} loads")
+    loads = np.array([number(source, field, x, nonneg=True) for x in items])
+    if len(np.unique(loads)) != len(loads):
+        raise InputError(source, field, f"repeats a load: {text!r}")
+    return np.sort(loads)
+
+
+@dataclass(frozen=True)
+class LoadCurve:
+    """An ensemble's statistics at each load, on both branches (see the module docstring).
+
+    ``loads`` are nondimensional (``τ_L``); ``branches[name][k]`` is the ensemble at ``loads[k]``.
+    """
+
+    loads: np.ndarray
+    branches: dict[str, list[EnsembleStats]]
+
+    def matrix(self, branch: str, name: str) -> np.ndarray:
+        """A per-member quantity as a ``(members, loads)`` array."""
+        return np.stack([s.column(name) for s in self.branches[branch]], axis=1)
+
+    def summary(self) -> dict:
+        """The JSON object of ``bouncedisk torque-speed --json`` (INTERFACES.md): the up branch's
+        statistics per load as lists, the derived quantities with intervals, the down branch
+        under ``"down"`` and the loads where the branches differ."""
+        out: dict = {"loads": [float(x) for x in self.loads]}
+        out.update(_per_load(self.branches["up"]))
+        out.update(derived(self.loads, self.matrix("up", "mean_omega"), self.power("up")))
+        if "down" in self.branches:
+            out["down"] = _per_load(self.branches["down"])
+            out["branches_differ_at"] = self.branches_differ()
+        scales = self.branches["up"][0].scales
+        if scales is not None:
+            out.update(_physical(out, scales))
+        return out
+
+    def power(self, branch: str) -> np.ndarray:
+        """Output power ``τ_L Ω̄`` per member and load (``(members, loads)``)."""
+        return self.matrix(branch, "power_out")
+
+    def branches_differ(self) -> list[float]:
+        """Loads at which the two branches hold different speeds: their 95 % intervals of the
+        mean speed do not overlap and the means differ by more than :data:`MATERIAL` of the
+        largest mean speed on the curve (a periodic attractor has a zero-width interval, and a
+        finite window's average still depends on where in the cycle it starts)."""
+        up = [confidence_interval(s.column("mean_omega")) for s in self.branches["up"]]
+        down = [confidence_interval(s.column("mean_omega")) for s in self.branches["down"]]
+        scale = max(abs(m) for m, _, _ in up + down)
+        out = []
+        for load, (m_u, lo_u, hi_u), (m_d, lo_d, hi_d) in zip(self.loads, up, down, strict=True):
+            apart = hi_u < lo_d or hi_d < lo_u
+            if apart and abs(m_u - m_d) > MATERIAL * scale:
+                out.append(float(load))
+        return out
+
+
+def _per_load(stats: list[EnsembleStats]) -> dict:
+    """Every ``stats`` field as a list over the loads."""
+    per = [s.summary() for s in stats]
+    keys = [k for k in per[0] if k not in ("members", "discard", "duration")]
+    out: dict = {k: [p[k] for p in per] for k in keys}
+    out["members"] = per[0]["members"]
+    out["discard"] = per[0]["discard"]
+    out["duration"] = per[0]["duration"]
+    return out
+
+
+def first_zero(loads: np.ndarray, speed: np.ndarray) -> float:
+    """The first load at which ``speed`` reaches 0, linearly interpolated (MODEL.md "stall
+    torque": the smallest ``τ_L`` with ``Ω̄ <= 0``); ``nan`` when it stays positive."""
+    if speed[0] <= 0.0:
+        return float(loads[0])
+    for k in range(1, len(loads)):
+        if speed[k] <= 0.0:
+            f = speed[k - 1] / (speed[k - 1] - speed[k])
+            return float(loads[k - 1] + f * (loads[k] - loads[k - 1]))
+    return math.nan
+
+
+def peak(loads: np.ndarray, power: np.ndarray) -> tuple[float, float]:
+    """The largest sampled ``power`` and its load.
+
+    No interpolation: where the speed collapses just past the peak (a stall), a parabola through
+    the largest sample and its neighbours overshoots every sample several-fold, so the grid of
+    loads sets the resolution (ask for more loads near the peak to refine it).
+    """
+    k = int(np.nanargmax(power))
+    return float(power[k]), float(loads[k])
+
+
+def derived(loads: np.ndarray, speed: np.ndarray, power: np.ndarray) -> dict:
+    """No-load speed, stall torque and maximum-power point with 95 % intervals.
+
+    ``speed`` and ``power`` are ``(members, loads)``. The estimates are those of the members'
+    mean curve; their intervals are the central 95 % of :data:`BOOTSTRAP` resamples of the
+    members (fixed seed: the same numbers on every run). The no-load speed is the mean speed at
+    ``τ_L = 0`` (Student interval, as every ``stats`` field) when the loads start at 0.
+    """
+    out: dict = {}
+    if loads[0] == 0.0:
+        mean, lo, hi = confidence_interval(speed[:, 0])
+        out["no_load_speed"], out["no_load_speed_ci95"] = _num(mean), [_num(lo), _num(hi)]
+    else:
+        out["no_load_speed"], out["no_load_speed_ci95"] = None, [None, None]
+
+    def stall(idx: np.ndarray) -> float:
+        return first_zero(loads, speed[idx].mean(axis=0))
+
+    def pmax(idx: np.ndarray) -> tuple[float, float]:
+        return peak(loads, power[idx].mean(axis=0))
+
+    members = speed.shape[0]
+    rng = np.random.default_rng(BOOTSTRAP_SEED)
+    boots = rng.integers(0, members, size=(BOOTSTRAP, members))
+    every = np.arange(members)
+    st = stall(every)
+    st_b = np.array([stall(i) for i in boots])
+    out["stall_torque"] = _num(st)
+    out["stall_torque_ci95"] = _interval(st_b) if math.isfinite(st) else [None, None]
+    p, at = pmax(every)
+    pb = np.array([pmax(i) for i in boots])
+    out["max_power"], out["max_power_ci95"] = _num(p), _interval(pb[:, 0])
+    out["max_power_load"], out["max_power_load_ci95"] = _num(at), _interval(pb[:, 1])
+    return out
+
+
+#: The load curve's derived quantities (INTERFACES.md), each with its ``*_ci95``.
+DERIVED = ("no_load_speed", "stall_torque", "max_power", "max_power_load")
+
+
+def _nan(x: float | None) -> float:
+    return math.nan if x is None else x
+
+
+def _interval(samples: np.ndarray) -> list[float | None]:
+    """Central 95 % of bootstrap samples. A resample with no value (``nan``: its mean speed
+    stayed positive) lies beyond the largest load: it counts as ``+inf``, and an end of the
+    interval that falls on one is unknown (``None``)."""
+    x = np.where(np.isfinite(samples), samples, np.inf)
+    lo = np.quantile(x, 0.025, method="lower")
+    hi = np.quantile(x, 0.975, method="higher")
+    return [_num(lo), _num(hi)]
+
+
+def _num(x: float) -> float | None:
+    return float(x) if math.isfinite(x) else None
+
+
+def _physical(out: dict, sc) -> dict:
+    """SI copies of the curve's axes and derived quantities (N·m, rad/s, W)."""
+
+    def conv(v, unit):
+        if isinstance(v, list):
+            return [conv(x, unit) for x in v]
+        return None if v is None else v * unit
+
+    si = {"loads_Nm": conv(out["loads"], sc.torque)}
+    si["mean_omega_rad_s"] = conv(out["mean_omega"], sc.omega_scale)
+    si["mean_omega_rad_s_ci95"] = conv(out["mean_omega_ci95"], sc.omega_scale)
+    for name, unit in (
+        ("no_load_speed", sc.omega_scale),
+        ("stall_torque", sc.torque),
+        ("max_power", sc.torsion_power),
+        ("max_power_load", sc.torque),
+    ):
+        suffix = {sc.omega_scale: "_rad_s", sc.torque: "_Nm", sc.torsion_power: "_W"}[unit]
+        si[name + suffix] = conv(out[name], unit)
+        si[name + suffix + "_ci95"] = conv(out[name + "_ci95"], unit)
+    return si
+
+
+def _continued(final: dict, omega_s: float) -> InitialState:
+    """The initial state that continues a run from its final state, at time ``θ/w`` (module
+    docstring)."""
+    t = final["phase"] / omega_s
+    if final["in_contact"]:
+        return InitialState(t=t, omega=final["omega"])
+    return InitialState(t=t, omega=final["omega"], u=final["u"], v=final["v"])
+
+
+def member_sweep(
+    cfg: EngineConfig,
+    init: InitialState,
+    member: int,
+    loads: Sequence[float],
+    discard: float,
+    duration: float,
+    branches: Sequence[str] = BRANCHES,
+    should_stop: Callable[[], bool] | None = None,
+) -> dict[str, list[MemberStats]]:
+    """One member's statistics at each load, swept up then down by continuation.
+
+    Each run lasts ``duration`` with ``discard`` left out of its averages.
+    """
+    order = {"up": list(range(len(loads))), "down": list(range(len(loads)))[::-1]}
+    out: dict[str, list[MemberStats]] = {}
+    state = init
+    for branch in branches:
+        got: dict[int, MemberStats] = {}
+        for k in order[branch]:
+            t0 = state.t
+            run = dataclasses.replace(cfg, load_torque=float(loads[k]), t_end=t0 + duration)
+            stats, final, _tail = run_member(run, state, member, t0 + discard, should_stop)
+            got[k] = stats
+            state = _continued(final, cfg.omega_s)
+        out[branch] = [got[k] for k in range(len(loads))]
+    return out
+
+
+def torque_speed(
+    scene: Scene,
+    loads: Sequence[float],
+    cores: int = 1,
+    branches: Sequence[str] = BRANCHES,
+    on_member: Callable[[int, int], None] | None = None,
+    should_stop: Callable[[], bool] | None = None,
+) -> LoadCurve:
+    """The scene's load characteristic: its ensemble at each of ``loads`` (nondimensional
+    ``τ_L``, increasing), swept by continuation (module docstring). Members run on ``cores``
+    threads, each sweeping its own chain; the numbers do not depend on ``cores``.
+
+    Parameters
+    ----------
+    scene : Scene
+        With ``torsion``, ``stop.time``, ``stats.discard`` and an ensemble: every load runs
+        ``stop.time − initial.t`` and averages after ``discard``.
+    loads : sequence of float
+        Load torques ``τ_L >= 0`` in units of ``μ m_r g_eff r_eff``, increasing.
+    cores : int
+        Threads the members run on.
+    branches : sequence of str
+        ``("up", "down")`` or ``("up",)``: the sweeps to run (:data:`BRANCHES`).
+    on_member, should_stop : callable, optional
+        Progress ``on_member(done, total)``; ``should_stop()`` polled between chunks.
+
+    Returns
+    -------
+    LoadCurve
+        Per branch and load the ensemble's :class:`~bouncedisk.analysis.statistics.EnsembleStats`.
+
+    Raises
+    ------
+    InputError
+        When the scene has no ``torsion`` effect, does not stop on time, or is not the exact
+        bouncing model.
+    """
+    t_from, t_end = ensemble_window(scene)
+    if "torsion" not in scene.effects:
+        raise InputError(scene.source, "effects", "a load curve needs the 'torsion' effect")
+    if scene.solver.method != "exact" or scene.model != "bouncing":
+        raise InputError(scene.source, "solver.method", "load curves run the exact bouncing model")
+    loads = np.asarray(loads, dtype=float)
+    cfg = engine_config(scene)
+    discard = scene.stats.discard
+    duration = t_end - scene.initial.t
+    members = scene.ensemble.members
+
+    def one(m: int) -> dict[str, list[MemberStats]]:
+        return member_sweep(cfg, scene.initial, m, loads, discard, duration, branches, should_stop)
+
+    results = []
+    with ThreadPoolExecutor(max_workers=max(1, cores)) as pool:
+        for res in pool.map(one, range(members)):
+            results.append(res)
+            if on_member:
+                on_member(len(results), members)
+    curve = {
+        b: [
+            EnsembleStats([r[b][k] for r in results], discard, t_end - t_from, True, scene.scales)
+            for k in range(len(loads))
+        ]
+        for b in branches
+    }
+    return LoadCurve(loads, curve)
+
+
+#: Per-load statistics written to a load-curve file: the ``stats`` quantities that have a mean
+#: and an interval (QUANTITIES), and the audit's residuals.
+CURVE_QUANTITIES = (
+    "mean_omega",
+    "mean_slip",
+    "impact_rate",
+    "chatter_rate",
+    "power_out",
+    "power_torsion_in",
+    "power_axial_in",
+    "efficiency_torsion",
+)
+
+
+def to_dataset(scene: Scene, curve: LoadCurve, wall_time_s: float):
+    """The load curve as an xarray Dataset (INTERFACES.md): per branch and load the ensemble
+    means with their 95 % intervals, per member the speed and output power, the audit residuals,
+    and the derived quantities as attributes, with the scene's provenance."""
+    import xarray as xr
+
+    from ..analysis.statistics import AUDIT, QUANTITIES
+    from ..io.provenance import base_attrs, new_run_id
+    from ..run.runner import scene_attrs
+
+    names = list(curve.branches)
+    dims = ("branch", "load_torque")
+    data = {}
+    for q in CURVE_QUANTITIES:
+        long_name = QUANTITIES[q][0]
+        cis = [[confidence_interval(s.column(q)) for s in curve.branches[b]] for b in names]
+        arr = np.array(cis, dtype=float)  # (branch, load, 3)
+        data[q] = (dims, arr[..., 0], {"long_name": f"ensemble mean of the {long_name}"})
+        for j, end in ((1, "low"), (2, "high")):
+            data[f"{q}_ci95_{end}"] = (
+                dims,
+                arr[..., j],
+                {"long_name": f"{end} end of the 95% interval of {q} across members"},
+            )
+    for q in ("mean_omega", "power_out"):
+        data[f"{q}_member"] = (
+            ("branch", "load_torque", "member"),
+            np.stack([curve.matrix(b, q).T for b in names]),
+            {"long_name": f"{QUANTITIES[q][0]} of each member"},
+        )
+    for q, long_name in AUDIT.items():
+        data[q] = (
+            dims,
+            np.array([[np.nanmax(s.column(q)) for s in curve.branches[b]] for b in names]),
+            {"long_name": long_name},
+        )
+    for var in data.values():
+        var[2].setdefault("units", "1")
+    members = np.arange(curve.branches[names[0]][0].column("mean_omega").size)
+    coords = {
+        "branch": ("branch", names, {"long_name": "direction of the continuation sweep"}),
+        "load_torque": (
+            "load_torque",
+            curve.loads,
+            {"long_name": "load torque tau_L (units of mu m_r g_eff r_eff)", "units": "1"},
+        ),
+        "member": ("member", members, {"long_name": "ensemble member"}),
+    }
+    ds = xr.Dataset(data, coords=coords)
+    ds.attrs.update(base_attrs(f"bouncedisk load characteristic of scene '{scene.name}'"))
+    ds.attrs.update(scene_attrs(scene))
+    summary = curve.summary()
+    for k in DERIVED:
+        for key in (k, *(f"{k}{si}" for si in ("_rad_s", "_Nm", "_W"))):
+            if key in summary:
+                ds.attrs[key] = _nan(summary[key])
+                ds.attrs[f"{key}_ci95"] = [_nan(x) for x in summary[f"{key}_ci95"]]
+    ds.attrs["branches_differ_at"] = summary.get("branches_differ_at") or "none"
+    if scene.physical is not None:
+        sc = scene.physical.scales()
+        ds.attrs.update({"torque_scale_Nm": sc.torque, "omega_scale_rad_s": sc.omega_scale})
+    ds.attrs.update(
+        {
+            "ensemble_members": int(members.size),
+            "ensemble_seed": scene.ensemble.seed,
+            "confidence_level": 0.95,
+            "bootstrap_resamples": BOOTSTRAP,
+            "run_id": new_run_id(f"{scene.name}-torque-speed", scene.sha256),
+            "wall_time_s": round(wall_time_s, 6),
+            "status": "completed",
+        }
+    )
+    return ds
+
+
+def motor_scene(
+    params,
+    drive_frequency_hz: float,
+    phi0_rad: float,
+    rotor: dict,
+    preload_n: float,
+    members: int,
+    time: float,
+    discard: float,
+    seed: int = 1,
+    name: str = "prototype_load",
+) -> Scene:
+    """A physical scene of a motor for its load curve in SI units: the nondimensional
+    ``params`` (e.g. a fit's) with the drive ``(f, Φ0)`` and the ``rotor``
+    (``m_r_kg``, ``r_g_m``, ``r_c_m``), converted by
+    :meth:`~bouncedisk.model.params.PhysicalParameters.from_nondimensional`; an ensemble of
+    ``members`` with the params' restitution noise, ``time`` and ``discard`` nondimensional.
+    """
+    from ..model.params import PhysicalParameters
+    from ..model.scene import scene_from_mapping
+
+    phys = PhysicalParameters.from_nondimensional(
+        params, drive_frequency_hz, phi0_rad, rotor["m_r_kg"], rotor["r_g_m"], rotor["r_c_m"],
+        F_preload=preload_n,
+    )  # fmt: skip
+    physical = {k: v for k, v in phys.as_dict().items()}
+    raw = {
+        "name": name,
+        "description": "load characteristic of a motor given by nondimensional parameters",
+        "physical": physical,
+        "effects": ["impacts", "contact", "torsion", "restitution_noise", "load"],
+        "stop": {"time": float(time)},
+        "stats": {"discard": float(discard)},
+        "ensemble": {"members": int(members), "seed": int(seed)},
+    }
+    return scene_from_mapping(raw, f"<{name}>")
+
+
+def readings_from_rest(
+    scene: Scene, loads: Sequence[float], cores: int = 1, independent: bool = False
+) -> list[EnsembleStats]:
+    """What a lab reads at each load: the scene's ensemble started from its initial condition
+    (at rest) under that load, each member's mean speed over the scene's stats window
+    (``[initial.t + discard, stop.time]``; INTERFACES.md, a load curve's ``window_s``).
+
+    Unlike :func:`torque_speed` there is no continuation: every reading starts afresh. Member
+    ``m`` uses the noise stream ``(seed, m)`` at every load (common random numbers), or with
+    ``independent`` the stream ``(seed + j + 1, m)`` at the ``j``-th load: separate runs, as a
+    lab's readings at different loads are.
+    """
+    from ..analysis.ensembles import run_ensemble
+
+    t_from, t_end = ensemble_window(scene)
+    cfg = engine_config(scene)
+    out = []
+    for j, load in enumerate(loads):
+        seed = cfg.seed + j + 1 if independent else cfg.seed
+        run = dataclasses.replace(cfg, load_torque=float(load), seed=seed)
+        members = run_ensemble(run, scene.initial, scene.ensemble.members, t_from, cores=cores)
+        out.append(EnsembleStats(members, scene.stats.discard, t_end - t_from, True, scene.scales))
+    return out
+
+
+def synthetic_load_curve(spec: dict, spec_path: str = "") -> tuple:
+    """A synthetic load curve of the synthetic motor (INTERFACES.md load-curve format).
+
+    ``spec`` is ``workflow/config/synthetic_motor.yaml``: the generating ``parameters`` and
+    ``e_sigma``, the drive, ``rotor``, ``preload_N`` and ``load_curve: {loads_Nm, repeats,
+    window_s, seed}``. Each load is read ``repeats`` times, each reading one ensemble member of the
+    model with restitution noise started from rest, on noise streams of its own at every load
+    (:func:`readings_from_rest` with ``independent``: a lab's readings are separate runs); the
+    CSV holds their mean and standard deviation, the sidecar ``repeats``. Returns
+    ``(DataFrame, sidecar)``.
+    """
+    import pandas as pd
+
+    from ..model.params import Parameters
+
+    lc = spec["load_curve"]
+    p = Parameters(**spec["parameters"], e_sigma=spec["e_sigma"])
+    t_c = p.omega_s / (2.0 * math.pi * spec["drive_frequency_hz"])
+    t0, t1 = (float(x) for x in lc["window_s"])
+    scene = motor_scene(
+        p, spec["drive_frequency_hz"], spec["Phi0_rad"], spec["rotor"], spec["preload_N"],
+        lc["repeats"], t1 / t_c, t0 / t_c, seed=lc["seed"], name="synthetic_load_curve",
+    )  # fmt: skip
+    sc = scene.physical.scales()
+    loads = np.asarray(lc["loads_Nm"], dtype=float)
+    readings = readings_from_rest(scene, loads / sc.torque, independent=True)
+    speeds = np.stack([r.column("mean_omega") for r in readings]) * sc.omega_scale
+    df = pd.DataFrame(
+        {
+            "torque_Nm": loads,
+            "speed_rad_s": speeds.mean(axis=1),
+            "speed_sd_rad_s": speeds.std(axis=1, ddof=1),
+        }
+    )
+    sidecar = {
+        "source": "SYNTHETIC: generated by bouncedisk from the bouncing-disk model at the "
+        "parameters below (each reading one ensemble member with restitution noise e_sigma, "
+        "started from rest under its load); not a measurement",
+        "synthetic": True,
+        "units": {"torque": "N m", "speed": "rad/s"},
+        "motor": {"drive_frequency_hz": spec["drive_frequency_hz"], "Phi0_rad": spec["Phi0_rad"]},
+        "rotor": dict(spec["rotor"]),
+        "preload_N": spec["preload_N"],
+        "window_s": [t0, t1],
+        "repeats": int(lc["repeats"]),
+        "protocol": f"{lc['repeats']} readings per load, each the mean speed over window_s after "
+        "a start from rest (separate runs at every load); speed_rad_s is their mean, "
+        "speed_sd_rad_s their standard deviation",
+        "generating_parameters": {
+            **spec["parameters"],
+            "e_sigma": spec["e_sigma"],
+            "ensemble_seed": lc["seed"],
+            "load_seeds": "ensemble_seed + j + 1 at the j-th load (j from 0)",
+        },  # fmt: skip
+        "generator": "workflow/scripts/make_synthetic_load_curve.py ("
+        + (spec_path or "workflow/config/synthetic_motor.yaml")
+        + ")",
+    }
+    return df, sidecar
