@@ -2,7 +2,7 @@
 
 The model is chaotic, so it is not fitted point by point: the measured curve and the model's
 ensemble (MODEL.md "Long-run statistics of chaotic motion") are reduced to statistics of the
-trend and the ripple (:mod:`.statistics`), compared by a synthetic likelihood that counts the
+trend and the ripple (:mod:`~bouncedisk.fitting.statistics`), compared by a synthetic likelihood that counts the
 model's across-member spread (:mod:`.objective`), searched globally then locally
 (:mod:`.search`), and profiled for every parameter (:mod:`.uncertainty`). :mod:`.model` holds the
 physical conversion (MODEL.md "Physical conversion"), :mod:`.output` the fit file, and

@@ -1,5 +1,5 @@
 """``bouncedisk fit CURVE.csv [CURVE.csv ...] -o FIT.nc``: options checked before any work,
-progress, output (several curves: run-ups of one motor fitted together, :mod:`.runs`).
+progress, output (several curves: run-ups of one motor fitted together, :mod:`~bouncedisk.fitting.runs`).
 
 Every option a user can get wrong is checked before the curve is fitted (INTERFACES.md: exit 2,
 one line ``bouncedisk: error: FILE: FIELD: message``, no output file).

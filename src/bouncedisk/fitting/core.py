@@ -1,7 +1,7 @@
 """Fit the model to a curve: data preparation, search, profiles, the fitted ensemble.
 
 The steps: bound the work (:func:`prepare_curve`), reduce the data to its statistics
-(:mod:`.statistics`), search the synthetic likelihood (:mod:`.search`), profile every parameter
+(:mod:`~bouncedisk.fitting.statistics`), search the synthetic likelihood (:mod:`.search`), profile every parameter
 (:mod:`.uncertainty`), and run the fitted model's ensemble for the band of Fig. 5.
 """
 
@@ -278,7 +278,7 @@ def fit_curve(
     load: Sequence[LoadCurveData] | None = None,
 ) -> FitResult:
     """Fit the model to ``curve``, or jointly to several run-ups of one motor (module docstring,
-    :mod:`.runs`) and, with ``load``, to its load curves too (:mod:`.loadpart`). Deterministic
+    :mod:`~bouncedisk.fitting.runs`) and, with ``load``, to its load curves too (:mod:`.loadpart`). Deterministic
     for a given seed."""
     start = _time.perf_counter()
     runs, fitted, note = prepare_runs(curve)

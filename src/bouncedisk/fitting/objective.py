@@ -4,7 +4,7 @@ For a parameter point ``θ`` the model's ``K`` members (:func:`.model.member_rec
 statistics ``s_k(θ)`` (:func:`.statistics.record_stats`) with mean ``μ(θ)``. A measured curve is
 one more realization, so its statistics differ from ``μ(θ)`` by the across-member spread ``C``
 (which includes the measurement noise, added to every member); the data's statistics ``s_d`` are
-the mean over ``M`` run-ups of one motor (``M = 1`` for one curve, :mod:`.runs`), which spreads
+the mean over ``M`` run-ups of one motor (``M = 1`` for one curve, :mod:`~bouncedisk.fitting.runs`), which spreads
 by ``C / M``, and the model's mean has the Monte-Carlo error ``C / K``:
 
     χ²(θ) = (s_d − μ(θ))ᵀ [C (1/M + 1/K)]⁻¹ (s_d − μ(θ)),
