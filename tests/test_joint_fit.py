@@ -218,6 +218,7 @@ def tiny_fit(data_dir):
     return fit_curve(curve, TINY, load=[load])
 
 
+@pytest.mark.xdist_group("tiny_joint_fit")  # one worker fits, not both
 def test_the_fit_file_holds_the_load_curves_and_the_identifiability_table(tiny_fit, tmp_path):
     from bouncedisk.io.netcdf import write_dataset
 
@@ -255,6 +256,7 @@ def test_the_fit_file_holds_the_load_curves_and_the_identifiability_table(tiny_f
     assert "load curve: chi2" in text and "95% intervals by data set" in text
 
 
+@pytest.mark.xdist_group("tiny_joint_fit")  # one worker fits, not both
 def test_joint_chi2_is_the_sum_of_the_parts(tiny_fit):
     """Independent experiments: the joint ``χ²`` at the estimate is the run-ups' plus the load
     curve's, and the load part's ``χ²`` is reported."""
@@ -263,6 +265,7 @@ def test_joint_chi2_is_the_sum_of_the_parts(tiny_fit):
     assert tiny_fit.chi2 >= lf.chi2
 
 
+@pytest.mark.xdist_group("tiny_joint_fit")  # one worker fits, not both
 def test_joint_figures_draw(tiny_fit, tmp_path):
     from bouncedisk.figures.drawing import FIGURES
 
@@ -274,6 +277,7 @@ def test_joint_figures_draw(tiny_fit, tmp_path):
         assert (tmp_path / f"{name}.png").stat().st_size > 5000
 
 
+@pytest.mark.xdist_group("tiny_joint_fit")  # one worker fits, not both
 def test_joint_figures_refuse_a_run_up_fit(tiny_fit):
     from bouncedisk.figures.drawing import FIGURES
 
