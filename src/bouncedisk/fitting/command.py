@@ -109,10 +109,7 @@ def fit_command(args) -> None:
     curves = []
     seen = {}
     for path in args.curve:
-        if Path(path).resolve() in seen:
-            raise InputError(str(path), "", f"is the same file as {seen[Path(path).resolve()]}: "
-                             "give each run-up once")  # fmt: skip
-        seen[Path(path).resolve()] = str(path)
+        first_time(path, seen, "", "give each run-up once")
         progress(f"reading {path}")
         curves.append(read_curve(path, args.sidecar))
     c = curves[0]
@@ -134,11 +131,15 @@ def read_loads(paths: list[str], seen: dict, progress) -> list:
 
     out = []
     for path in paths:
-        key = Path(path).resolve()
-        if key in seen:
-            raise InputError(str(path), "--load", f"is the same file as {seen[key]}: give each "
-                             "curve once")  # fmt: skip
-        seen[key] = str(path)
+        first_time(path, seen, "--load", "give each curve once")
         progress(f"reading load curve {path}")
         out.append(read_load_curve(path))
     return out
+
+
+def first_time(path: str, seen: dict, field: str, advice: str) -> None:
+    """Refuse an input file given before (``seen``: resolved path -> as given), else record it."""
+    key = Path(path).resolve()
+    if key in seen:
+        raise InputError(str(path), field, f"is the same file as {seen[key]}: {advice}")
+    seen[key] = str(path)

@@ -14,7 +14,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats as _sps
 
 from ..analysis.observables import first_order_trend
 from ..io.load_curves import LoadCurveData
@@ -26,7 +25,7 @@ from .model import MODEL_E_SIGMA, EnsembleSpec, member_records, param_names, phy
 from .objective import Objective
 from .runs import check_runs, mean_curve
 from .search import SearchSettings, search
-from .statistics import STATS, Layout, provisional_sd, record_stats, stat_floor
+from .statistics import STATS, Layout, member_band, provisional_sd, record_stats, stat_floor
 from .uncertainty import (
     ADEQUATE_P,
     THRESHOLD,
@@ -236,11 +235,7 @@ def fitted_band(
     """The fitted model's noise-free members: ensemble mean, its 95 % interval, member band."""
     runs = np.array(member_records(theta, dataclasses.replace(curve, sigma=0.0),
                                    range(members), spec))  # fmt: skip
-    mean = runs.mean(axis=0)
-    half = _sps.t.ppf(0.975, members - 1) * runs.std(axis=0, ddof=1) / math.sqrt(members)
-    lo, hi = np.percentile(runs, [2.5, 97.5], axis=0)
-    return {"mean": mean, "low": mean - half, "high": mean + half, "p025": lo, "p975": hi,
-            "member0": runs[0]}  # fmt: skip
+    return {**member_band(runs), "member0": runs[0]}
 
 
 def prepare_runs(

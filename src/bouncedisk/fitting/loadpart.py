@@ -26,7 +26,6 @@ experiments: block-diagonal covariance).
 
 from __future__ import annotations
 
-import math
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
@@ -226,10 +225,6 @@ def members_for(k: int) -> int:
 def band(part: LoadPart, theta: dict[str, float], x: np.ndarray, members: int = LOAD_BAND) -> dict:
     """The fitted model's load curve: mean of ``members`` members, the 95 % interval of the mean
     (Student) and the members' 2.5–97.5 % band, at every measured load."""
-    from scipy.special import stdtrit
+    from .statistics import member_band
 
-    v = part.values(theta, x, members)
-    mean = np.add.reduce(v, axis=0) / members
-    half = stdtrit(members - 1, 0.975) * v.std(axis=0, ddof=1) / math.sqrt(members)
-    lo, hi = np.percentile(v, [2.5, 97.5], axis=0)
-    return {"mean": mean, "low": mean - half, "high": mean + half, "p025": lo, "p975": hi}
+    return member_band(part.values(theta, x, members))

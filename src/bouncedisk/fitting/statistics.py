@@ -219,3 +219,15 @@ def stat_floor(measured: np.ndarray) -> np.ndarray:
 def provisional_sd(measured: np.ndarray) -> np.ndarray:
     """Standard deviations of the global search's provisional metric: a few % of each statistic."""
     return _scaled(measured, "provisional")
+
+
+def member_band(values: np.ndarray) -> dict[str, np.ndarray]:
+    """Ensemble mean of ``values`` ``(members, n)``, the 95 % interval of that mean (Student) and
+    the members' 2.5–97.5 % band: the fitted model's band of a run-up and of a load curve."""
+    from scipy.special import stdtrit  # Student's quantile, bit-identical to scipy.stats.t.ppf
+
+    k = len(values)
+    mean = values.mean(axis=0)
+    half = stdtrit(k - 1, 0.975) * values.std(axis=0, ddof=1) / np.sqrt(k)
+    lo, hi = np.percentile(values, [2.5, 97.5], axis=0)
+    return {"mean": mean, "low": mean - half, "high": mean + half, "p025": lo, "p975": hi}
