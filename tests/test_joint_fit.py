@@ -44,10 +44,11 @@ def torque_scale(true: dict) -> float:
     return lp.motor_scales(theta, data)[2]
 
 
-def _fake_load_data(window=(0.03, 0.06)):
+def _fake_load_data(window=(0.03, 0.06), torques=(0.0, 1e-4, 2e-4)):
     from bouncedisk.io.load_curves import LoadCurveData
 
-    return LoadCurveData(torque=np.array([0.0, 1e-4, 2e-4]), speed=np.zeros(3), speed_sd=None,
+    n = len(torques)
+    return LoadCurveData(torque=np.array(torques), speed=np.zeros(n), speed_sd=None,
                          drive_frequency_hz=F_HZ, phi0_rad=PHI0, rotor=ROTOR, preload_n=PRELOAD,
                          window_s=window, synthetic=True, path="<test>")  # fmt: skip
 
@@ -89,20 +90,23 @@ def test_torque_scale_is_the_closed_form():
 
 
 def test_a_reading_is_the_members_window_mean():
-    """:func:`loadpart.reading` is the ensemble reducer's mean speed over the window of the same
-    member under the same load, in rad/s (two routes through the engine)."""
+    """:func:`loadpart.curve_readings` is, at every load, the ensemble reducer's mean speed over
+    the window of the same member run under that load alone, in rad/s (two routes through the
+    engine: one axial trajectory for all loads, and one run per load)."""
     theta = {"e": 0.55, "log10_r_phi": math.log10(0.002), "psi": 0.4, "omega_s": 1.7}
-    data = _fake_load_data((0.01, 0.02))
-    item = lp.LoadItem(data, 1.2e-4)
-    t_c, speed, torque = lp.motor_scales(theta, data)
-    got = lp.reading(theta, item, 3, 0.03, 17)
-    cfg = EngineConfig(e=0.55, omega_s=1.7, r_phi=0.002, psi=0.4, contact=True, torsion=True,
-                       t_end=0.02 / t_c, max_events=10**8, e_sigma=0.03, seed=17,
-                       load_torque=1.2e-4 / torque)  # fmt: skip
-    stats, _, _ = run_member(cfg, InitialState(t=0.0, omega=0.0), lp.LOAD_STREAM + 3, 0.01 / t_c)
-    assert got == pytest.approx(stats.mean_omega * speed, rel=1e-12)
+    t_c, speed, torque = lp.motor_scales(theta, _fake_load_data())
+    data = _fake_load_data((0.01, 0.02), torques=(0.0, 1.2e-4, 3.0 * torque))
+    got = lp.curve_readings(theta, data, 3, 0.03, 17)
+    for load, reading in zip(data.torque, got, strict=True):
+        cfg = EngineConfig(e=0.55, omega_s=1.7, r_phi=0.002, psi=0.4, contact=True, torsion=True,
+                           t_end=0.02 / t_c, max_events=10**8, e_sigma=0.03, seed=17,
+                           load_torque=load / torque)  # fmt: skip
+        stats, _, _ = run_member(
+            cfg, InitialState(t=0.0, omega=0.0), lp.LOAD_STREAM + 3, 0.01 / t_c
+        )
+        assert reading == pytest.approx(stats.mean_omega * speed, rel=1e-12)
     # under a load past stall the rotor is driven backwards
-    assert lp.reading(theta, lp.LoadItem(data, 3.0 * torque), 0, 0.03, 17) < 0
+    assert got[0] > got[1] > 0 > got[2]
 
 
 def test_load_residuals_are_the_whitened_difference(tmp_path):

@@ -822,30 +822,45 @@ def _contact_end(st, ist, ev, evk, info, prm, clipped, taus, tau_end, n1, th1, s
 def _flight_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, noise_key, infl):
     """A flight and the impact that ends it (MODEL.md "Flight", "Impact").
 
-    The first root of the gap (:func:`flight_next_impact`, eq. 20); the flight's outputs
-    (:func:`_flight_output`, which ends the run if its end comes first); the impact law with
-    this impact's restitution (``restitution_noise``: ``e_k``, :mod:`.noise`) and what follows
-    (:func:`_impact`); its event row; then a new flight, contact or a chattering sequence
-    (:func:`_enter_contact`). Returns ``ST_CONTINUE`` or the status that ends this call.
-    ``infl``: the gap's inflection data (:func:`flight_next_impact`).
+    The first root of the gap (:func:`flight_next_impact`, eq. 20) with this impact's
+    restitution (``restitution_noise``: ``e_k``, :mod:`.noise`), then :func:`_flight_land`.
+    Returns ``ST_CONTINUE`` or the status that ends this call. ``infl``: the gap's inflection
+    data (:func:`flight_next_impact`).
     """
+    tau, dk, ph, v_minus = flight_next_impact(
+        st[S_U], st[S_V], th, st[S_ANCHOR_TAU], st[S_ANCHOR_GAP], prm[P_W], prm[P_TOL], infl
+    )
+    if tau < 0.0:
+        return _finish(ist, info, ST_NUMERICAL)
+    e = prm[P_E]
+    e_k = noisy_restitution(e, prm[P_ESIG], noise_key, ist[I_EVENTS]) if flg[F_NOISE] else e
+    hit = (tau, dk, ph, v_minus, e_k)
+    return _flight_land(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, hit)
+
+
+@_on_arrays
+def _flight_land(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, hit):
+    """The rest of a flight once its impact ``hit = (tau, dk, phase, v_minus, e_k)`` is known.
+
+    The flight's outputs (:func:`_flight_output`, which ends the run if its end comes first);
+    the impact law with the restitution ``e_k`` and what follows (:func:`_impact`); its event
+    row; then a new flight, contact or a chattering sequence (:func:`_enter_contact`). Nothing
+    here feeds back into the axial motion through ``Ω``, so runs that differ only in the load
+    share ``hit`` (:mod:`bouncedisk.engine.loads`). Returns ``ST_CONTINUE`` or the status that
+    ends this call.
+    """
+    tau, dk, ph, v_minus, e_k = hit
     e = prm[P_E]
     w = prm[P_W]
     xtol = prm[P_TOL]
     torsion = flg[F_TORSION] != 0
     cap = flg[F_CAP] != 0
-    tau, dk, ph, v_minus = flight_next_impact(
-        st[S_U], st[S_V], th, st[S_ANCHOR_TAU], st[S_ANCHOR_GAP], w, xtol, infl
-    )
-    if tau < 0.0:
-        return _finish(ist, info, ST_NUMERICAL)
     n_hit = n + dk
     t_hit = (n_hit * TWO_PI + ph) / w
     if flg[F_TRAJ] or flg[F_STROBE] or flg[F_STATS] or t_hit > prm[P_TEND]:
         status = _flight_output(prm, flg, st, ist, traj, strobe, info, n, th, t_now, t_hit, tau)
         if status != ST_CONTINUE:
             return status
-    e_k = noisy_restitution(e, prm[P_ESIG], noise_key, ist[I_EVENTS]) if flg[F_NOISE] else e
     r = prm[P_R]
     psi = prm[P_PSI]
     om = loaded_omega(st[S_OMEGA], prm[P_LOAD], tau)

@@ -8,7 +8,9 @@ the rotor known, ``t_c = ω_s / (2π f)``, the speed scale ``R_φ Φ0 / t_c`` an
 ``μ m_r g_eff r_eff`` (:meth:`bouncedisk.model.params.PhysicalParameters.scales`) turn ``T_j`` into the
 nondimensional ``τ_L`` and the window into ``[t0, t1] / t_c``; member ``m`` runs the engine from
 rest in contact at ``t = 0`` under ``τ_L`` with restitution noise on its own stream and reads
-``∫Ω dt`` over the window (the kernel's exact integral, no sampling).
+``∫Ω dt`` over the window (the kernel's exact integral, no sampling). The axial motion does not
+depend on the load, so one member's readings at all loads share one axial trajectory
+(:mod:`bouncedisk.engine.loads`): a curve of 16 loads costs a few runs, not 16.
 
 The residual of the load part is ``μ(θ) − y`` with ``μ`` the mean of ``K`` members, whose
 covariance is the data's own spread plus the model's Monte-Carlo error:
@@ -32,7 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..engine import EngineConfig, InitialState
-from ..engine.driver import iterate
+from ..engine.loads import omega_integrals
 from ..io.load_curves import LoadCurveData
 from ..model.params import Parameters, PhysicalParameters
 from . import detlinalg
@@ -53,19 +55,6 @@ LOAD_FLOOR = 1e-2
 MAX_EVENTS = 50_000_000
 
 
-@dataclass(frozen=True)
-class LoadItem:
-    """One reading to predict: its curve's constants and its load torque (N·m)."""
-
-    data: LoadCurveData
-    torque_nm: float
-
-
-def items_of(curves: list[LoadCurveData]) -> list[LoadItem]:
-    """Every reading of every load curve, curve by curve, in increasing torque."""
-    return [LoadItem(d, float(t)) for d in curves for t in d.torque]
-
-
 def motor_scales(theta: dict[str, float], data: LoadCurveData) -> tuple[float, float, float]:
     """``(t_c [s], speed scale [rad/s], torque scale [N·m])`` of a parameter point for a motor
     (MODEL.md "Physical conversion"; the torque scale ``μ m_r g_eff r_eff`` of "The motor under
@@ -81,27 +70,21 @@ def motor_scales(theta: dict[str, float], data: LoadCurveData) -> tuple[float, f
     return sc.t_c, sc.omega_scale, sc.torque
 
 
-def reading(
-    theta: dict[str, float], item: LoadItem, member: int, e_sigma: float, seed: int
-) -> float:
-    """One member's mean speed (rad/s) over the item's window after a start from rest under its
-    load (module docstring)."""
-    t_c, speed, torque = motor_scales(theta, item.data)
-    t0, t1 = (w / t_c for w in item.data.window_s)
+def curve_readings(
+    theta: dict[str, float], data: LoadCurveData, member: int, e_sigma: float, seed: int
+) -> np.ndarray:
+    """One member's mean speed (rad/s) over the curve's window after a start from rest under each
+    of its loads (module docstring): one axial trajectory carries every load's rotation
+    (:func:`bouncedisk.engine.loads.omega_integrals`, bit-identical to a run per load)."""
+    t_c, speed, torque = motor_scales(theta, data)
+    t0, t1 = (w / t_c for w in data.window_s)
     cfg = EngineConfig(
         e=theta["e"], omega_s=theta["omega_s"], r_phi=10.0 ** theta["log10_r_phi"],
         psi=theta["psi"], contact=True, torsion=True, t_end=t1, max_events=MAX_EVENTS,
         e_sigma=e_sigma, seed=seed, member=LOAD_STREAM + member, stats_from=t0,
-        load_torque=item.torque_nm / torque,
     )  # fmt: skip
-    gen = iterate(cfg, InitialState(t=0.0, omega=0.0))
-    while True:
-        try:
-            next(gen)
-        except StopIteration as stop:
-            _, final = stop.value
-            break
-    return final["omega_integral"] / (t1 - t0) * speed
+    integrals = omega_integrals(cfg, data.torque / torque, InitialState(t=0.0, omega=0.0))
+    return integrals / (t1 - t0) * speed
 
 
 @dataclass
@@ -130,7 +113,6 @@ class LoadPart:
     _white: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        self.items = items_of(self.curves)
         self.y = np.concatenate([d.speed for d in self.curves])
         sd = [d.speed_sd if d.speed_sd is not None else np.full(len(d.torque), np.nan)
               for d in self.curves]  # fmt: skip
@@ -160,17 +142,17 @@ class LoadPart:
         have = self.cache.get(key)
         if have is None or len(have) < k:
             start = 0 if have is None else len(have)
-            tasks = [(m, it) for m in range(start, k) for it in self.items]
+            tasks = [(m, d) for m in range(start, k) for d in self.curves]
 
             def one(task):
-                return reading(theta, task[1], task[0], self.e_sigma, self.seed)
+                return curve_readings(theta, task[1], task[0], self.e_sigma, self.seed)
 
             if serial or self.cores <= 1 or len(tasks) < 2:
                 flat = [one(t) for t in tasks]
             else:
                 with ThreadPoolExecutor(max_workers=self.cores) as pool:
                     flat = list(pool.map(one, tasks))
-            new = np.array(flat, float).reshape(k - start, self.n)
+            new = np.concatenate(flat).reshape(k - start, self.n)
             have = new if have is None else np.vstack([have, new])
             self.cache[key] = have
         return have[:k]
