@@ -297,10 +297,10 @@ def fit_curve(
         progress(f"scan: {len(extra)} points reproduce the data's statistics within its "
                  "bootstrap scales")  # fmt: skip
     if part is not None:
-        extra = joint_consistent(obj, s.global_members)
+        extra = joint_consistent(obj, s.global_members, best.chi2)
         if progress is not None:
             progress(f"scan: {len(extra)} of the joint candidates reproduce the run-ups and the "
-                     "load curve together (one member against the data)")  # fmt: skip
+                     "load curve together (chi2 below its 95 % point)")  # fmt: skip
     profiles, jac, corr, sd = all_profiles(obj, best.x, s.members, s.profile and list(s.profile),
                                            progress, thr, extra)  # fmt: skip
     final = obj.best(s.members)  # a profile may have found a better point

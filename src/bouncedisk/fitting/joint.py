@@ -50,13 +50,16 @@ def load_part(
     return LoadPart(curves, spec.e_sigma, spec.seed, cores=spec.cores)
 
 
-def joint_consistent(obj: Objective, members: int) -> np.ndarray:
+def joint_consistent(obj: Objective, members: int, best_chi2: float) -> np.ndarray:
     """The joint candidates (:func:`.search.joint_candidates`: scan points that reproduce the
-    run-ups, as they are and with ``R_φ`` moved to the load curve's torque scale) that reproduce
-    both data sets: ``χ²`` on ``members`` members (one realization against the data: twice the
-    variance) below twice the 95 % point of ``χ²(n)``, as :func:`.uncertainty.scan_acceptable`
-    judges the run-ups' scan. Every basin among them widens the joint intervals."""
-    limit = 2.0 * float(_sps.chi2.ppf(0.95, obj.n_stats))
+    run-ups, as they are, with ``R_φ`` moved to the load curve's torque scale, and the joint
+    zoom around the best) that reproduce both data sets on ``members`` members: ``χ²`` below the
+    95 % point of ``χ²(n)``, scaled by the best fit's ``χ²/n`` when that exceeds 1 (Birge). The
+    residuals are already whitened for ``members`` members (the run-ups' by
+    ``sqrt(1/M + 1/k)``, the load curves' by ``D + C_L/k``), so no further factor for the few
+    members is due. Every basin among them widens the joint intervals."""
+    scale = max(1.0, best_chi2 / obj.n_stats)
+    limit = scale * float(_sps.chi2.ppf(0.95, obj.n_stats))
     pts = {tuple(ev.x): ev.x for ev in obj.log
            if ev.members == members and ev.parts == "both" and ev.chi2 <= limit}  # fmt: skip
     return np.array(list(pts.values())).reshape(-1, len(obj.names))

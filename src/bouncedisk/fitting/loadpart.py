@@ -39,10 +39,12 @@ from ..io.load_curves import LoadCurveData
 from ..model.params import Parameters, PhysicalParameters
 from . import detlinalg
 
-#: Members per evaluation of the load part (local search, profiles); the scan uses one.
-LOAD_MEMBERS = 4
+#: Load members per evaluation of the load part (local search, profiles).
+LOAD_MEMBERS = 8
+#: Load members when the run-ups are evaluated on one member (the scan's candidates).
+LOAD_SCAN = 4
 #: Members measuring the load part's covariance ``C_L`` (the pilot).
-LOAD_PILOT = 16
+LOAD_PILOT = 32
 #: Members of the fitted load curve's band.
 LOAD_BAND = 16
 #: Load members run on the streams ``(seed, LOAD_STREAM + m)``, apart from the run-ups' ``(seed, m)``.
@@ -199,9 +201,11 @@ def _repeats(d: LoadCurveData) -> int:
 
 
 def members_for(k: int) -> int:
-    """Load members for an evaluation of the run-ups with ``k`` members: one in the scan,
-    :data:`LOAD_MEMBERS` otherwise (never more than ``k``)."""
-    return max(1, min(k, LOAD_MEMBERS))
+    """Load members for an evaluation of the run-ups with ``k`` members: :data:`LOAD_SCAN` for
+    the scan's one member, :data:`LOAD_MEMBERS` otherwise. A member's whole load curve costs
+    about one run (:mod:`bouncedisk.engine.loads`), so the load part gets more members than its
+    share of the cost would suggest: its Monte-Carlo error is what blurs the narrow joint valley."""
+    return LOAD_SCAN if k <= 1 else LOAD_MEMBERS
 
 
 def band(part: LoadPart, theta: dict[str, float], x: np.ndarray, members: int = LOAD_BAND) -> dict:

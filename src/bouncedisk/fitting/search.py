@@ -9,7 +9,10 @@
 2. A pilot ensemble (``pilot_members``) at the best point measures the model's across-member
    covariance ``C``; the objective switches to it. The best ``candidates`` distinct scan points
    are re-ranked on ``members`` members (one member is a noisy estimate where the model is
-   chaotic), ``C`` is measured again at the best of them.
+   chaotic), ``C`` is measured again at the best of them. With load curves the candidates are
+   the scan points that reproduce the run-ups, each also with ``R_φ`` moved to the load curve's
+   torque scale, and a joint zoom around the best of them (:func:`joint_candidates`,
+   :func:`joint_zoom`), ranked by the joint ``χ²``.
 3. :func:`scipy.optimize.least_squares` on the whitened residuals, in coordinates scaled to the
    search box, from each of the best few re-ranked points (multi-start); then ``C`` is measured
    again at the new best point and the search polished.
@@ -245,7 +248,40 @@ def joint_candidates(
     # each point as the run-ups matched it and with R_phi moved to the load curve's torque scale
     pool = pool + obj.map(lambda x: load_matched(obj, x), pool)
     scores = obj.map(lambda x: obj.chi2(x, s.global_members), pool)
+    near = joint_zoom(obj, [pool[i] for i in rank_order(scores, pool)], s)
+    pool = pool + near
+    scores = scores + obj.map(lambda x: obj.chi2(x, s.global_members), near)
     return [pool[i] for i in rank_order(scores, pool)[: s.candidates]]
+
+
+#: The joint zoom (:func:`joint_zoom`): centres, points around each, and the patch's half-width
+#: as a fraction of the range of ``e`` and of ``omega_s``.
+JOINT_ZOOM_CENTRES = 4
+JOINT_ZOOM_POINTS = 48
+JOINT_ZOOM_HALF = 0.04
+
+
+def joint_zoom(obj: Objective, ranked: list[np.ndarray], s: SearchSettings) -> list[np.ndarray]:
+    """Points around the best joint candidates, ``R_φ`` moved to the load curve's torque scale.
+
+    The load curve pins ``(e, omega_s)`` to a valley far narrower than the scan's spacing (on the
+    shipped motor a change of 0.04 in ``omega_s`` at fixed ``(e, ψ, R_φ)`` raises the load part's
+    ``χ²`` by hundreds), so a candidate of the scan lies beside it, not in it. Around each of the
+    best :data:`JOINT_ZOOM_CENTRES` candidates distinct in ``(e, omega_s)``, a Sobol patch of
+    :data:`JOINT_ZOOM_POINTS` points ``± JOINT_ZOOM_HALF`` of the range keeps the centre's
+    ``(ψ, R_φ)`` with ``R_φ`` load-matched (:func:`load_matched`); the local search refines the
+    best of them. Cheap because a load curve costs about one run
+    (:mod:`bouncedisk.engine.loads`).
+    """
+    ax = [obj.names.index("e"), obj.names.index("omega_s")]
+    patch = (2.0 * _sobol(JOINT_ZOOM_POINTS, s.seed + 2) - 1.0) * JOINT_ZOOM_HALF
+    pts = []
+    for c in _distinct_axial(obj, ranked, JOINT_ZOOM_CENTRES):
+        for d in patch:
+            x = c.copy()
+            x[ax] = np.clip(c[ax] + d * obj.span[ax], obj.lo[ax], obj.hi[ax])
+            pts.append(snap(x))
+    return obj.map(lambda x: load_matched(obj, x), pts)
 
 
 def load_matched(obj: Objective, x: np.ndarray) -> np.ndarray:
