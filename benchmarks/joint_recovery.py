@@ -7,7 +7,10 @@ Run:  python benchmarks/joint_recovery.py [--scan N] [--zoom N] [CASE ...]
 
 Prints, per case, the fit's summary lines and whether every joint interval holds the generating
 value, then one JSON line with the interval widths by data set. Not a test: a fit per case takes
-minutes, and the issue's criterion is not met yet (see the closing note of issue 20).
+2-6 minutes, and the issue's criterion is not met: in the chaotic case another basin reproduces
+both short data sets (chi2 8.0 on 21) and the search never evaluates the generating one; near the
+period doubling no adequate point is found; in the periodic case the profiles are narrow and
+local (see the closing notes of issue 20).
 """
 
 from __future__ import annotations
