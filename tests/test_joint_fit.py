@@ -288,3 +288,37 @@ def test_joint_figures_refuse_a_run_up_fit(tiny_fit):
     ds = fit_dataset(tiny_fit).drop_vars(["load_speed_measured"])
     with pytest.raises(ValueError, match="no load curve"):
         FIGURES["fit_load"].draw(ds)
+
+
+def test_the_joint_zoom_samples_around_distinct_candidates(monkeypatch):
+    """:func:`search.joint_zoom`: :data:`JOINT_ZOOM_POINTS` points around each of the best
+    :data:`JOINT_ZOOM_CENTRES` candidates distinct in ``(e, omega_s)``, within
+    ``± JOINT_ZOOM_HALF`` of the range there and inside the search box, keeping the centre's
+    ``(ψ, R_φ)`` before the load match (replaced here by the identity)."""
+    from types import SimpleNamespace
+
+    from bouncedisk.fitting import search as se
+    from bouncedisk.fitting.search import SearchSettings
+
+    names = ["e", "log10_r_phi", "psi", "omega_s"]
+    lo = np.array([BOUNDS[n][0] for n in names])
+    hi = np.array([BOUNDS[n][1] for n in names])
+    obj = SimpleNamespace(names=names, lo=lo, hi=hi, span=hi - lo,
+                          map=lambda f, xs: [f(x) for x in xs])  # fmt: skip
+    monkeypatch.setattr(se, "load_matched", lambda obj, x: x)
+    # six candidates, best first; the second is a near-copy of the first (not distinct), the
+    # last sits on the box's corner
+    ranked = [np.array(v) for v in ([0.5, -2.5, 0.3, 2.0], [0.501, -2.4, 0.1, 2.001],
+              [0.3, -2.2, -1.0, 1.5], [0.8, -3.0, 2.0, 3.0], [0.2, -2.0, 0.0, 3.5],
+              [hi[0], -2.6, 0.5, lo[3]])]  # fmt: skip
+    pts = se.joint_zoom(obj, ranked, SearchSettings())
+    assert len(pts) == se.JOINT_ZOOM_CENTRES * se.JOINT_ZOOM_POINTS
+    centres = [ranked[i] for i in (0, 2, 3, 4)]  # the near-copy is skipped
+    ax = [0, 3]
+    for k, c in enumerate(centres):
+        block = np.array(pts[k * se.JOINT_ZOOM_POINTS : (k + 1) * se.JOINT_ZOOM_POINTS])
+        off = np.abs(block[:, ax] - c[ax]) / obj.span[ax]
+        assert np.all(off <= se.JOINT_ZOOM_HALF + 1e-8)
+        assert np.all(block[:, [1, 2]] == c[[1, 2]])
+        assert len({tuple(p) for p in block}) == se.JOINT_ZOOM_POINTS
+        assert np.all((block >= lo - 1e-12) & (block <= hi + 1e-12))
