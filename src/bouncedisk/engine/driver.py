@@ -224,8 +224,9 @@ def initial_state(cfg: EngineConfig, init: InitialState) -> tuple[np.ndarray, np
 
 
 @dataclass
-class _Raw:
-    """One kernel call's output, as views into the run's buffers (valid until the next call)."""
+class ChunkView:
+    """One kernel call's output as views into the run's buffers, valid until the next call:
+    event rows ``ev`` (columns ``EV_*`` of :mod:`.kernel`), their kinds, samples."""
 
     ev: np.ndarray
     evk: np.ndarray
@@ -235,11 +236,14 @@ class _Raw:
     t_now: float
 
 
-def _raw_chunks(
-    cfg: EngineConfig, init: InitialState | None, chunk_events: int, chunk_samples: int
-) -> Iterator[_Raw]:
-    """The kernel's calls of one run (:func:`iterate` without the copies); returns
-    ``(status_code, final_state)``."""
+def iterate_views(
+    cfg: EngineConfig,
+    init: InitialState | None = None,
+    chunk_events: int = 1 << 16,
+    chunk_samples: int = 1 << 16,
+) -> Iterator[ChunkView]:
+    """:func:`iterate` without copies: one :class:`ChunkView` per kernel call, valid until the
+    next. The generator's return value is ``(status_code, final_state)``."""
     init = init or InitialState()
     prm, flg = _pack(cfg)
     st, ist = initial_state(cfg, init)
@@ -259,7 +263,7 @@ def _raw_chunks(
             n_tr, n_sb = int(info[K.O_TRAJ_PARTIAL]), int(info[K.O_STROBE_PARTIAL])
         t_now = (ist[K.I_PERIOD] * K.TWO_PI + st[K.S_PHASE]) / w
         if n_ev or n_tr or n_sb:
-            yield _Raw(
+            yield ChunkView(
                 ev[:n_ev], evk[:n_ev], traj[:n_tr], strobe[:n_sb], int(ist[K.I_EVENTS]), t_now
             )
         if status in (K.ST_CHUNK, K.ST_NEED_TRAJ, K.ST_NEED_STROBE):
@@ -299,7 +303,7 @@ def iterate(
     EngineError
         When the dynamics need an effect the configuration left out, or an event search fails.
     """
-    raw = _raw_chunks(cfg, init, chunk_events, chunk_samples)
+    raw = iterate_views(cfg, init, chunk_events, chunk_samples)
     while True:
         try:
             c = next(raw)
@@ -416,7 +420,7 @@ def simulate_arrays(
     kind = _Filling(cap, None, np.int8)
     traj = _Filling(1 << 12 if cfg.traj_dt > 0 else 0, K.TRAJ_COLS)
     strobe = _Filling(1 << 12 if cfg.stroboscopic else 0, K.STROBE_COLS)
-    raw = _raw_chunks(cfg, init, _COLLECT_CHUNK, _COLLECT_CHUNK)
+    raw = iterate_views(cfg, init, _COLLECT_CHUNK, _COLLECT_CHUNK)
     while True:
         try:
             c = next(raw)
