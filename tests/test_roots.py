@@ -10,11 +10,9 @@ from numba import njit
 
 from bouncedisk.engine.roots import (
     TWO_PI,
-    _interval_root,
     first_root,
-    hev,
+    floor_turns,
     inflections,
-    mod_two_pi,
 )
 
 
@@ -123,8 +121,99 @@ def test_curvature_is_positive_before_p1_and_negative_before_p2(c2, a, b, w):
 
 
 # --- the shortcuts of first_root_sc change no result ------------------------------------------
-# The walk as it was before the shortcuts (roots.py at 0.x, evaluating f at every interval's
-# end): the engine's first root must be this one's, bit for bit.
+# The walk as it was before the shortcuts (evaluating f at every interval's end, hev with every
+# term, the reduction of a phase by a division): the engine's first root must be this one's,
+# bit for bit.
+
+
+@njit(cache=False)
+def _plain_mod(x):
+    r = x - TWO_PI * math.floor(x / TWO_PI)
+    if r >= TWO_PI:
+        r -= TWO_PI
+    if r < 0.0:
+        r = 0.0
+    return r
+
+
+@njit(cache=False)
+def _plain_hev(f0, c1, c2, a, b, th0, s0, k0, w, tau):
+    """``roots.hev`` as it was (no shortcut for a flight's gap)."""
+    half = 0.5 * w * tau
+    sh = math.sin(half)
+    mid = th0 + half
+    sm = math.sin(mid)
+    cm = math.cos(mid)
+    ds = 2.0 * cm * sh
+    dc = -2.0 * sm * sh
+    sp = s0 + ds
+    cp = k0 + dc
+    f = f0 + tau * (c1 + c2 * tau) + a * dc + b * ds
+    fp = c1 + 2.0 * c2 * tau + w * (b * cp - a * sp)
+    fpp = 2.0 * c2 - w * w * (a * cp + b * sp)
+    return f, fp, fpp
+
+
+@njit(cache=False)
+def _plain_bracket(f0, c1, c2, a, b, th0, s0, k0, w, lo, hi, xtol):
+    x = 0.5 * (lo + hi)
+    for _ in range(300):
+        f, fp, _fpp = _plain_hev(f0, c1, c2, a, b, th0, s0, k0, w, x)
+        if f > 0.0:
+            lo = x
+        elif f < 0.0:
+            hi = x
+        else:
+            return x
+        if fp < 0.0:
+            dx = f / fp
+            xn = x - dx
+            if lo < xn < hi:
+                if abs(dx) <= xtol:
+                    return xn
+                x = xn
+                continue
+        if hi - lo <= xtol:
+            return hi
+        x = 0.5 * (lo + hi)
+    return hi
+
+
+@njit(cache=False)
+def _plain_interval(f0, c1, c2, a, b, th0, s0, k0, w, lo, flo, fplo, hi, fhi, fphi, convex, xtol):
+    if convex:
+        if fplo >= 0.0:
+            return -1.0
+        if fhi <= 0.0:
+            if flo <= 0.0:
+                return lo
+            return _plain_bracket(f0, c1, c2, a, b, th0, s0, k0, w, lo, hi, xtol)
+        if fphi <= 0.0:
+            return -1.0
+        d0 = c1 + w * (b * k0 - a * s0)
+        m = _plain_bracket(-d0, -2.0 * c2, 0.0, -w * b, w * a, th0, s0, k0, w, lo, hi, xtol)
+        fm, _fp, _fpp = _plain_hev(f0, c1, c2, a, b, th0, s0, k0, w, m)
+        if fm > 0.0:
+            return -1.0
+        if flo <= 0.0:
+            return lo
+        if fm == 0.0:
+            return m
+        return _plain_bracket(f0, c1, c2, a, b, th0, s0, k0, w, lo, m, xtol)
+    if fhi > 0.0:
+        return -1.0
+    if fhi == 0.0 and flo > 0.0:
+        return hi
+    if flo > 0.0:
+        return _plain_bracket(f0, c1, c2, a, b, th0, s0, k0, w, lo, hi, xtol)
+    if fplo <= 0.0:
+        return lo
+    d0 = c1 + w * (b * k0 - a * s0)
+    m = _plain_bracket(d0, 2.0 * c2, 0.0, w * b, -w * a, th0, s0, k0, w, lo, hi, xtol)
+    fm, _fp, _fpp = _plain_hev(f0, c1, c2, a, b, th0, s0, k0, w, m)
+    if fm <= 0.0:
+        return m
+    return _plain_bracket(f0, c1, c2, a, b, th0, s0, k0, w, m, hi, xtol)
 
 
 @njit(cache=False)
@@ -138,8 +227,8 @@ def _plain_first_root(f0, c1, c2, a, b, th0, w, t_max, xtol):
     p1 = math.inf
     p2 = math.inf
     if found:
-        p1 = mod_two_pi(beta - delta - th0) / w
-        p2 = mod_two_pi(math.pi - beta - delta - th0) / w
+        p1 = _plain_mod(beta - delta - th0) / w
+        p2 = _plain_mod(math.pi - beta - delta - th0) / w
     lo = 0.0
     flo = f0
     fplo = c1 + w * (b * k0 - a * s0)
@@ -159,11 +248,11 @@ def _plain_first_root(f0, c1, c2, a, b, th0, w, t_max, xtol):
             if lo >= t_max:
                 return -1.0
             continue
-        fhi, fphi, _fpp = hev(f0, c1, c2, a, b, th0, s0, k0, w, hi)
+        fhi, fphi, _fpp = _plain_hev(f0, c1, c2, a, b, th0, s0, k0, w, hi)
         if not found or tie:
-            _fm, _fpm, fppm = hev(f0, c1, c2, a, b, th0, s0, k0, w, 0.5 * (lo + hi))
+            _fm, _fpm, fppm = _plain_hev(f0, c1, c2, a, b, th0, s0, k0, w, 0.5 * (lo + hi))
             convex = fppm > 0.0
-        r = _interval_root(
+        r = _plain_interval(
             f0, c1, c2, a, b, th0, s0, k0, w, lo, flo, fplo, hi, fhi, fphi, convex, xtol
         )
         if r >= 0.0:
@@ -226,3 +315,28 @@ def test_every_family_finds_the_walks_root(f0, c1, c2, a, b, th0, w, t_max):
     """Any quadratic-plus-harmonic function (slip, stick margins): the same root, bit for bit."""
     args = (f0, c1, c2, a, b, th0, w, t_max, 1e-12)
     assert _same_bits(first_root(*args), _plain_first_root(*args))
+
+
+@njit(cache=False)
+def _floor_mismatches(x):
+    bad = 0
+    for v in x:
+        if floor_turns(v) != math.floor(v / TWO_PI):
+            bad += 1
+    return bad
+
+
+def test_floor_turns_is_the_floor_of_the_division():
+    rng = np.random.default_rng(3)
+    k = rng.integers(-(10**7), 10**7, 200_000).astype(float)
+    near = k * TWO_PI
+    for x in (
+        rng.uniform(-1e3, 1e3, 200_000),
+        rng.uniform(-1e15, 1e15, 200_000),
+        near,
+        np.nextafter(near, np.inf),
+        np.nextafter(near, -np.inf),
+        near * (1 + rng.normal(0, 1e-15, len(near))),
+        np.array([0.0, -0.0, 1e300, -1e300, 5e-324]),
+    ):
+        assert _floor_mismatches(x) == 0

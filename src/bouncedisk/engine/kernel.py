@@ -54,7 +54,7 @@ from .laws import (
     stick_twist_work,
 )
 from .noise import member_key, noisy_restitution
-from .roots import TWO_PI, first_root, first_root_sc, inflections
+from .roots import TWO_PI, first_root, first_root_sc, floor_turns, inflections
 
 
 def _nrt_off() -> dict:
@@ -161,7 +161,7 @@ STROBE_COLS = 5
 def _advance(n, th, dphi):
     """Add ``dphi`` to phase ``th`` of period ``n``; returns the reduced ``(n, θ)``."""
     x = th + dphi
-    k = floor(x / TWO_PI)
+    k = floor_turns(x)  # floor(x / 2π)
     r = x - k * TWO_PI
     if r >= TWO_PI:
         r -= TWO_PI

@@ -26,10 +26,31 @@ from numba import njit
 TWO_PI = 2.0 * pi
 
 
+INV_TWO_PI = 1.0 / TWO_PI
+
+
+@njit(cache=True, inline="always")
+def floor_turns(x: float) -> float:
+    """``floor(x / 2π)``, the same as with the division, mostly from a multiplication.
+
+    ``q = x · fl(1/2π)`` and the rounded quotient ``x / 2π`` are both within ``2.1 u |q|`` of the
+    exact one (``u = 2⁻⁵³``), so they have the same floor unless ``q`` is within that of an
+    integer: only then (``q``'s fraction within ``1e-14 (1 + |q|)`` of 0 or 1, or ``q`` not
+    finite) the division is made.
+    """
+    q = x * INV_TWO_PI
+    k = floor(q)
+    f = q - k
+    tol = 1e-14 * (1.0 + abs(q))
+    if tol < f < 1.0 - tol:
+        return k
+    return floor(x / TWO_PI)
+
+
 @njit(cache=True, inline="always")
 def mod_two_pi(x: float) -> float:
     """Reduce ``x`` to ``[0, 2π)``."""
-    r = x - TWO_PI * floor(x / TWO_PI)
+    r = x - TWO_PI * floor_turns(x)
     if r >= TWO_PI:
         r -= TWO_PI
     if r < 0.0:
@@ -53,6 +74,13 @@ def hev(f0, c1, c2, a, b, th0, s0, k0, w, tau):
     dc = -2.0 * sm * sh
     sp = s0 + ds
     cp = k0 + dc
+    if a == 0.0 and b == -1.0:
+        # a flight's gap: the terms with a = 0 dropped (at most the sign of a zero differs,
+        # which no caller reads: f and f' are only compared with 0 when they are 0)
+        f = f0 + tau * (c1 + c2 * tau) - ds
+        fp = c1 + 2.0 * c2 * tau - w * cp
+        fpp = 2.0 * c2 + w * w * sp
+        return f, fp, fpp
     f = f0 + tau * (c1 + c2 * tau) + a * dc + b * ds
     fp = c1 + 2.0 * c2 * tau + w * (b * cp - a * sp)
     fpp = 2.0 * c2 - w * w * (a * cp + b * sp)
