@@ -16,7 +16,7 @@ import math
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from math import isfinite, log, sqrt
+from math import cos, isfinite, log, sin, sqrt
 
 import numpy as np
 from numba import njit
@@ -75,17 +75,17 @@ _N_FLOATS = 5
 
 
 @njit(cache=True, nogil=True)
-def _reduce_chunk(
-    t, phase, v_rel, kind, sin_ph, cos_ph, t_from, e, w, vec, ints, fl, tail_f, tail_k
-):
+def _reduce_chunk(t, phase, v_rel, kind, t_from, e, w, vec, ints, fl, tail_f, tail_k):
     """One chunk of :meth:`_Reducer.add`, compiled (releases the GIL); returns the rows kept.
 
     The events with ``t >= t_from``, preceded by the tail's last row, are walked pair by pair:
     the impact map's Jacobian of each valid pair (the formulas and the order of operations of
     :func:`~bouncedisk.analysis.observables.impact_jacobians`) goes straight into Benettin's
     step (:func:`~bouncedisk.analysis.observables.benettin`); the chunk's sum of logs and its
-    count go to ``fl[_F_TOTAL]``, ``ints[_I_COUNT]``. ``sin_ph``, ``cos_ph``: the stator's sine
-    and cosine of every row's phase. The tail becomes the last ``TAIL_EVENTS`` of those rows.
+    count go to ``fl[_F_TOTAL]``, ``ints[_I_COUNT]``. The tail becomes the last ``TAIL_EVENTS``
+    of those rows. The stator's ``sin φ``, ``cos φ`` come from libm, as in the engine: the same
+    bits as numpy's on the reference machine (``model/stator.py``; 2e8 phases compared), and
+    ``tests/test_ensemble_reducer.py`` holds the whole reduction to the numpy one.
     """
     n_tail = ints[_I_TAIL]
     have = n_tail > 0  # the previous row of the first pair
@@ -126,7 +126,8 @@ def _reduce_chunk(
                 first = tj
             last = tj
             n_chat += 1
-        s_j = sin_ph[j]
+        ph_j = phase[j]
+        s_j = sin(ph_j)
         vr_j = v_rel[j]
         if li > 0:
             vs = w * p_c
@@ -166,7 +167,7 @@ def _reduce_chunk(
         p_vr = vr_j
         p_k = kj
         p_s = s_j
-        p_c = cos_ph[j]
+        p_c = cos(ph_j)
         li += 1
         kept += 1
     if kept == 0:
@@ -247,11 +248,8 @@ class _Reducer:
 
         The same numbers, bit for bit, as :func:`~bouncedisk.analysis.observables.impact_jacobians`
         and :func:`~bouncedisk.analysis.observables.benettin` over the chunk's events after
-        ``t_from`` with the previous chunk's last one in front (the stator's ``sin``, ``cos``
-        from numpy, as :mod:`bouncedisk.model.stator` computes them).
+        ``t_from`` with the previous chunk's last one in front.
         """
-        sin_ph = stator.position(phase)
-        cos_ph = np.cos(phase)  # stator.velocity(phase, w) = w * cos(phase)
         ints = self._ints
         ints[_I_IMPACTS] = self.n_impacts
         ints[_I_CHATTER] = self.n_chatter
@@ -262,7 +260,7 @@ class _Reducer:
         fl[_F_FIRST] = self.chatter_first
         fl[_F_LAST] = self.chatter_last
         kept = _reduce_chunk(
-            t, phase, v_rel, kind, sin_ph, cos_ph, self.t_from, self.e, self.w,
+            t, phase, v_rel, kind, self.t_from, self.e, self.w,
             self.vec, ints, fl, self._tail_f, self._tail_k,
         )  # fmt: skip
         if kept == 0:
