@@ -1,6 +1,6 @@
 """Ensembles: members that differ by their restitution-noise streams, run in parallel.
 
-Every member is one run of the engine (:func:`bouncedisk.engine.iterate`) with its own noise
+Every member is one run of the engine (:func:`bouncedisk.engine.driver.iterate_views`) with its own noise
 stream ``(seed, member)`` (:mod:`bouncedisk.engine.noise`), reduced chunk by chunk to the
 long-run observables of MODEL.md "Long-run statistics of chaotic motion": the time-averaged
 rotor speed and slip, impact and chatter rates, the Lyapunov exponent between resets, and the
@@ -16,11 +16,14 @@ import math
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from math import cos, isfinite, log, sin, sqrt
 
 import numpy as np
+from numba import njit
 
-from ..engine import KIND_CHATTER, KIND_IMPACT, EngineConfig, InitialState, iterate
-from ..engine.driver import audit_balances
+from ..engine import KIND_CHATTER, KIND_IMPACT, EngineConfig, InitialState
+from ..engine.driver import audit_balances, iterate_views
+from ..engine.kernel import EV_PHASE, EV_T, EV_V_REL
 from ..model import stator
 from . import observables as ob
 
@@ -64,8 +67,149 @@ class MemberStats:
     audit_residual_torsion: float = math.nan
 
 
+# slots of the reducer's state arrays (:func:`_reduce_chunk`)
+_I_IMPACTS, _I_CHATTER, _I_PREV, _I_OFFSET, _I_SKIP, _I_COUNT, _I_TAIL = range(7)
+_N_INTS = 7
+_F_FIRST, _F_LAST, _F_TOTAL, _F_SIN, _F_COS = range(5)
+_N_FLOATS = 5
+
+
+@njit(cache=True, nogil=True)
+def _reduce_chunk(t, phase, v_rel, kind, t_from, e, w, vec, ints, fl, tail_f, tail_k):
+    """One chunk of :meth:`_Reducer.add`, compiled (releases the GIL); returns the rows kept.
+
+    The events with ``t >= t_from``, preceded by the tail's last row, are walked pair by pair:
+    the impact map's Jacobian of each valid pair (the formulas and the order of operations of
+    :func:`~bouncedisk.analysis.observables.impact_jacobians`) goes straight into Benettin's
+    step (:func:`~bouncedisk.analysis.observables.benettin`); the chunk's sum of logs and its
+    count go to ``fl[_F_TOTAL]``, ``ints[_I_COUNT]``. The tail becomes the last ``TAIL_EVENTS``
+    of those rows. The stator's ``sin φ``, ``cos φ`` come from libm, as in the engine: the same
+    bits as numpy's on the reference machine (``model/stator.py``; 2e8 phases compared), and
+    ``tests/test_ensemble_reducer.py`` holds the whole reduction to the numpy one.
+    """
+    n_tail = ints[_I_TAIL]
+    have = n_tail > 0  # the previous row of the first pair
+    start = ints[_I_OFFSET] - (1 if have else 0)
+    skip = ints[_I_SKIP]
+    prev = ints[_I_PREV]
+    n_imp = ints[_I_IMPACTS]
+    n_chat = ints[_I_CHATTER]
+    first = fl[_F_FIRST]
+    last = fl[_F_LAST]
+    p_t = 0.0
+    p_vr = 0.0
+    p_k = 0
+    p_s = 0.0
+    p_c = 0.0
+    if have:
+        p_t = tail_f[n_tail - 1, 0]
+        p_vr = tail_f[n_tail - 1, 2]
+        p_k = tail_k[n_tail - 1]
+        p_s = fl[_F_SIN]
+        p_c = fl[_F_COS]
+    reset = 1.0 / sqrt(2.0)
+    k_coef = (1.0 + e) * w * w
+    total = 0.0
+    count = 0
+    j_pair = 0  # index of the pair among this chunk's valid pairs
+    li = 1 if have else 0  # index of the row in the chunk's rows with the previous one in front
+    kept = 0
+    for j in range(len(t)):
+        tj = t[j]
+        if not tj >= t_from:
+            continue
+        kj = kind[j]
+        if kj == KIND_IMPACT:
+            n_imp += 1
+        elif kj == KIND_CHATTER:
+            if n_chat == 0:
+                first = tj
+            last = tj
+            n_chat += 1
+        ph_j = phase[j]
+        s_j = sin(ph_j)
+        vr_j = v_rel[j]
+        if li > 0:
+            vs = w * p_c
+            v_post = vs + e * p_vr
+            dt = tj - p_t
+            landing = p_s + v_post * dt - 0.5 * (dt * dt)
+            if (
+                p_k == KIND_IMPACT
+                and kj == KIND_IMPACT
+                and abs(landing - s_j) < 1e-7 * (1.0 + dt * dt)
+                and vr_j > 0.0
+            ):
+                a = (vs - v_post + dt) / vr_j
+                b = dt / vr_j
+                c = e - k_coef * s_j
+                j10 = c * a - e
+                j11 = c * b - e
+                k = li - 1 + start
+                if k != prev + 1:
+                    vec[0] = reset
+                    vec[1] = reset
+                prev = k
+                x = a * vec[0] + b * vec[1]
+                y = j10 * vec[0] + j11 * vec[1]
+                norm = sqrt(x * x + y * y)
+                if norm == 0.0 or not isfinite(norm):
+                    vec[0] = reset
+                    vec[1] = reset
+                else:
+                    vec[0] = x / norm
+                    vec[1] = y / norm
+                    if j_pair >= skip:
+                        total += log(norm)
+                        count += 1
+                j_pair += 1
+        p_t = tj
+        p_vr = vr_j
+        p_k = kj
+        p_s = s_j
+        p_c = cos(ph_j)
+        li += 1
+        kept += 1
+    if kept == 0:
+        return 0
+    # the tail: the last TAIL_EVENTS rows, the previous chunk's last one in front
+    rows = kept + (1 if have else 0)
+    n_new = min(rows, TAIL_EVENTS)
+    if kept < n_new:  # the previous last row stays, first
+        tail_f[0, 0] = tail_f[n_tail - 1, 0]
+        tail_f[0, 1] = tail_f[n_tail - 1, 1]
+        tail_f[0, 2] = tail_f[n_tail - 1, 2]
+        tail_k[0] = tail_k[n_tail - 1]
+    i = n_new - 1
+    for j in range(len(t) - 1, -1, -1):
+        if i < n_new - kept or i < 0:
+            break
+        if not t[j] >= t_from:
+            continue
+        tail_f[i, 0] = t[j]
+        tail_f[i, 1] = phase[j]
+        tail_f[i, 2] = v_rel[j]
+        tail_k[i] = kind[j]
+        i -= 1
+    ints[_I_TAIL] = n_new
+    ints[_I_IMPACTS] = n_imp
+    ints[_I_CHATTER] = n_chat
+    ints[_I_PREV] = prev
+    ints[_I_COUNT] = count
+    fl[_F_FIRST] = first
+    fl[_F_LAST] = last
+    fl[_F_TOTAL] = total
+    fl[_F_SIN] = p_s
+    fl[_F_COS] = p_c
+    return kept
+
+
 class _Reducer:
-    """Streams one member's events after ``t_from`` into counts, a Lyapunov sum and a tail."""
+    """Streams one member's events after ``t_from`` into counts, a Lyapunov sum and a tail.
+
+    The reduction of a chunk is compiled and releases the GIL (:func:`_reduce_chunk`), so the
+    members of an ensemble reduce in parallel as they run.
+    """
 
     def __init__(self, e: float, omega_s: float, t_from: float):
         self.e = e
@@ -80,42 +224,55 @@ class _Reducer:
         self.vec = np.full(2, 1.0 / math.sqrt(2.0))
         self.prev_pair = -2
         self.offset = 0  # global index of the first event kept
-        self.tail = {k: np.empty(0) for k in ("t", "phase", "v_rel")}
-        self.tail["kind"] = np.empty(0, dtype=np.int8)
+        # the tail (the last chunk's events, and the one before them), with sin and cos of its
+        # last phase (the first row of the next chunk's pairs)
+        self._tail_f = np.empty((TAIL_EVENTS, 3))  # t, phase, v_rel
+        self._tail_k = np.empty(TAIL_EVENTS, dtype=np.int8)
+        self._ints = np.zeros(_N_INTS, dtype=np.int64)
+        self._floats = np.zeros(_N_FLOATS)
+
+    @property
+    def tail(self) -> dict[str, np.ndarray]:
+        """The last events kept: ``t``, ``phase``, ``v_rel``, ``kind`` (copies)."""
+        n = int(self._ints[_I_TAIL])
+        f = self._tail_f[:n]
+        return {
+            "t": f[:, 0].copy(),
+            "phase": f[:, 1].copy(),
+            "v_rel": f[:, 2].copy(),
+            "kind": self._tail_k[:n].copy(),
+        }
 
     def add(self, t, phase, v_rel, kind) -> None:
-        """Add one chunk's events (those before ``t_from`` are ignored)."""
-        keep = t >= self.t_from
-        if not np.any(keep):
+        """Add one chunk's events (those before ``t_from`` are ignored).
+
+        The same numbers, bit for bit, as :func:`~bouncedisk.analysis.observables.impact_jacobians`
+        and :func:`~bouncedisk.analysis.observables.benettin` over the chunk's events after
+        ``t_from`` with the previous chunk's last one in front.
+        """
+        ints = self._ints
+        ints[_I_IMPACTS] = self.n_impacts
+        ints[_I_CHATTER] = self.n_chatter
+        ints[_I_PREV] = self.prev_pair
+        ints[_I_OFFSET] = self.offset
+        ints[_I_SKIP] = max(0, LYAPUNOV_SKIP - self.lyap_count)
+        fl = self._floats
+        fl[_F_FIRST] = self.chatter_first
+        fl[_F_LAST] = self.chatter_last
+        kept = _reduce_chunk(
+            t, phase, v_rel, kind, self.t_from, self.e, self.w,
+            self.vec, ints, fl, self._tail_f, self._tail_k,
+        )  # fmt: skip
+        if kept == 0:
             return
-        t, phase, v_rel, kind = t[keep], phase[keep], v_rel[keep], kind[keep]
-        self.n_impacts += int(np.count_nonzero(kind == KIND_IMPACT))
-        chat = t[kind == KIND_CHATTER]
-        if len(chat):
-            if self.n_chatter == 0:
-                self.chatter_first = float(chat[0])
-            self.chatter_last = float(chat[-1])
-            self.n_chatter += len(chat)
-        # pairs across the chunk boundary: prepend the previous chunk's last event
-        tl = self.tail
-        m = 1 if len(tl["t"]) else 0
-        cat = {
-            k: np.concatenate([tl[k][len(tl[k]) - m :], v])
-            for k, v in (("t", t), ("phase", phase), ("v_rel", v_rel), ("kind", kind))
-        }
-        jac, idx = ob.impact_jacobians(
-            cat["t"], cat["phase"], cat["v_rel"], cat["kind"], self.e, self.w
-        )
-        start = self.offset - m
-        skip = max(0, LYAPUNOV_SKIP - self.lyap_count)
-        total, count, self.prev_pair = ob.benettin(
-            jac, (idx + start).astype(np.int64), self.vec, self.prev_pair, skip
-        )
-        self.lyap_sum += total
-        self.lyap_count += count
-        self.offset += len(t)
-        for k in tl:
-            tl[k] = cat[k][-TAIL_EVENTS:]
+        self.n_impacts = int(ints[_I_IMPACTS])
+        self.n_chatter = int(ints[_I_CHATTER])
+        self.chatter_first = float(fl[_F_FIRST])
+        self.chatter_last = float(fl[_F_LAST])
+        self.lyap_sum += float(fl[_F_TOTAL])
+        self.lyap_count += int(ints[_I_COUNT])
+        self.prev_pair = int(ints[_I_PREV])
+        self.offset += kept
 
     def result(
         self, member: int, final: dict, t_end: float, r_phi: float, psi: float
@@ -193,7 +350,7 @@ def run_member(
         cfg, member=member, stats_from=t_from, traj_dt=0.0, stroboscopic=False
     )
     red = _Reducer(cfg.e, cfg.omega_s, t_from)
-    gen = iterate(cfg, init)
+    gen = iterate_views(cfg, init)  # the kernel's buffers, reduced in place: no copies
     while True:
         if should_stop is not None and should_stop():
             raise KeyboardInterrupt
@@ -202,7 +359,8 @@ def run_member(
         except StopIteration as stop:
             _, final = stop.value
             break
-        red.add(c.t, c.phase, c.v_rel, c.kind)
+        ev = c.ev
+        red.add(ev[:, EV_T], ev[:, EV_PHASE], ev[:, EV_V_REL], c.evk)
     stats = red.result(member, final, cfg.t_end, cfg.r_phi, cfg.psi)
     return stats, final, red.tail
 

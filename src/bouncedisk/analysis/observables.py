@@ -72,6 +72,20 @@ def find_period(
         return None
     sl = slice(len(t) - n, len(t))
     ph, vr, tt, kd = phase[sl], v_rel[sl], t[sl], kind[sl]
+    ph, vr, kd = np.asarray(ph), np.asarray(vr), np.asarray(kd)
+    if ph.dtype == np.float64 and vr.dtype == np.float64:
+        p = _first_period(ph, vr, kd, max_period, tol)
+    else:  # other precisions as numpy computes them
+        p = _first_period_numpy(ph, vr, kd, max_period, tol)
+    if p == 0:
+        return None
+    q = int(round((tt[-1] - tt[-1 - p]) * omega_s / TWO_PI))
+    return Periodicity(p=p, q=q, phases=np.sort(ph[-p:]))
+
+
+def _first_period_numpy(ph, vr, kd, max_period, tol):
+    """:func:`_first_period` in numpy (any dtype)."""
+    n = len(ph)
     for p in range(1, max_period + 1):
         if n <= 2 * p:
             break
@@ -79,9 +93,45 @@ def find_period(
         dv = np.abs(vr[p:] - vr[:-p])
         same_kind = np.all(kd[p:] == kd[:-p])
         if same_kind and np.all(dph < tol) and np.all(dv < tol * (1.0 + np.abs(vr[:-p]))):
-            q = int(round((tt[-1] - tt[-1 - p]) * omega_s / TWO_PI))
-            return Periodicity(p=p, q=q, phases=np.sort(ph[-p:]))
-    return None
+            return p
+    return 0
+
+
+@njit(cache=True, inline="always")
+def _circular(a, b):
+    """:func:`circular_distance` of two scalars (the same bits: floored ``%``, as ``np.mod``)."""
+    d = (a - b) % TWO_PI
+    return min(d, TWO_PI - d)
+
+
+@njit(cache=True, nogil=True)
+def _first_period(ph, vr, kd, max_period, tol):
+    """The loop of :func:`find_period` (compiled, releases the GIL): the smallest ``p`` whose
+    shift matches every row in kind, phase and relative velocity, or 0."""
+    n = len(ph)
+    for p in range(1, max_period + 1):
+        if n <= 2 * p:
+            break
+        ok = True
+        for i in range(n - p):
+            if kd[i + p] != kd[i]:
+                ok = False
+                break
+        if not ok:
+            continue
+        for i in range(n - p):
+            if not _circular(ph[i + p], ph[i]) < tol:
+                ok = False
+                break
+        if not ok:
+            continue
+        for i in range(n - p):
+            if not abs(vr[i + p] - vr[i]) < tol * (1.0 + abs(vr[i])):
+                ok = False
+                break
+        if ok:
+            return p
+    return 0
 
 
 @dataclass(frozen=True)
@@ -367,19 +417,65 @@ def chatter_cycle(
     the last three chatters must be equally spaced in events, and the events of the last two
     cycles must agree in kind, phase and relative velocity within ``tol``.
     """
-    where = np.nonzero(kind == KIND_CHATTER)[0]
-    if len(where) < 3:
+    phase, v_rel, kind = np.asarray(phase), np.asarray(v_rel), np.asarray(kind)
+    where = None
+    if phase.dtype == np.float64 and v_rel.dtype == np.float64:
+        m = _chatter_cycle_length(phase, v_rel, kind, tol)
+    else:  # other precisions as numpy computes them
+        where = np.nonzero(kind == KIND_CHATTER)[0]
+        m = -1
+        if len(where) >= 3 and where[-1] - where[-2] == where[-2] - where[-3]:
+            a, b, c = where[-3], where[-2], where[-1]
+            m = c - b
+            dph = circular_distance(phase[b + 1 : c + 1], phase[a + 1 : b + 1])
+            dv = np.abs(v_rel[b + 1 : c + 1] - v_rel[a + 1 : b + 1])
+            if (
+                np.any(kind[b + 1 : c + 1] != kind[a + 1 : b + 1])
+                or np.any(dph > tol)
+                or np.any(dv > tol)
+            ):
+                m = -1
+    if m < 0:
         return None
-    a, b, c = where[-3], where[-2], where[-1]
-    if c - b != b - a:
-        return None
-    m = c - b
-    dph = circular_distance(phase[b + 1 : c + 1], phase[a + 1 : b + 1])
-    dv = np.abs(v_rel[b + 1 : c + 1] - v_rel[a + 1 : b + 1])
-    if np.any(kind[b + 1 : c + 1] != kind[a + 1 : b + 1]) or np.any(dph > tol) or np.any(dv > tol):
-        return None
+    if where is None:
+        where = np.nonzero(kind == KIND_CHATTER)[0]
+    b, c = where[-2], where[-1]
     q = int(round((t[c] - t[b]) * omega_s / TWO_PI))
     return int(m - 1), q
+
+
+@njit(cache=True, nogil=True)
+def _chatter_cycle_length(phase, v_rel, kind, tol):
+    """The test of :func:`chatter_cycle` (compiled, releases the GIL): the events from one of
+    the last three chatters to the next, ``m``, when the last two cycles agree; else -1."""
+    a = -1
+    b = -1
+    c = -1
+    found = 0
+    for i in range(len(kind) - 1, -1, -1):
+        if kind[i] == KIND_CHATTER:
+            if found == 0:
+                c = i
+            elif found == 1:
+                b = i
+            else:
+                a = i
+            found += 1
+            if found == 3:
+                break
+    if found < 3 or c - b != b - a:
+        return -1
+    m = c - b
+    for i in range(m):
+        if kind[b + 1 + i] != kind[a + 1 + i]:
+            return -1
+    for i in range(m):
+        if _circular(phase[b + 1 + i], phase[a + 1 + i]) > tol:
+            return -1
+    for i in range(m):
+        if abs(v_rel[b + 1 + i] - v_rel[a + 1 + i]) > tol:
+            return -1
+    return m
 
 
 def classify(

@@ -223,21 +223,27 @@ def initial_state(cfg: EngineConfig, init: InitialState) -> tuple[np.ndarray, np
     return st, ist
 
 
-def iterate(
+@dataclass
+class ChunkView:
+    """One kernel call's output as views into the run's buffers, valid until the next call:
+    event rows ``ev`` (columns ``EV_*`` of :mod:`.kernel`), their kinds, samples."""
+
+    ev: np.ndarray
+    evk: np.ndarray
+    traj: np.ndarray
+    strobe: np.ndarray
+    n_events_total: int
+    t_now: float
+
+
+def iterate_views(
     cfg: EngineConfig,
     init: InitialState | None = None,
     chunk_events: int = 1 << 16,
     chunk_samples: int = 1 << 16,
-) -> Iterator[Chunk]:
-    """Run the simulation, yielding one :class:`Chunk` per kernel call.
-
-    The generator's return value (``StopIteration.value``) is ``(status_code, final_state)``.
-
-    Raises
-    ------
-    EngineError
-        When the dynamics need an effect the configuration left out, or an event search fails.
-    """
+) -> Iterator[ChunkView]:
+    """:func:`iterate` without copies: one :class:`ChunkView` per kernel call, valid until the
+    next. The generator's return value is ``(status_code, final_state)``."""
     init = init or InitialState()
     prm, flg = _pack(cfg)
     st, ist = initial_state(cfg, init)
@@ -257,18 +263,8 @@ def iterate(
             n_tr, n_sb = int(info[K.O_TRAJ_PARTIAL]), int(info[K.O_STROBE_PARTIAL])
         t_now = (ist[K.I_PERIOD] * K.TWO_PI + st[K.S_PHASE]) / w
         if n_ev or n_tr or n_sb:
-            yield Chunk(
-                t=ev[:n_ev, K.EV_T].copy(),
-                phase=ev[:n_ev, K.EV_PHASE].copy(),
-                v_rel=ev[:n_ev, K.EV_V_REL].copy(),
-                omega_after=ev[:n_ev, K.EV_OMEGA_AFTER].copy(),
-                u=ev[:n_ev, K.EV_U].copy(),
-                omega_before=ev[:n_ev, K.EV_OMEGA_BEFORE].copy(),
-                kind=evk[:n_ev].copy(),
-                traj=traj[:n_tr].copy(),
-                strobe=strobe[:n_sb].copy(),
-                n_events_total=int(ist[K.I_EVENTS]),
-                t_now=t_now,
+            yield ChunkView(
+                ev[:n_ev], evk[:n_ev], traj[:n_tr], strobe[:n_sb], int(ist[K.I_EVENTS]), t_now
             )
         if status in (K.ST_CHUNK, K.ST_NEED_TRAJ, K.ST_NEED_STROBE):
             continue
@@ -290,6 +286,43 @@ def iterate(
         if flg[K.F_STATS]:
             final["audit"] = _audit_terms(cfg, st, ist, bool(final["in_contact"]))
         return status, final
+
+
+def iterate(
+    cfg: EngineConfig,
+    init: InitialState | None = None,
+    chunk_events: int = 1 << 16,
+    chunk_samples: int = 1 << 16,
+) -> Iterator[Chunk]:
+    """Run the simulation, yielding one :class:`Chunk` per kernel call.
+
+    The generator's return value (``StopIteration.value``) is ``(status_code, final_state)``.
+
+    Raises
+    ------
+    EngineError
+        When the dynamics need an effect the configuration left out, or an event search fails.
+    """
+    raw = iterate_views(cfg, init, chunk_events, chunk_samples)
+    while True:
+        try:
+            c = next(raw)
+        except StopIteration as stop:
+            return stop.value
+        ev = c.ev
+        yield Chunk(
+            t=ev[:, K.EV_T].copy(),
+            phase=ev[:, K.EV_PHASE].copy(),
+            v_rel=ev[:, K.EV_V_REL].copy(),
+            omega_after=ev[:, K.EV_OMEGA_AFTER].copy(),
+            u=ev[:, K.EV_U].copy(),
+            omega_before=ev[:, K.EV_OMEGA_BEFORE].copy(),
+            kind=c.evk.copy(),
+            traj=c.traj.copy(),
+            strobe=c.strobe.copy(),
+            n_events_total=c.n_events_total,
+            t_now=c.t_now,
+        )
 
 
 def _audit_terms(cfg: EngineConfig, st: np.ndarray, ist: np.ndarray, in_contact: bool) -> dict:
@@ -334,6 +367,33 @@ def audit_balances(terms: dict) -> tuple[float, float]:
     return ax, tor
 
 
+#: Kernel buffer of :func:`simulate_arrays`, in events and samples (fits a core's cache).
+_COLLECT_CHUNK = 1 << 14
+#: Largest event count :func:`simulate_arrays` allocates at once for a run that stops on events.
+_COLLECT_PREALLOCATE = 1 << 22
+
+
+class _Filling:
+    """An array filled block by block, its capacity doubled in place (``ndarray.resize``:
+    ``realloc``, no copy for a large block) and trimmed at the end: each value is copied once."""
+
+    def __init__(self, cap: int, cols: int | None, dtype=float):
+        self.a = np.empty((max(cap, 1),) if cols is None else (max(cap, 1), cols), dtype=dtype)
+        self.n = 0
+
+    def add(self, block: np.ndarray) -> None:
+        m = len(block)
+        if self.n + m > len(self.a):
+            cap = max(2 * len(self.a), self.n + m)
+            self.a.resize((cap, *self.a.shape[1:]), refcheck=False)  # no view exists yet
+        self.a[self.n : self.n + m] = block
+        self.n += m
+
+    def done(self) -> np.ndarray:
+        self.a.resize((self.n, *self.a.shape[1:]), refcheck=False)
+        return self.a
+
+
 def simulate_arrays(
     cfg: EngineConfig,
     init: InitialState | None = None,
@@ -341,11 +401,46 @@ def simulate_arrays(
 ) -> RunResult:
     """Run to the end and collect events and samples in memory.
 
+    Each value is copied once, from the kernel's buffer into its output array (the arrays of
+    :func:`iterate`'s chunks, concatenated, are the same values).
+
     Raises
     ------
     EngineError
         As :func:`iterate`.
     """
+    if on_chunk is not None:
+        return _collect_chunks(cfg, init, on_chunk)
+    stops_on_events = math.isinf(cfg.t_end)
+    cap = cfg.max_events if stops_on_events else 1 << 16
+    cap = min(cap, _COLLECT_PREALLOCATE)
+    names = ("t", "phase", "v_rel", "omega_after", "u", "omega_before")
+    cols = (K.EV_T, K.EV_PHASE, K.EV_V_REL, K.EV_OMEGA_AFTER, K.EV_U, K.EV_OMEGA_BEFORE)
+    out = [_Filling(cap, None) for _ in names]
+    kind = _Filling(cap, None, np.int8)
+    traj = _Filling(1 << 12 if cfg.traj_dt > 0 else 0, K.TRAJ_COLS)
+    strobe = _Filling(1 << 12 if cfg.stroboscopic else 0, K.STROBE_COLS)
+    raw = iterate_views(cfg, init, _COLLECT_CHUNK, _COLLECT_CHUNK)
+    while True:
+        try:
+            c = next(raw)
+        except StopIteration as stop:
+            status, final = stop.value
+            break
+        for f, j in zip(out, cols, strict=True):
+            f.add(c.ev[:, j])
+        kind.add(c.evk)
+        traj.add(c.traj)
+        strobe.add(c.strobe)
+    events = {name: f.done() for name, f in zip(names, out, strict=True)}
+    events["kind"] = kind.done()
+    return RunResult(events, traj.done(), strobe.done(), STATUS_TEXT[status], status, final)
+
+
+def _collect_chunks(
+    cfg: EngineConfig, init: InitialState | None, on_chunk: Callable[[Chunk], None]
+) -> RunResult:
+    """:func:`simulate_arrays` handing every chunk to ``on_chunk`` as it comes."""
     chunks: list[Chunk] = []
     gen = iterate(cfg, init)
     while True:
@@ -355,8 +450,7 @@ def simulate_arrays(
             status, final = stop.value
             break
         chunks.append(c)
-        if on_chunk is not None:
-            on_chunk(c)
+        on_chunk(c)
 
     def cat(name: str, dtype=float) -> np.ndarray:
         parts = [getattr(c, name) for c in chunks]

@@ -36,9 +36,9 @@ from numba import njit
 
 from .laws import (
     GRAZE_GAP,
-    chatter_time,
+    chatter_time_sc,
     contact_axial_work,
-    impact_law,
+    impact_law_sc,
     loaded_omega,
     loaded_omega_integral,
     normal_load,
@@ -54,7 +54,7 @@ from .laws import (
     stick_twist_work,
 )
 from .noise import member_key, noisy_restitution
-from .roots import TWO_PI, first_root, first_root_from, inflections
+from .roots import TWO_PI, first_root, first_root_sc, floor_turns, inflections
 
 
 def _nrt_off() -> dict:
@@ -105,7 +105,10 @@ S_AUD_WT = 11  # stator's torsional input W_t (friction in contact and angular i
 S_AUD_DF = 12  # friction loss D_f
 S_AUD_E0 = 13  # axial energy v²/2 + u where the audit window starts
 S_AUD_K0 = 14  # rotational energy Ω²/2 where the audit window starts
-N_ST = 15
+# sin and cos of the phase S_SC_PHASE, kept by the impact that starts a flight for its impact
+# search; read only when S_SC_PHASE equals the flight's phase (so any state array is valid)
+S_SC_PHASE, S_SC_SIN, S_SC_COS = 15, 16, 17
+N_ST = 18
 # --- int state --------------------------------------------------------------------------------
 I_PERIOD = 0  # stator period count n
 I_MODE = 1  # MODE_FLIGHT, MODE_CONTACT or MODE_DONE
@@ -158,7 +161,7 @@ STROBE_COLS = 5
 def _advance(n, th, dphi):
     """Add ``dphi`` to phase ``th`` of period ``n``; returns the reduced ``(n, θ)``."""
     x = th + dphi
-    k = floor(x / TWO_PI)
+    k = floor_turns(x)  # floor(x / 2π)
     r = x - k * TWO_PI
     if r >= TWO_PI:
         r -= TWO_PI
@@ -188,20 +191,36 @@ def flight_next_impact(
         Time of impact after the origin (-1 on failure), whole stator periods added to the
         origin's period count, the impact phase in ``[0, 2π)``, the rotor velocity before impact.
     """
+    s0 = 0.0
+    c0 = 0.0
+    if ta == 0.0:
+        s0 = sin(th0)
+        c0 = cos(th0)
+    return _flight_root(u0, v0, th0, s0, c0, ta, ga, w, xtol, infl)
+
+
+@njit(cache=True)
+def _flight_root(u0, v0, th0, s0, c0, ta, ga, w, xtol, infl):
+    """:func:`flight_next_impact` with ``s0, c0 = sin θ0, cos θ0`` given (read only when
+    ``ta == 0``): the impact that starts a flight has computed them already."""
     fd, dl, bt = infl
     va = v0 - ta
     if ta == 0.0:
         ka = 0
         pha = th0
         ua = u0
+        sa = s0
+        ca = c0
     else:
         ka, pha = _advance(0, th0, w * ta)
-        ua = sin(pha) + ga
+        sa = sin(pha)
+        ca = cos(pha)
+        ua = sa + ga
     if ua < 1.0:
         if va > 0.0 and va * va > 2.0 * (1.0 - ua):
             disc = sqrt(va * va - 2.0 * (1.0 - ua))
             t_up = 2.0 * (1.0 - ua) / (va + disc)
-            r = first_root_from(ga, va, -0.5, 0.0, -1.0, pha, w, t_up, xtol, fd, dl, bt)
+            r = _gap_root(ga, va, pha, sa, ca, w, t_up, xtol, fd, dl, bt)
             if r >= 0.0:
                 k, ph = _advance(ka, pha, w * r)
                 return ta + r, k, ph, va - r
@@ -210,7 +229,7 @@ def flight_next_impact(
         else:
             t_bot = va + sqrt(va * va + 2.0 * (ua + 1.0))
             t_max = t_bot * (1.0 + 1e-12) + 1e-12
-            r = first_root_from(ga, va, -0.5, 0.0, -1.0, pha, w, t_max, xtol, fd, dl, bt)
+            r = _gap_root(ga, va, pha, sa, ca, w, t_max, xtol, fd, dl, bt)
             if r < 0.0:
                 return -1.0, 0, 0.0, 0.0
             k, ph = _advance(ka, pha, w * r)
@@ -220,14 +239,24 @@ def flight_next_impact(
         t_dn = va + rad
         vd = -rad
     k2, ph2 = _advance(ka, pha, w * t_dn)
-    g2 = 1.0 - sin(ph2)
+    s2 = sin(ph2)
+    g2 = 1.0 - s2
     t_bot2 = 4.0 / (sqrt(vd * vd + 4.0) - vd)
     t_max = t_bot2 * (1.0 + 1e-12) + 1e-12
-    r = first_root_from(g2, vd, -0.5, 0.0, -1.0, ph2, w, t_max, xtol, fd, dl, bt)
+    r = _gap_root(g2, vd, ph2, s2, cos(ph2), w, t_max, xtol, fd, dl, bt)
     if r < 0.0:
         return -1.0, 0, 0.0, 0.0
     k, ph = _advance(k2, ph2, w * r)
     return ta + t_dn + r, k, ph, vd - r
+
+
+@njit(cache=True, inline="always")
+def _gap_root(g0, v, th, s, c, w, t_max, xtol, fd, dl, bt):
+    """First root of a flight's gap ``g0 + vτ − τ²/2 − (sin φ − sin θ)`` (``s, c = sin θ,
+    cos θ``): :func:`~bouncedisk.engine.roots.first_root_from` without recomputing them."""
+    if g0 < 0.0:
+        return 0.0
+    return first_root_sc(g0, v, -0.5, 0.0, -1.0, th, s, c, w, t_max, xtol, fd, dl, bt)
 
 
 @njit(cache=True, inline="always")
@@ -546,10 +575,18 @@ def _impact(e_k, e, w, r, psi, phase, v_minus, omega, torsion, cap, inertia, tol
         Relative impact velocity, rotor velocities after the impact, whether the rotor enters
         contact, and the time from the impact to the accumulation point (-1: none).
     """
-    v_rel, v_plus, omega_plus = impact_law(
-        e_k, w, r, psi, phase, v_minus, omega, torsion, cap, inertia
+    return _impact_sc(
+        e_k, e, w, r, psi, phase, sin(phase), cos(phase), v_minus, omega, torsion, cap, inertia, tol
     )
-    n_load = normal_load(w, phase)
+
+
+@njit(cache=True)
+def _impact_sc(e_k, e, w, r, psi, phase, sph, cph, v_minus, omega, torsion, cap, inertia, tol):
+    """:func:`_impact` with ``sph, cph = sin φ, cos φ`` of the impact phase given."""
+    v_rel, v_plus, omega_plus = impact_law_sc(
+        e_k, w, r, psi, phase, cph, v_minus, omega, torsion, cap, inertia
+    )
+    n_load = 1.0 - w * w * sph  # normal_load(w, phase)
     w_rel = e_k * v_rel
     go_contact = False
     t_acc = -1.0
@@ -557,7 +594,7 @@ def _impact(e_k, e, w, r, psi, phase, v_minus, omega, torsion, cap, inertia, tol
         if w_rel <= GRAZE_GAP * (1.0 + w):
             go_contact = True
         else:
-            t_acc = chatter_time(e, w, phase, w_rel, tol)
+            t_acc = chatter_time_sc(e, w, sph, cph, w_rel, tol)
             if t_acc > 0.0:
                 go_contact = True
     return v_rel, v_plus, omega_plus, go_contact, t_acc
@@ -822,20 +859,35 @@ def _contact_end(st, ist, ev, evk, info, prm, clipped, taus, tau_end, n1, th1, s
 def _flight_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, noise_key, infl):
     """A flight and the impact that ends it (MODEL.md "Flight", "Impact").
 
-    The first root of the gap (:func:`flight_next_impact`, eq. 20) with this impact's
+    The first root of the gap (:func:`_flight_search`, eq. 20) with this impact's
     restitution (``restitution_noise``: ``e_k``, :mod:`.noise`), then :func:`_flight_land`.
     Returns ``ST_CONTINUE`` or the status that ends this call. ``infl``: the gap's inflection
     data (:func:`flight_next_impact`).
     """
-    tau, dk, ph, v_minus = flight_next_impact(
-        st[S_U], st[S_V], th, st[S_ANCHOR_TAU], st[S_ANCHOR_GAP], prm[P_W], prm[P_TOL], infl
-    )
+    tau, dk, ph, v_minus = _flight_search(st, th, prm[P_W], prm[P_TOL], infl)
     if tau < 0.0:
         return _finish(ist, info, ST_NUMERICAL)
     e = prm[P_E]
     e_k = noisy_restitution(e, prm[P_ESIG], noise_key, ist[I_EVENTS]) if flg[F_NOISE] else e
     hit = (tau, dk, ph, v_minus, e_k)
     return _flight_land(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, hit)
+
+
+@_on_arrays
+def _flight_search(st, th, w, xtol, infl):
+    """The flight's impact ``(tau, dk, phase, v_minus)`` (:func:`_flight_root`, eq. 20), with the
+    sine and cosine of its origin's phase kept by the impact that started it when they are."""
+    ta = st[S_ANCHOR_TAU]
+    s0 = 0.0
+    c0 = 0.0
+    if ta == 0.0:
+        if st[S_SC_PHASE] == th and th != 0.0:  # kept by the impact that started the flight
+            s0 = st[S_SC_SIN]
+            c0 = st[S_SC_COS]
+        else:
+            s0 = sin(th)
+            c0 = cos(th)
+    return _flight_root(st[S_U], st[S_V], th, s0, c0, ta, st[S_ANCHOR_GAP], w, xtol, infl)
 
 
 @_on_arrays
@@ -864,8 +916,10 @@ def _flight_land(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, h
     r = prm[P_R]
     psi = prm[P_PSI]
     om = loaded_omega(st[S_OMEGA], prm[P_LOAD], tau)
-    v_rel, v_plus, om_plus, go_contact, t_acc = _impact(
-        e_k, e, w, r, psi, ph, v_minus, om, torsion, cap, prm[P_INERTIA], xtol
+    sph = sin(ph)
+    cph = cos(ph)
+    v_rel, v_plus, om_plus, go_contact, t_acc = _impact_sc(
+        e_k, e, w, r, psi, ph, sph, cph, v_minus, om, torsion, cap, prm[P_INERTIA], xtol
     )
     if flg[F_STATS] and t_hit > prm[P_TSTAT]:
         _audit_impact(st, prm, flg, w, r, psi, ph, v_minus, v_plus, om, om_plus, go_contact)
@@ -874,7 +928,10 @@ def _flight_land(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, h
     st[S_PHASE] = ph
     st[S_OMEGA] = om_plus
     if not go_contact:
-        _enter_flight(st, ist, sin(ph), v_plus, 0.0, 0.0)
+        _enter_flight(st, ist, sph, v_plus, 0.0, 0.0)
+        st[S_SC_PHASE] = ph
+        st[S_SC_SIN] = sph
+        st[S_SC_COS] = cph
     elif flg[F_CONTACT]:
         _enter_contact(st, ist, prm, torsion, n_hit, ph, t_acc)
     else:

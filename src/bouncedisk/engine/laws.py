@@ -45,7 +45,15 @@ def impact_law(e, w, r, psi, phase, v_minus, omega, torsion, cap, inertia_factor
         Relative impact velocity ``v_s − v⁻ >= 0``, ``v⁺ = v_s + e(v_s − v⁻)`` and
         ``Ω⁺ = Ω⁻ − H sgn(s⁻)`` with ``H_a = (1 + e) v_rel`` and ``H_p = |s⁻|/R``.
     """
-    vs = w * cos(phase)
+    return impact_law_sc(
+        e, w, r, psi, phase, cos(phase), v_minus, omega, torsion, cap, inertia_factor
+    )
+
+
+@njit(cache=True)
+def impact_law_sc(e, w, r, psi, phase, cos_phase, v_minus, omega, torsion, cap, inertia_factor):
+    """:func:`impact_law` with ``cos φ`` given (the caller has it already)."""
+    vs = w * cos_phase
     v_rel = vs - v_minus
     if v_rel < 0.0:
         v_rel = 0.0
@@ -98,13 +106,19 @@ def chatter_time(e, w, phase, w_rel, tol):
     So as ``w → 1⁺`` every cycle is separate, land, accumulate, ride; and below the grazing
     limit (:data:`GRAZE_GAP`) the rotor rests.
     """
+    return chatter_time_sc(e, w, sin(phase), cos(phase), w_rel, tol)
+
+
+@njit(cache=True)
+def chatter_time_sc(e, w, sin_phase, cos_phase, w_rel, tol):
+    """:func:`chatter_time` with ``sin φ, cos φ`` given (the caller has them already)."""
     if e >= 1.0 or w_rel <= 0.0:
         return -1.0
-    n0 = normal_load(w, phase)
+    n0 = 1.0 - w * w * sin_phase  # normal_load(w, phase)
     if n0 <= 0.0:
         return -1.0
     t = 2.0 * w_rel / (n0 * (1.0 - e))
-    n1 = abs(w * w * w * cos(phase))
+    n1 = abs(w * w * w * cos_phase)
     w4 = w * w * w * w
     n_min = n0 - n1 * t - 0.5 * w4 * t * t
     if n_min <= 0.0:

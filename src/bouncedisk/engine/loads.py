@@ -6,7 +6,7 @@ and the normal load involve ``u``, ``v`` and the stator only; the load torque ac
 the event count (:mod:`.noise`). So runs of one member that differ only in ``τ_L`` share every
 flight, impact, chattering tail and separation; they differ in ``Ω`` and in where contact
 sticks and slips. :func:`run_loads` advances them together: each flight's first root
-(:func:`~.kernel.flight_next_impact`, most of an impact's cost) and its restitution are computed
+(:func:`~.kernel._flight_search`, most of an impact's cost) and its restitution are computed
 once and handed to every load's :func:`~.kernel._flight_land`; in contact each load takes its own
 segments (:func:`~.kernel._contact_step`) to the contact's end, which is the same for all.
 
@@ -120,10 +120,7 @@ def run_loads(prm, flg, st, ist, ev, evk, traj, strobe, info):
         n = ist[0, K.I_PERIOD]
         th = st[0, K.S_PHASE]
         t_now = (n * K.TWO_PI + th) / w
-        tau, dk, ph, v_minus = K.flight_next_impact(
-            st[0, K.S_U], st[0, K.S_V], th, st[0, K.S_ANCHOR_TAU], st[0, K.S_ANCHOR_GAP],
-            w, xtol, infl,
-        )  # fmt: skip
+        tau, dk, ph, v_minus = K._flight_search(st[0], th, w, xtol, infl)
         if tau < 0.0:
             for l in range(n_loads):
                 K._finish(ist[l], info[l], K.ST_NUMERICAL)

@@ -26,10 +26,31 @@ from numba import njit
 TWO_PI = 2.0 * pi
 
 
+INV_TWO_PI = 1.0 / TWO_PI
+
+
+@njit(cache=True, inline="always")
+def floor_turns(x: float) -> float:
+    """``floor(x / 2π)``, the same as with the division, mostly from a multiplication.
+
+    ``q = x · fl(1/2π)`` and the rounded quotient ``x / 2π`` are both within ``2.1 u |q|`` of the
+    exact one (``u = 2⁻⁵³``), so they have the same floor unless ``q`` is within that of an
+    integer: only then (``q``'s fraction within ``1e-14 (1 + |q|)`` of 0 or 1, or ``q`` not
+    finite) the division is made.
+    """
+    q = x * INV_TWO_PI
+    k = floor(q)
+    f = q - k
+    tol = 1e-14 * (1.0 + abs(q))
+    if tol < f < 1.0 - tol:
+        return k
+    return floor(x / TWO_PI)
+
+
 @njit(cache=True, inline="always")
 def mod_two_pi(x: float) -> float:
     """Reduce ``x`` to ``[0, 2π)``."""
-    r = x - TWO_PI * floor(x / TWO_PI)
+    r = x - TWO_PI * floor_turns(x)
     if r >= TWO_PI:
         r -= TWO_PI
     if r < 0.0:
@@ -53,6 +74,13 @@ def hev(f0, c1, c2, a, b, th0, s0, k0, w, tau):
     dc = -2.0 * sm * sh
     sp = s0 + ds
     cp = k0 + dc
+    if a == 0.0 and b == -1.0:
+        # a flight's gap: the terms with a = 0 dropped (at most the sign of a zero differs,
+        # which no caller reads: f and f' are only compared with 0 when they are 0)
+        f = f0 + tau * (c1 + c2 * tau) - ds
+        fp = c1 + 2.0 * c2 * tau - w * cp
+        fpp = 2.0 * c2 + w * w * sp
+        return f, fp, fpp
     f = f0 + tau * (c1 + c2 * tau) + a * dc + b * ds
     fp = c1 + 2.0 * c2 * tau + w * (b * cp - a * sp)
     fpp = 2.0 * c2 - w * w * (a * cp + b * sp)
@@ -192,26 +220,81 @@ def first_root(f0, c1, c2, a, b, th0, w, t_max, xtol):
 def first_root_from(f0, c1, c2, a, b, th0, w, t_max, xtol, found, delta, beta):
     """:func:`first_root` with the inflection data ``(found, δ, β)`` of :func:`inflections`.
 
+    See :func:`first_root_sc`, which this calls with ``sin θ0, cos θ0``.
+    """
+    if f0 < 0.0:
+        return 0.0
+    return first_root_sc(
+        f0, c1, c2, a, b, th0, sin(th0), cos(th0), w, t_max, xtol, found, delta, beta
+    )
+
+
+#: Relative margin of the shortcuts of :func:`first_root_sc`: a shortcut is taken only when its
+#: bound holds by this fraction of the size of the terms (:func:`_sizes`), some 1e5 times the
+#: rounding of one evaluation of ``f``. A shortcut changes no result, only skips evaluations.
+SHORTCUT_MARGIN = 1e-9
+
+
+@njit(cache=True, inline="always")
+def _sizes(f0, c1, c2, amp, th0, w, tau):
+    """``(S_f, S_f')``: sizes of the terms of :func:`hev`'s ``f`` and ``f'`` at ``tau``.
+
+    The rounding of each is at most 16 ``ε`` times its size (``amp = |A| + |B|``; the
+    differences ``sin φ − sin θ0``, ``cos φ − cos θ0`` are bounded by ``min(1, h)(1 + h)``
+    ``(|θ0| + 6 + 2h)`` ulps, ``h = wτ/2``, which covers the rounding of ``θ0 + h``). Both grow
+    with ``tau``, so their values at an interval's end bound those at its start.
+    """
+    h = 0.5 * w * tau
+    trig = (1.0 + h) * (abs(th0) + 6.0 + 2.0 * h)
+    s_f = abs(f0) + tau * (abs(c1) + abs(c2) * tau) + amp * min(1.0, h) * trig
+    s_p = abs(c1) + 2.0 * abs(c2) * tau + w * amp * (1.0 + trig)
+    return s_f, s_p
+
+
+@njit(cache=True)
+def first_root_sc(f0, c1, c2, a, b, th0, s0, k0, w, t_max, xtol, found, delta, beta):
+    """:func:`first_root_from` with ``s0, k0 = sin θ0, cos θ0`` given (``f0 >= 0``).
+
     The search walks the intervals between consecutive inflection points. ``f''`` is positive
     before an inflection at phase ``φ + δ ≡ β`` (``p1``: ``sin(φ + δ)`` rises through
     ``sin β``) and negative before one at ``φ + δ ≡ π − β`` (``p2``), so each interval is convex
     when the next inflection is a ``p1`` and concave when it is a ``p2``, with no evaluation of
     ``f''``. Without inflections (``found`` False) ``f''`` has one sign, taken at the window's
     middle.
+
+    Two shortcuts skip evaluations whose outcome is certain, so the result is bit for bit the
+    one of the plain walk (``tests/test_roots.py``). With ``m >= −f''`` and ``M >= f''``
+    everywhere (``m, M = ∓2c2 + w²(|A| + |B|)``):
+
+    - no root in the whole window: ``f(τ) >= f0 + f'(0) τ − max(m, 0) t_max τ / 2 > 0`` with a
+      margin over the rounding of every evaluation the walk would make, so each of them would
+      be positive and the walk would return -1 (a flight's ascent after an impact);
+    - ``f < 0`` at an interval's end: ``f(hi) <= f(lo) + f'(lo) d + M d²/2 < 0`` (``d = hi −
+      lo``) with the same margin; the interval's root then depends on the sign of ``f(hi)``
+      only, so it is found without evaluating ``f(hi)`` (a flight's descent).
     """
-    if f0 < 0.0:
-        return 0.0
-    s0 = sin(th0)
-    k0 = cos(th0)
     per = TWO_PI / w
+    amp = abs(a) + abs(b)
+    ww = w * w
+    lo = 0.0
+    flo = f0
+    fplo = c1 + w * (b * k0 - a * s0)  # f'(0) (hev at τ = 0 has no trigonometry left)
+    # no root in (0, t_max]: a lower bound stays positive (f0 >= 0; NaN takes no shortcut)
+    q = ww * amp - 2.0 * c2
+    if q < 0.0:
+        q = 0.0
+    hm = 0.5 * w * t_max
+    k_size = abs(c1) + abs(c2) * t_max + 0.5 * w * amp * (1.0 + hm) * (abs(th0) + 6.0 + 2.0 * hm)
+    s_p0 = abs(c1) + w * amp * (1.0 + (abs(th0) + 6.0))
+    slack = fplo - 0.5 * q * t_max
+    if f0 >= 0.0 and slack > SHORTCUT_MARGIN * (s_p0 + k_size + q * t_max + abs(fplo)):
+        return -1.0
+    m_up = 2.0 * c2 + ww * amp
     p1 = inf
     p2 = inf
     if found:
         p1 = mod_two_pi(beta - delta - th0) / w
         p2 = mod_two_pi(pi - beta - delta - th0) / w
-    lo = 0.0
-    flo = f0
-    fplo = c1 + w * (b * k0 - a * s0)  # f'(0) (hev at τ = 0 has no trigonometry left)
     while True:
         hi = t_max
         if p1 < hi:
@@ -228,6 +311,18 @@ def first_root_from(f0, c1, c2, a, b, th0, w, t_max, xtol, found, delta, beta):
             if lo >= t_max:
                 return -1.0
             continue
+        if found and not tie:
+            # f(hi) < 0 for certain: the interval's root needs only that sign
+            d = hi - lo
+            upper = flo + fplo * d + 0.5 * m_up * d * d
+            s_f, s_p = _sizes(f0, c1, c2, amp, th0, w, hi)
+            size = 2.0 * s_f + s_p * d + abs(flo) + abs(fplo) * d + abs(m_up) * d * d
+            if upper < -SHORTCUT_MARGIN * size:
+                r = _interval_root(
+                    f0, c1, c2, a, b, th0, s0, k0, w, lo, flo, fplo, hi, -1.0, -1.0, convex, xtol
+                )
+                if r >= 0.0:
+                    return r
         fhi, fphi, _fpp = hev(f0, c1, c2, a, b, th0, s0, k0, w, hi)
         if not found or tie:
             _fm, _fpm, fppm = hev(f0, c1, c2, a, b, th0, s0, k0, w, 0.5 * (lo + hi))
