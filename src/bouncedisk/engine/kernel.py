@@ -54,7 +54,7 @@ from .laws import (
     stick_twist_work,
 )
 from .noise import member_key, noisy_restitution
-from .roots import TWO_PI, first_root, first_root_sc, floor_turns, inflections
+from .roots import TWO_PI, first_root, first_root_sc, floor_turns, inflections, no_root
 
 
 def _nrt_off() -> dict:
@@ -240,10 +240,11 @@ def _flight_root(u0, v0, th0, s0, c0, ta, ga, w, xtol, infl):
         vd = -rad
     k2, ph2 = _advance(ka, pha, w * t_dn)
     s2 = sin(ph2)
+    c2 = cos(ph2)  # next to sin: one call of sincos
     g2 = 1.0 - s2
     t_bot2 = 4.0 / (sqrt(vd * vd + 4.0) - vd)
     t_max = t_bot2 * (1.0 + 1e-12) + 1e-12
-    r = _gap_root(g2, vd, ph2, s2, cos(ph2), w, t_max, xtol, fd, dl, bt)
+    r = _gap_root(g2, vd, ph2, s2, c2, w, t_max, xtol, fd, dl, bt)
     if r < 0.0:
         return -1.0, 0, 0.0, 0.0
     k, ph = _advance(k2, ph2, w * r)
@@ -256,6 +257,8 @@ def _gap_root(g0, v, th, s, c, w, t_max, xtol, fd, dl, bt):
     cos θ``): :func:`~bouncedisk.engine.roots.first_root_from` without recomputing them."""
     if g0 < 0.0:
         return 0.0
+    if no_root(g0, v, -0.5, 0.0, -1.0, th, s, c, w, t_max):  # a flight's ascent: no call
+        return -1.0
     return first_root_sc(g0, v, -0.5, 0.0, -1.0, th, s, c, w, t_max, xtol, fd, dl, bt)
 
 

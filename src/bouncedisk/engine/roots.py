@@ -251,6 +251,26 @@ def _sizes(f0, c1, c2, amp, th0, w, tau):
     return s_f, s_p
 
 
+@njit(cache=True, inline="always")
+def no_root(f0, c1, c2, a, b, th0, s0, k0, w, t_max):
+    """The first shortcut of :func:`first_root_sc`: ``f > 0`` on ``(0, t_max]`` for certain.
+
+    ``f(τ) >= f0 + f'(0) τ − max(m, 0) t_max τ / 2`` with ``m = w²(|A| + |B|) − 2c2 >= −f''``,
+    positive with a margin over the rounding of any evaluation in the window (``f0 >= 0``;
+    NaN or an infinite window takes no shortcut). True means the walk would return -1.
+    """
+    amp = abs(a) + abs(b)
+    fp0 = c1 + w * (b * k0 - a * s0)  # f'(0), as the walk computes it
+    q = w * w * amp - 2.0 * c2
+    if q < 0.0:
+        q = 0.0
+    hm = 0.5 * w * t_max
+    k_size = abs(c1) + abs(c2) * t_max + 0.5 * w * amp * (1.0 + hm) * (abs(th0) + 6.0 + 2.0 * hm)
+    s_p0 = abs(c1) + w * amp * (1.0 + (abs(th0) + 6.0))
+    slack = fp0 - 0.5 * q * t_max
+    return f0 >= 0.0 and slack > SHORTCUT_MARGIN * (s_p0 + k_size + q * t_max + abs(fp0))
+
+
 @njit(cache=True)
 def first_root_sc(f0, c1, c2, a, b, th0, s0, k0, w, t_max, xtol, found, delta, beta):
     """:func:`first_root_from` with ``s0, k0 = sin θ0, cos θ0`` given (``f0 >= 0``).
@@ -273,22 +293,14 @@ def first_root_sc(f0, c1, c2, a, b, th0, s0, k0, w, t_max, xtol, found, delta, b
       lo``) with the same margin; the interval's root then depends on the sign of ``f(hi)``
       only, so it is found without evaluating ``f(hi)`` (a flight's descent).
     """
+    if no_root(f0, c1, c2, a, b, th0, s0, k0, w, t_max):
+        return -1.0
     per = TWO_PI / w
     amp = abs(a) + abs(b)
     ww = w * w
     lo = 0.0
     flo = f0
     fplo = c1 + w * (b * k0 - a * s0)  # f'(0) (hev at τ = 0 has no trigonometry left)
-    # no root in (0, t_max]: a lower bound stays positive (f0 >= 0; NaN takes no shortcut)
-    q = ww * amp - 2.0 * c2
-    if q < 0.0:
-        q = 0.0
-    hm = 0.5 * w * t_max
-    k_size = abs(c1) + abs(c2) * t_max + 0.5 * w * amp * (1.0 + hm) * (abs(th0) + 6.0 + 2.0 * hm)
-    s_p0 = abs(c1) + w * amp * (1.0 + (abs(th0) + 6.0))
-    slack = fplo - 0.5 * q * t_max
-    if f0 >= 0.0 and slack > SHORTCUT_MARGIN * (s_p0 + k_size + q * t_max + abs(fplo)):
-        return -1.0
     m_up = 2.0 * c2 + ww * amp
     p1 = inf
     p2 = inf
