@@ -44,6 +44,35 @@ def ensemble_seconds(members: int, cores: int, repeat: int, psi: float = 0.0) ->
     return best, res
 
 
+def gil_free_share(members: int) -> float:
+    """Share of one thread's ensemble time spent in compiled code that releases the GIL (the
+    kernel, the members' reduction): the rest runs under the GIL and bounds the speed-up on
+    ``n`` cores at ``1 / (1 − share + share / n)``, whatever the machine's load."""
+    from bouncedisk.analysis import ensembles
+    from bouncedisk.engine import kernel
+
+    inside = [0.0]
+
+    def timed(fn):
+        def call(*args):
+            t0 = time.perf_counter()
+            out = fn(*args)
+            inside[0] += time.perf_counter() - t0
+            return out
+
+        return call
+
+    saved = kernel.run_chunk, ensembles._reduce_chunk
+    kernel.run_chunk, ensembles._reduce_chunk = timed(saved[0]), timed(saved[1])
+    try:
+        t0 = time.perf_counter()
+        run_ensemble(CFG, InitialState(), members, 3000.0, cores=1)
+        total = time.perf_counter() - t0
+    finally:
+        kernel.run_chunk, ensembles._reduce_chunk = saved
+    return inside[0] / total
+
+
 def noise_cost_ratio(events: int, repeat: int) -> float:
     """Per-impact time with restitution noise over without (same scene otherwise)."""
     base = EngineConfig(e=0.6, omega_s=1.5, torsion=True, r_phi=0.01, max_events=events)
@@ -74,6 +103,11 @@ def main() -> None:
     print(f"{args.members} members x 50,000 time units ({impacts:,} impacts after the transient)")
     print(f"  1 core : {one:.3f} s")
     print(f"  2 cores: {two:.3f} s   speed-up {one / two:.2f}x (target close to 2x)")
+    share = max(gil_free_share(args.members) for _ in range(args.repeat))
+    print(
+        f"  share of a member's time without the GIL: {100 * share:.1f} % "
+        f"(bounds the 2-core speed-up at {1 / (1 - share / 2):.2f}x)"
+    )
     for psi in (0.0, math.pi / 2):
         sec, res = ensemble_seconds(args.members, 2, 1, psi)
         mean, low, high = confidence_interval([m.mean_omega for m in res])
