@@ -58,6 +58,8 @@ def project(base: Path) -> Path:
     cfg = yaml.safe_load(SMALL.read_text())
     cfg["results"] = str(base / "results")
     cfg["prototype"]["curve"] = str(ROOT / cfg["prototype"]["curve"])
+    # the smallest search the schema allows: the checks need a fit file, what is tested is its record
+    cfg["prototype"].update(scan=8, zoom=0)
     (base / "config.yaml").write_text(yaml.safe_dump(cfg))
     return base
 
