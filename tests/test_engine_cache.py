@@ -37,6 +37,7 @@ print(repr(float(r.events["t"][-1])))
 
 
 @pytest.mark.slow
+@pytest.mark.cost(17)  # one compilation of the engine
 def test_changing_laws_alone_recompiles_the_kernel(tmp_path: Path) -> None:
     """A copy of the engine, run, then ``laws.py`` edited: the kernel must use the new law.
 

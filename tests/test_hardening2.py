@@ -885,6 +885,7 @@ SECONDS = {"fit", "simulation_physical"}
 
 @pytest.mark.parametrize("kind", KINDS)
 @pytest.mark.xdist_group("every_kind")  # one worker writes the files, not both
+@pytest.mark.cost(12)  # the files
 def test_item18_every_file_kind_is_cf_clean_and_carries_acdd(every_kind, monkeypatch, kind):
     pytest.importorskip("compliance_checker")
     tries = _no_network(monkeypatch)

@@ -270,6 +270,7 @@ def two_runs(tmp_path_factory):
 
 
 @pytest.mark.slow
+@pytest.mark.cost(81)  # the fixture's three pipeline invocations
 @needs_snakemake
 def test_two_invocations_two_parent_runs_and_the_diff_names_the_change(two_runs):
     base, first, _ = two_runs
