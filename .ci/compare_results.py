@@ -1,11 +1,14 @@
-"""Compare two pipeline results folders built from the same config (used by .ci/cluster-test).
+"""Compare two pipeline results folders built from the same config (.ci/cluster-test, .ci/two-kernels).
 
-    python .ci/compare_results.py RESULTS_A RESULTS_B
+    python .ci/compare_results.py [--subset] RESULTS_A RESULTS_B
 
 Every netCDF file must exist in both folders and hold bit-identical data: the same variables and
 coordinates with the same dimensions, dtype and bytes (read raw, without CF decoding), the same
 variable attributes, and the same global attributes except those that differ from run to run by
 design (PER_RUN_ATTRS). Every figure must exist, non-empty, in both. Exit 0 only if all of it holds.
+
+--subset: A is a run of part of the pipeline (some targets) and B a run of all of it: every netCDF
+file and figure of A must be in B and hold the same data; B's other files are not looked at.
 """
 
 from __future__ import annotations
@@ -115,13 +118,18 @@ def _compare_attrs(a: dict, b: dict, where: str) -> list[str]:
 
 
 def main(argv: list[str]) -> int:
+    subset = "--subset" in argv[1:2]
+    if subset:
+        argv = [argv[0], *argv[2:]]
     if len(argv) != 3:
         print(__doc__.strip().splitlines()[2].strip(), file=sys.stderr)
         return 2
     root_a, root_b = Path(argv[1]), Path(argv[2])
     failures = 0
 
-    nc_a, nc_b = _files(root_a, (".nc",)), _files(root_b, (".nc",))
+    nc_a = _files(root_a, (".nc",))
+    # --subset: only A's files are looked up in B (B, a whole run, may hold CI's other folders too)
+    nc_b = {r for r in nc_a if (root_b / r).is_file()} if subset else _files(root_b, (".nc",))
     if not nc_a:
         print(f"FAIL no netCDF files in {root_a}")
         failures += 1
@@ -136,7 +144,10 @@ def main(argv: list[str]) -> int:
         failures += bool(problems)
 
     figs_a = _files(root_a / "figures", FIGURE_SUFFIXES)
-    figs_b = _files(root_b / "figures", FIGURE_SUFFIXES)
+    if subset:
+        figs_b = {r for r in figs_a if (root_b / "figures" / r).is_file()}
+    else:
+        figs_b = _files(root_b / "figures", FIGURE_SUFFIXES)
     if not figs_a:
         print(f"FAIL no figures in {root_a / 'figures'}")
         failures += 1

@@ -885,6 +885,7 @@ SECONDS = {"fit", "simulation_physical"}
 
 @pytest.mark.parametrize("kind", KINDS)
 @pytest.mark.xdist_group("every_kind")  # one worker writes the files, not both
+@pytest.mark.cost(12)  # the files
 def test_item18_every_file_kind_is_cf_clean_and_carries_acdd(every_kind, monkeypatch, kind):
     pytest.importorskip("compliance_checker")
     tries = _no_network(monkeypatch)
@@ -919,6 +920,7 @@ def test_item18_every_file_kind_is_cf_clean_and_carries_acdd(every_kind, monkeyp
                 assert "_FillValue" not in var.ncattrs(), name
 
 
+@pytest.mark.xdist_group("every_kind")  # the files of the worker that wrote them
 def test_item18_string_labels_are_cf_labels_that_read_back_as_the_index(every_kind):
     """A string-labelled dimension keeps no coordinate variable in the file (CF-1.10 §1.3: they
     are numeric): the labels ``X`` are an auxiliary coordinate (§6.1) on the dimension

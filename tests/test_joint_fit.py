@@ -223,6 +223,7 @@ def tiny_fit(data_dir):
 
 
 @pytest.mark.xdist_group("tiny_joint_fit")  # one worker fits, not both
+@pytest.mark.cost(18)  # the tiny joint fit
 def test_the_fit_file_holds_the_load_curves_and_the_identifiability_table(tiny_fit, tmp_path):
     from bouncedisk.io.netcdf import write_dataset
 

@@ -88,6 +88,7 @@ def test_statistics_bit_identical_under_blas_kernels(curve_csv):
 
 
 @pytest.mark.slow
+@pytest.mark.cost(16)
 def test_fit_estimate_equal_under_kernels_threads_and_round_off(curve_csv):
     """A small fit gives the same estimate (to 1e-6 relative) under another BLAS kernel, one or
     two BLAS threads, one or two fit threads, and with the data perturbed by 1e-15 relative

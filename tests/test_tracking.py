@@ -58,6 +58,8 @@ def project(base: Path) -> Path:
     cfg = yaml.safe_load(SMALL.read_text())
     cfg["results"] = str(base / "results")
     cfg["prototype"]["curve"] = str(ROOT / cfg["prototype"]["curve"])
+    # the smallest search the schema allows: the checks need a fit file, what is tested is its record
+    cfg["prototype"].update(scan=8, zoom=0)
     (base / "config.yaml").write_text(yaml.safe_dump(cfg))
     return base
 
@@ -268,6 +270,7 @@ def two_runs(tmp_path_factory):
 
 
 @pytest.mark.slow
+@pytest.mark.cost(81)  # the fixture's three pipeline invocations
 @needs_snakemake
 def test_two_invocations_two_parent_runs_and_the_diff_names_the_change(two_runs):
     base, first, _ = two_runs

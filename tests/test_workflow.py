@@ -270,6 +270,7 @@ def test_figure_registry_refuses_an_unknown_figure_or_wrong_inputs(tmp_path):
 
 
 @pytest.mark.slow
+@pytest.mark.cost(140)
 def test_one_run_is_final_reruns_only_what_a_scene_change_affects_and_cores_do_not_matter(tmp_path):
     """One run of the small pipeline on one core serves three checks (each ran it once before):
     a second invocation has nothing to do; after one scene changes, the plan reruns only what
