@@ -259,6 +259,12 @@ def test_the_fit_file_holds_the_load_curves_and_the_identifiability_table(tiny_f
     ]
     text = summary_text(back)
     assert "load curve: chi2" in text and "95% intervals by data set" in text
+    # the chi2 at the generating point, under the fit's final metric: the parts add up, and the
+    # summary says whether the search missed a better basin
+    at = {k: back.attrs[f"chi2_generating_{k}"] for k in ("runup", "load", "both")}
+    assert at["both"] == pytest.approx(at["runup"] + at["load"], rel=1e-12) and at["load"] > 0
+    verdict = "the search missed" if at["both"] < back.attrs["chi2"] else "not below the fit's"
+    assert f"at the generating point: chi2 {at['both']:.4g}" in text and verdict in text
 
 
 @pytest.mark.xdist_group("tiny_joint_fit")  # one worker fits, not both

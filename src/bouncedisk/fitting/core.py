@@ -25,7 +25,7 @@ from .model import MODEL_E_SIGMA, EnsembleSpec, member_records, param_names, phy
 from .objective import Objective
 from .runs import check_runs, mean_curve
 from .search import SearchSettings, search
-from .statistics import STATS, Layout, member_band, provisional_sd, record_stats, stat_floor
+from .statistics import STATS, Layout, member_band, provisional_sd, records_stats, stat_floor
 from .uncertainty import (
     ADEQUATE_P,
     THRESHOLD,
@@ -165,7 +165,7 @@ def data_layout(curves: Sequence[MotorCurve]) -> tuple[Layout, np.ndarray, np.nd
     tau = first_order_trend(grid[::step], records.mean(axis=0)[::step]).tau
     tau = float(np.clip(tau, 2.0 * curves[0].dt, grid[-1] - grid[0]))
     layout = Layout(grid, tau, curves[0].drive_frequency_hz)
-    return layout, records, np.mean([record_stats(r, layout) for r in records], axis=0)
+    return layout, records, np.mean(records_stats(records, layout), axis=0)
 
 
 def bootstrap_stats(layout: Layout, records: np.ndarray, n: int, seed: int) -> np.ndarray:
@@ -179,10 +179,11 @@ def bootstrap_stats(layout: Layout, records: np.ndarray, n: int, seed: int) -> n
     for data in np.atleast_2d(records):
         base = first_order_trend(t[::step], data[::step])(t)
         resid = data - base
-        for i in range(n):
+        samples = []
+        for _ in range(n):
             starts = rng.integers(0, len(t) - b + 1, size=len(t) // b + 1)
-            resampled = np.concatenate([resid[s : s + b] for s in starts])[: len(t)]
-            out[i] += record_stats(base + resampled, layout)
+            samples.append(base + np.concatenate([resid[s : s + b] for s in starts])[: len(t)])
+        out += records_stats(np.array(samples), layout)
     return out / len(np.atleast_2d(records))
 
 

@@ -20,13 +20,12 @@ import xarray as xr
 
 from ..io.provenance import sha256_file
 from .core import FitResult
+from .joint import stated_truth, truth_coordinate
 from .loadpart import LOAD_BAND, LOAD_MEMBERS
 from .model import BOUNDS
 
 #: Data sets of the identifiability table, in order: (key of ``LoadFit.intervals``, label).
 DATA_SETS = (("runup", "run-ups"), ("load", "load curve"), ("both", "both"))
-#: Generating parameters a synthetic data set's sidecar states (the truth the figure marks).
-TRUTH_KEYS = ("e", "r_phi", "psi", "omega_s")
 
 
 def _readings(fit: FitResult) -> dict:
@@ -92,11 +91,7 @@ def _intervals(fit: FitResult) -> dict:
 
 def truth(fit: FitResult) -> dict[str, float]:
     """Generating parameters stated by a synthetic load curve's sidecar (empty otherwise)."""
-    for d in fit.load.curves:
-        gen = d.sidecar.get("generating_parameters") if d.synthetic else None
-        if isinstance(gen, dict) and all(k in gen for k in TRUTH_KEYS):
-            return {k: float(gen[k]) for k in TRUTH_KEYS}
-    return {}
+    return stated_truth(fit.load.curves)
 
 
 def load_dataset(fit: FitResult) -> xr.Dataset:
@@ -124,6 +119,8 @@ def load_dataset(fit: FitResult) -> xr.Dataset:
     )
     for k, v in truth(fit).items():
         ds.attrs[f"generating_{k}"] = v
+    for part, v in (lf.chi2_generating or {}).items():
+        ds.attrs[f"chi2_generating_{part}"] = v
     return ds
 
 
@@ -144,14 +141,16 @@ def identifiability_lines(ds: xr.Dataset) -> list[str]:
         truth = float(ds["generating_value"].values[j]) if "generating_value" in ds else math.nan
         lines.append(f"    {name:>12}: " + "; ".join(cells)
                      + (f"  (generating {truth:.4g})" if math.isfinite(truth) else ""))  # fmt: skip
-    return lines
+    return lines + _truth_lines(a)
 
 
-def truth_coordinate(attrs: dict, name: str) -> float | None:
-    """The generating value of search coordinate ``name`` from a fit file's ``generating_*``
-    attributes (``log10_r_phi`` from ``generating_r_phi``); ``None`` when not stated."""
-    if name.startswith("log10_"):
-        v = attrs.get(f"generating_{name[6:]}")
-        return math.log10(v) if v is not None and v > 0 else None
-    v = attrs.get(f"generating_{name}")
-    return float(v) if v is not None else None
+def _truth_lines(attrs: dict) -> list[str]:
+    """The summary's line on the generating point's ``χ²`` (synthetic data only): whether
+    the search missed a better basin."""
+    if "chi2_generating_both" not in attrs:
+        return []
+    at, fit = attrs["chi2_generating_both"], attrs["chi2"]
+    verdict = ("below the fit's: the search missed a better basin (a larger --scan and --zoom)"
+               if at < fit else "not below the fit's")  # fmt: skip
+    return [f"  at the generating point: chi2 {at:.4g} (run-ups {attrs['chi2_generating_runup']:.4g}, "
+            f"load curve {attrs['chi2_generating_load']:.4g}), {verdict} {fit:.4g}"]  # fmt: skip

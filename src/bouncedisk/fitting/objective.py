@@ -38,7 +38,7 @@ from . import detlinalg
 from .basins import rank_key
 from .loadpart import LoadPart, members_for
 from .model import BOUNDS, EnsembleSpec, member_records
-from .statistics import EnsembleStats, Layout, record_stats
+from .statistics import EnsembleStats, Layout, records_stats
 
 #: Decimals of the lattice every evaluated point is put on (:func:`snap`): far finer than any step
 #: of the search (the finest, a finite difference, is 1e-3 of a range), far coarser than round-off.
@@ -137,10 +137,8 @@ class Objective:
         key = (k, *x)
         if key not in self.cache:
             spec = replace(self.spec, cores=1) if self.points_parallel else self.spec
-            vals = member_records(
-                self.theta(x), self.curve, range(k), spec, lambda r: record_stats(r, self.layout)
-            )
-            self.cache[key] = EnsembleStats.from_values(np.array(vals))
+            recs = member_records(self.theta(x), self.curve, range(k), spec)
+            self.cache[key] = EnsembleStats.from_values(records_stats(np.array(recs), self.layout))
             if self.on_eval is not None:
                 self.on_eval(len(self.cache))
         return self.cache[key]

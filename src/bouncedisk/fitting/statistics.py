@@ -129,28 +129,54 @@ class Layout:
 
 def record_stats(y: np.ndarray, layout: Layout) -> np.ndarray:
     """The statistics (order of :data:`STATS`) of one record ``y`` (rad/s) on ``layout.t``."""
+    return records_stats(np.asarray(y, float)[None, :], layout)[0]
+
+
+def records_stats(ys: np.ndarray, layout: Layout) -> np.ndarray:
+    """The statistics (order of :data:`STATS`) of every row of ``ys`` (records in rad/s on
+    ``layout.t``), shape ``(rows, len(STATS))``.
+
+    The rows' ripple spectra come from one Welch call on the stacked residuals: a row's spectrum
+    is the same, bit for bit, as from a call of its own (``tests/test_fit_statistics.py``), and
+    the segments' transforms of all the rows run together instead of one short call each.
+    """
+    ys = np.atleast_2d(np.asarray(ys, float))
     t = layout.t
     step = max(1, len(t) // TREND_POINTS)
-    trend = first_order_trend(t[::step], y[::step])
-    rise = [float(np.mean(y[m])) for m in layout.windows()]
     steady = layout.steady()
-    r = (y - trend(t))[steady]
-    r = r - r.mean()
+    windows = layout.windows()
+    head, ripples = [], []
+    for y in ys:
+        trend = first_order_trend(t[::step], y[::step])
+        rise = [float(np.mean(y[m])) for m in windows]
+        r = (y - trend(t))[steady]
+        ripples.append(r - r.mean())
+        head.append([trend.steady, np.log(trend.tau), *rise])
+    r = np.array(ripples)
     dt = float(t[1] - t[0])
-    f, pxx = welch(r, fs=1.0 / dt, nperseg=min(256, len(r)))
-    f, pxx = f[1:], pxx[1:]
+    f, pxx = welch(r, fs=1.0 / dt, nperseg=min(256, r.shape[1]))
+    out = []
+    for y, h, ri, p in zip(ys, head, r, pxx, strict=True):
+        spectral = _ripple_spectrum(f[1:], p[1:], dt, layout.drive_frequency_hz)
+        rms = max(float(np.std(ri)), 1e-300)
+        kicks = max(float(np.var(np.diff(y[steady]))), 1e-300)
+        out.append([*h, np.log(rms), *spectral, np.log(kicks), float(np.mean(y[steady]))])
+    return np.array(out, dtype=float)
+
+
+def _ripple_spectrum(
+    f: np.ndarray, pxx: np.ndarray, dt: float, drive_frequency_hz: float
+) -> tuple[float, float, float]:
+    """The ripple's power-weighted mean frequency (a fraction of the drive frequency) and the
+    fractions of its power below ``f_N/8`` and in ``f_N/8 … f_N/2`` (module docstring)."""
     total = float(np.sum(pxx))
+    if not total > 0:  # no ripple (or not a number): no spectrum
+        return 0.0, 0.0, 0.0
     nyq = 0.5 / dt
-    if total > 0:
-        freq = float(np.sum(f * pxx) / total) / layout.drive_frequency_hz
-        low = float(np.sum(pxx[f < nyq / 8]) / total)
-        mid = float(np.sum(pxx[(f >= nyq / 8) & (f < nyq / 2)]) / total)
-    else:
-        freq, low, mid = 0.0, 0.0, 0.0
-    rms = max(float(np.std(r)), 1e-300)
-    kicks = max(float(np.var(np.diff(y[steady]))), 1e-300)
-    stats = [trend.steady, np.log(trend.tau), *rise, np.log(rms), freq, low, mid, np.log(kicks)]
-    return np.array([*stats, float(np.mean(y[steady]))], dtype=float)
+    freq = float(np.sum(f * pxx) / total) / drive_frequency_hz
+    low = float(np.sum(pxx[f < nyq / 8]) / total)
+    mid = float(np.sum(pxx[(f >= nyq / 8) & (f < nyq / 2)]) / total)
+    return freq, low, mid
 
 
 def dominant_frequency(y: np.ndarray, layout: Layout) -> float:
