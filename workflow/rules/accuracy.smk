@@ -4,8 +4,8 @@
 rule work_precision:
     """Error against CPU time for every solver and tolerance: results/tables/work_precision.csv."""
     input:
-        code=CODE,
         compiled=rules.compile_engine.output,
+    priority: 10  # a long job: started early, so that no long job ends the pipeline alone
     output:
         table=report(f"{RES}/tables/work_precision.csv", caption="../report/work_precision_table.rst",
                      category="Accuracy and cost"),
@@ -23,8 +23,8 @@ rule work_precision:
 rule scaling:
     """Cost per impact against omega_s, time and memory against impacts, cost of each effect."""
     input:
-        code=CODE,
         compiled=rules.compile_engine.output,
+    priority: 10  # a long job: started early, so that no long job ends the pipeline alone
     output:
         report(f"{RES}/tables/scaling.csv", caption="../report/scaling_table.rst",
                category="Accuracy and cost"),

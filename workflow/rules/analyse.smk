@@ -4,7 +4,7 @@
 rule poincare:
     """Impact map and stroboscopic map of a simulation: results/poincare/<scene>.nc."""
     input:
-        code=CODE,
+        compiled=rules.compile_engine.output,
         sim=f"{RES}/simulations/{{scene}}.nc",
     output:
         f"{RES}/poincare/{{scene}}.nc",
@@ -23,7 +23,6 @@ rule poincare:
 rule clipped_comparison:
     """Rotor speed of the bouncing and the clipped spring-contact models, for several psi."""
     input:
-        code=CODE,
         scene=scene_path(config["clipped_comparison"]["scene"]),
         compiled=rules.compile_engine.output,
     output:

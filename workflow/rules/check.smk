@@ -4,7 +4,7 @@
 rule reproduction_checks:
     """Verify the paper's claims from the built results: results/reproduction.md."""
     input:
-        code=CODE,
+        compiled=rules.compile_engine.output,
         sims=[f"{RES}/simulations/fig5.nc"],
         stats=expand(f"{RES}/stats/{{s}}.nc", s=CHECKED_STATS),
         band=f"{RES}/bands/fig5.nc",

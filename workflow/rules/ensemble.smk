@@ -5,7 +5,6 @@
 rule ensemble_stats:
     """Ensemble statistics of a scene (`bouncedisk stats`): results/stats/<scene>.nc."""
     input:
-        code=CODE,
         scene=scene_path("{scene}"),
         compiled=rules.compile_engine.output,
     output:
@@ -24,7 +23,6 @@ rule ensemble_stats:
 rule omega_band:
     """Ensemble band of the rotor speed behind a single trajectory: results/bands/<scene>.nc."""
     input:
-        code=CODE,
         scene=scene_path("{scene}"),
         compiled=rules.compile_engine.output,
     output:
@@ -45,7 +43,6 @@ rule omega_band:
 rule continuation:
     """Bifurcation diagram by continuation, one direction: results/continuation/<dir>.nc."""
     input:
-        code=CODE,
         scene=scene_path(config["continuation"]["scene"]),
         compiled=rules.compile_engine.output,
     output:
@@ -67,7 +64,6 @@ rule continuation:
 rule stats_cost:
     """CI half-width of the mean rotor speed against CPU time: results/tables/stats_cost.csv."""
     input:
-        code=CODE,
         scene=scene_path(config["stats_cost"]["scene"]),
         compiled=rules.compile_engine.output,
     output:

@@ -93,7 +93,7 @@ _check_figures()
 
 
 def figure_inputs(wildcards):
-    return {"code": CODE, **_figure_paths(wildcards.fig)}
+    return {"code": rules.compile_engine.output[0], **_figure_paths(wildcards.fig)}
 
 
 def figure_params(wildcards):

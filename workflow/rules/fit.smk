@@ -4,7 +4,6 @@
 rule synthetic_curve:
     """Regenerate the shipped synthetic curve (and log whether it is byte-identical)."""
     input:
-        code=CODE,
         spec="workflow/config/synthetic_motor.yaml",
         compiled=rules.compile_engine.output,
     output:
@@ -30,13 +29,15 @@ LOAD_INPUTS = [LOAD_CURVE, str(Path(LOAD_CURVE).with_suffix(".yaml"))] if LOAD_C
 rule fit_prototype:
     """Fit the model to the prototype's run-up (and load curve, jointly): results/fit/prototype.nc."""
     input:
-        code=CODE,
         curve=config["prototype"]["curve"],
         load=LOAD_INPUTS,
         compiled=rules.compile_engine.output,
     output:
         f"{RES}/fit/prototype.nc",
     threads: 2
+    # the pipeline's longest job and the head of its longest chain (the fit's figures, the
+    # prototype's load curve, the checks): started as soon as the engine is compiled
+    priority: 100
     conda:
         "../envs/bouncedisk.yaml"
     log:

@@ -6,7 +6,6 @@ import re
 rule torque_speed:
     """Load characteristic of a scene (`bouncedisk torque-speed`): results/load/<curve>.nc."""
     input:
-        code=CODE,
         scene=lambda wildcards: scene_path(config["load_curves"][wildcards.curve]["scene"]),
         compiled=rules.compile_engine.output,
     output:
@@ -29,12 +28,12 @@ rule torque_speed:
 rule torque_speed_prototype:
     """Load characteristic of the fitted prototype motor in SI units: results/load/prototype.nc."""
     input:
-        code=CODE,
         fit=f"{RES}/fit/prototype.nc",
         motor="workflow/config/synthetic_motor.yaml",
         compiled=rules.compile_engine.output,
     output:
         f"{RES}/load/prototype.nc",
+    priority: 90  # on the longest chain (after the fit, before its figure and the checks)
     conda:
         "../envs/bouncedisk.yaml"
     log:
@@ -51,7 +50,6 @@ rule torque_speed_prototype:
 rule synthetic_load_curve:
     """Regenerate the shipped synthetic load curve (and log whether it is byte-identical)."""
     input:
-        code=CODE,
         spec="workflow/config/synthetic_motor.yaml",
         compiled=rules.compile_engine.output,
     output:

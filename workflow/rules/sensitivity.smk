@@ -11,8 +11,8 @@ SENS = f"{RES}/sensitivity"
 rule sensitivity_shard:
     """One block of the Sobol' sample's points: results/sensitivity/shard-<i>.nc."""
     input:
-        code=CODE,
         compiled=rules.compile_engine.output,
+    priority: 10  # a long job: started early, so that no long job ends the pipeline alone
     output:
         f"{SENS}/shard-{{shard}}.nc",
     conda:
@@ -32,7 +32,7 @@ rule sensitivity_shard:
 rule sensitivity_join:
     """The shards in sample order: results/sensitivity/points.nc."""
     input:
-        code=CODE,
+        compiled=rules.compile_engine.output,
         shards=expand(f"{SENS}/shard-{{i}}.nc", i=range(SENSITIVITY.shards)),
     output:
         f"{SENS}/points.nc",
@@ -49,7 +49,6 @@ rule sensitivity_join:
 rule sensitivity_map:
     """Design map over (psi, log10_r_phi) at the i-th e of design_map.e: results/sensitivity/map-<i>.nc."""
     input:
-        code=CODE,
         compiled=rules.compile_engine.output,
     output:
         f"{SENS}/map-{{i}}.nc",
@@ -70,7 +69,7 @@ rule sensitivity_map:
 rule sensitivity_analyse:
     """Sobol' indices with bootstrap intervals, noise shares, best operating points."""
     input:
-        code=CODE,
+        compiled=rules.compile_engine.output,
         points=f"{SENS}/points.nc",
         maps=expand(f"{SENS}/map-{{i}}.nc", i=range(len(SENSITIVITY.map_e))),
     output:

@@ -22,7 +22,6 @@ rule compile_engine:
 rule simulate:
     """Run one scene: results/simulations/<scene>.nc (INTERFACES.md names and provenance)."""
     input:
-        code=CODE,
         scene=scene_path("{scene}"),
         compiled=rules.compile_engine.output,
     output:

@@ -4,7 +4,6 @@
 rule sweep_shard:
     """One contiguous block of a sweep's first axis: results/sweeps/<sweep>/shard-<i>.nc."""
     input:
-        code=CODE,
         scene=lambda wc: scene_path(config["sweeps"][wc.sweep]["scene"]),
         compiled=rules.compile_engine.output,
     output:
@@ -26,7 +25,7 @@ rule sweep_shard:
 rule sweep_combine:
     """Join a sweep's shards along its swept dimensions: results/sweeps/<sweep>.nc."""
     input:
-        code=CODE,
+        compiled=rules.compile_engine.output,
         shards=sweep_shards,
     output:
         f"{RES}/sweeps/{{sweep}}.nc",
