@@ -551,7 +551,9 @@ def _flight_output(prm, flg, st, ist, traj, strobe, info, n, th, t_now, t_hit, t
     t_end = prm[P_TEND]
     ends = t_hit > t_end
     length = t_end - t_now if ends else tau
-    status = _segment_output(SEG_FLIGHT, n, th, length, ends, prm, flg, st, ist, traj, strobe, info)
+    # np.int64: one compiled _segment_output for every kind (a literal kind compiled its own)
+    kind = np.int64(SEG_FLIGHT)
+    status = _segment_output(kind, n, th, length, ends, prm, flg, st, ist, traj, strobe, info)
     if status != ST_CONTINUE or not ends:
         return status
     u0 = st[S_U]
@@ -672,7 +674,8 @@ def _clipped_ride(prm, flg, st, ist, traj, strobe, info, n, th, t_now, th_sep):
         d += TWO_PI
     seg = min(d / w, prm[P_TEND] - t_now)
     ends = seg < d / w
-    status = _segment_output(SEG_CONTACT, n, th, seg, ends, prm, flg, st, ist, traj, strobe, info)
+    kind = np.int64(SEG_CONTACT)  # one compiled _segment_output (as _flight_output)
+    status = _segment_output(kind, n, th, seg, ends, prm, flg, st, ist, traj, strobe, info)
     if status != ST_CONTINUE:
         return status
     if ends:
