@@ -883,6 +883,7 @@ KINDS = (
 SECONDS = {"fit", "simulation_physical"}
 
 
+@pytest.mark.slow  # compliance-checker on every kind of file: an external validation, in CI
 @pytest.mark.parametrize("kind", KINDS)
 @pytest.mark.xdist_group("every_kind")  # one worker writes the files, not both
 @pytest.mark.cost(12)  # the files
@@ -920,6 +921,7 @@ def test_item18_every_file_kind_is_cf_clean_and_carries_acdd(every_kind, monkeyp
                 assert "_FillValue" not in var.ncattrs(), name
 
 
+@pytest.mark.slow  # the files of every kind (the fixture above): in CI
 @pytest.mark.xdist_group("every_kind")  # the files of the worker that wrote them
 def test_item18_string_labels_are_cf_labels_that_read_back_as_the_index(every_kind):
     """A string-labelled dimension keeps no coordinate variable in the file (CF-1.10 §1.3: they
