@@ -71,6 +71,27 @@ def test_simulate_imports_neither_matplotlib_nor_mlflow(tmp_path):
     assert heavy == []
 
 
+def test_drawing_and_reading_files_import_no_numba(tmp_path):
+    """A figure job (figures, netCDF reading and writing, the records' names) loads no numba:
+    the record layouts are plain integers (``engine/layout.py``) and the engine's entry points
+    load on first use; the engine itself still loads, with its cache, when it is used."""
+    code = (
+        "import json, sys\n"
+        "import bouncedisk.figures.drawing, bouncedisk.figures.common, bouncedisk.io.netcdf\n"
+        "from bouncedisk.io.records import EventKind, RunStatus, TrajColumn\n"
+        "from bouncedisk.engine import KIND_CHATTER\n"
+        "before = sorted(m for m in sys.modules if m.split('.')[0] == 'numba')\n"
+        "from bouncedisk.engine import EngineConfig, simulate_arrays\n"
+        "res = simulate_arrays(EngineConfig(e=0.3, omega_s=1.5, max_events=5))\n"
+        "print(json.dumps([before, 'numba' in sys.modules, len(res.events['t']),"
+        " int(EventKind.CHATTER) == KIND_CHATTER, RunStatus(res.status_code).text]))"
+    )
+    r = _python(code, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr[-2000:]
+    before, loaded, events, same_code, status = json.loads(r.stdout.splitlines()[-1])
+    assert before == [] and loaded and events == 5 and same_code and status == "completed"
+
+
 def test_the_command_s_parser_and_the_package_are_light():
     """``bouncedisk --help`` builds every subcommand's parser without the numerical stack, and
     ``import bouncedisk`` imports none of the public API until it is used."""

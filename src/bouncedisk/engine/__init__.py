@@ -4,20 +4,28 @@ Public entry points: :class:`EngineConfig`, :class:`InitialState`, :func:`iterat
 streaming) and :func:`simulate_arrays` (in memory).
 
 The compiled functions are cached on disk by numba, keyed on all of the engine's sources
-(:mod:`bouncedisk.engine._cache`, imported first so that it applies to every one of them).
+(:mod:`bouncedisk.engine._cache`, which every compiled module imports before it decorates
+anything). The entry points are loaded on first use: code that only names the engine's records
+(:mod:`bouncedisk.engine.layout`, plain integers) imports no numba.
 """
 
-from . import _cache  # noqa: F401  (registers the cache locators before anything compiles)
-from .driver import (
-    Chunk,
-    EngineConfig,
-    EngineError,
-    InitialState,
-    RunResult,
-    iterate,
-    simulate_arrays,
-)
-from .kernel import KIND_CHATTER, KIND_IMPACT
+from __future__ import annotations
+
+from importlib import import_module
+from typing import TYPE_CHECKING, Any
+
+from .layout import KIND_CHATTER, KIND_IMPACT
+
+if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs only
+    from .driver import (
+        Chunk,
+        EngineConfig,
+        EngineError,
+        InitialState,
+        RunResult,
+        iterate,
+        simulate_arrays,
+    )
 
 __all__ = [
     "Chunk",
@@ -30,3 +38,22 @@ __all__ = [
     "KIND_IMPACT",
     "KIND_CHATTER",
 ]
+#: The entry points that live in :mod:`bouncedisk.engine.driver` (imported on first use).
+_FROM_DRIVER = frozenset(__all__) - {"KIND_IMPACT", "KIND_CHATTER"}
+
+
+def __getattr__(name: str) -> Any:
+    """An entry point of the driver, or a submodule (``engine.kernel``), on first use."""
+    if name in _FROM_DRIVER:
+        value = getattr(import_module(".driver", __name__), name)
+    elif name.isidentifier() and not name.startswith("__"):
+        try:
+            value = import_module(f".{name}", __name__)
+        except ModuleNotFoundError as ex:
+            if ex.name != f"{__name__}.{name}":
+                raise
+            raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value
+    return value

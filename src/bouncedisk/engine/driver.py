@@ -14,19 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import kernel as K
-
-STATUS_TEXT = {
-    K.ST_EVENTS: "completed",
-    K.ST_TIME: "completed",
-    K.ST_REST: "rest: the rotor stays in contact with the stator for ever (no further impact)",
-    K.ST_NEED_CONTACT: (
-        "missing effect 'contact': the rotor lands softly or chatters and must ride the stator, "
-        "which needs the 'contact' effect"
-    ),
-    K.ST_NUMERICAL: "numerical failure: an event search failed or made no progress",
-}
-#: The statuses of a run that ended as asked: events or time reached, or the rotor at rest.
-OK_STATUSES = frozenset({K.ST_EVENTS, K.ST_TIME, K.ST_REST})
+from .layout import OK_STATUSES, STATUS_TEXT  # noqa: F401  (re-exported: records, loads)
 
 
 @dataclass(frozen=True)

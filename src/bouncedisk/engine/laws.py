@@ -9,6 +9,8 @@ from math import asin, cos, pi, sin, sqrt
 
 from numba import njit
 
+from . import _cache  # noqa: F401  (the cache locators, before anything here is decorated)
+
 
 @njit(cache=True, inline="always")
 def normal_load(w, phase):

@@ -23,6 +23,7 @@ from dataclasses import replace
 import numpy as np
 from numba import njit
 
+from . import _cache  # noqa: F401  (the cache locators, before anything here is decorated)
 from . import kernel as K
 from .driver import (
     STATUS_TEXT,

@@ -12,6 +12,7 @@ from math import cos, log, sqrt
 import numpy as np
 from numba import njit
 
+from . import _cache  # noqa: F401  (the cache locators, before anything here is decorated)
 from .roots import TWO_PI
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)

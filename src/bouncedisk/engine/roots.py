@@ -23,6 +23,8 @@ from math import asin, atan2, cos, floor, hypot, inf, pi, sin
 
 from numba import njit
 
+from . import _cache  # noqa: F401  (the cache locators, before anything here is decorated)
+
 TWO_PI = 2.0 * pi
 
 

@@ -11,16 +11,18 @@ from __future__ import annotations
 import math
 import uuid
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import netCDF4
 import numpy as np
 import xarray as xr
 
-from ..engine.driver import Chunk
 from ..model.errors import InputError
 from .atomic import atomic_path
 from .records import KIND_NAMES, EventKind, StrobeColumn, TrajColumn
+
+if TYPE_CHECKING:  # pragma: no cover - the engine's chunks, named in annotations only
+    from ..engine.driver import Chunk
 
 ENCODING = {"zlib": True, "complevel": 4}
 

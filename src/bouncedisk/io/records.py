@@ -2,7 +2,8 @@
 
 The compiled kernel (:mod:`bouncedisk.engine.kernel`) returns integer codes and plain array
 columns; this module is the one public place that names them, with values taken from the
-kernel's own constants, so that no code outside the engine uses a raw code or a column number.
+kernel's own constants (:mod:`bouncedisk.engine.layout`, which imports no numba), so that no
+code outside the engine uses a raw code or a column number.
 
 For example ``res.traj[:, TrajColumn.OMEGA]`` is the rotor angular velocity at the samples,
 and ``res.status_code == RunStatus.REST`` says the rotor rides the stator for ever.
@@ -12,8 +13,8 @@ from __future__ import annotations
 
 from enum import IntEnum
 
-from ..engine import kernel as _K
-from ..engine.driver import OK_STATUSES, STATUS_TEXT
+from ..engine import layout as _K
+from ..engine.layout import OK_STATUSES, STATUS_TEXT
 
 __all__ = [
     "KIND_NAMES",
