@@ -3,7 +3,7 @@
 for each, a synthetic run-up and load curve (``tests/test_joint_fit.py``'s ``make_data``), the
 joint fit, and its identifiability table against the generating values.
 
-Run:  python benchmarks/joint_recovery.py [--scan N] [--zoom N] [CASE ...]
+Run:  python benchmarks/joint_recovery.py [--scan N] [--zoom N] [--cores N] [CASE ...]
 
 Prints, per case, the fit's summary lines (the identifiability table and the chi2 at the
 generating point under the fit's final metric) and whether every joint interval holds the
@@ -42,13 +42,13 @@ def _cases_module():
     return mod
 
 
-def recover(case: str, scan: int, zoom: int) -> dict:
+def recover(case: str, scan: int, zoom: int, cores: int = 2) -> dict:
     """Fit one case; its intervals by data set and whether the joint ones hold the truth."""
     cases = _cases_module()
     true, top = cases.CASES[case]
     with tempfile.TemporaryDirectory() as tmp:
         run, load = cases.make_data(Path(tmp), true, top, loads=10, seed=3)
-        settings = FitSettings(seed=1, scan=scan, zoom=zoom, zoom_centres=4, cores=2)
+        settings = FitSettings(seed=1, scan=scan, zoom=zoom, zoom_centres=4, cores=cores)
         ds = fit_dataset(fit_curve(read_curve(run), settings, load=[read_load_curve(load)]))
     print(f"\n{case}: chi2 {ds.attrs['chi2']:.4g} on {ds.attrs['n_statistics']}, "
           f"wall {ds.attrs['wall_time_s']:.1f} s")  # fmt: skip
@@ -74,8 +74,9 @@ def main() -> None:
     )
     ap.add_argument("--scan", type=int, default=256)
     ap.add_argument("--zoom", type=int, default=8)
+    ap.add_argument("--cores", type=int, default=2, help="threads of each fit (1: one core)")
     args = ap.parse_args()
-    print(json.dumps({c: recover(c, args.scan, args.zoom) for c in args.cases}))
+    print(json.dumps({c: recover(c, args.scan, args.zoom, args.cores) for c in args.cases}))
 
 
 if __name__ == "__main__":
