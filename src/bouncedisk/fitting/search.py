@@ -12,7 +12,9 @@
    chaotic), ``C`` is measured again at the best of them. With load curves the candidates are
    the scan points that reproduce the run-ups, each also with ``R_φ`` moved to the load curve's
    torque scale, and a joint zoom around the best of them (:func:`joint_candidates`,
-   :func:`joint_zoom`), ranked by the joint ``χ²``.
+   :func:`joint_zoom`), ranked by the joint ``χ²``; when none of them reproduces both data sets,
+   shrinking patches in ``(e, ψ, omega_s)`` from the best run-up candidates and a walk along the
+   valley they reach (:func:`joint_refine`, :func:`valley_walk`).
 3. :func:`scipy.optimize.least_squares` on the whitened residuals, in coordinates scaled to the
    search box, from each of the best few re-ranked points (multi-start); then ``C`` is measured
    again at the new best point and the search polished.
@@ -232,13 +234,18 @@ def measure_cov(obj: Objective, x: np.ndarray, members: int) -> np.ndarray:
 
 
 def joint_candidates(
-    obj: Objective, ranked: list[Evaluation], s: SearchSettings
+    obj: Objective,
+    ranked: list[Evaluation],
+    s: SearchSettings,
+    progress: Callable[[str], None] | None = None,
 ) -> list[np.ndarray]:
     """The scan points to refine: with load curves, every distinct scan point that reproduces
     the run-ups (:func:`.uncertainty.scan_acceptable`), as it is and with its ``R_φ`` moved to the
     load curve's torque scale (:func:`load_matched`), re-ranked by the joint ``χ²`` on the scan's
     ensemble size — the run-ups leave a valley of points that reproduce them, the load curve picks along
-    it; without load curves, the best ``s.candidates`` distinct scan points."""
+    it; without load curves, the best ``s.candidates`` distinct scan points. When no candidate,
+    nor any point of the joint zoom, reproduces both data sets (:func:`joint_missed`), the best
+    run-up candidates are refined into the joint valley (:func:`joint_refine`)."""
     if obj.load is None:
         return [ev.x for ev in _distinct(ranked, obj.span, s.candidates)]
     from .uncertainty import scan_acceptable
@@ -255,6 +262,9 @@ def joint_candidates(
     if joint_missed(obj, scores):
         # no candidate reproduces both data sets: the joint valley lies between the scan's
         # points; refine the best run-up candidates (distinct in (e, omega_s)) into it
+        _say(progress, f"no joint candidate reproduces both data sets (best chi2 "
+                       f"{min(scores):.4g} on {s.global_members} member(s)): the best run-up "
+                       "candidates refined into the joint valley")  # fmt: skip
         more = joint_refine(obj, _distinct_axial(obj, runup, REFINE_CENTRES), s)
         pool = pool + [x for x, _ in more]
         scores = scores + [c for _, c in more]
@@ -479,7 +489,7 @@ def search(
     obj.set_cov(measure_cov(obj, ranked[0].x, s.pilot_members))
     # one member per scan point is noisy where the model is chaotic: re-rank the best distinct
     # scan points on `members` members under the model's covariance, measured at the best of them
-    cands = joint_candidates(obj, ranked, s)
+    cands = joint_candidates(obj, ranked, s, progress)
     if obj.load is not None:
         _say(progress, f"load curve read at the distinct scan points that reproduce the run-ups, "
                        f"R_phi matched to its torque scale; the best {len(cands)} by the joint "
