@@ -494,9 +494,7 @@ def search(
         _say(progress, f"load curve read at the distinct scan points that reproduce the run-ups, "
                        f"R_phi matched to its torque scale; the best {len(cands)} by the joint "
                        "chi2 go on")  # fmt: skip
-    scores = obj.map(lambda x: obj.chi2(x, s.members), cands)
-    obj.set_cov(measure_cov(obj, cands[rank_order(scores, cands)[0]], s.pilot_members))
-    scores = [obj.chi2(x, s.members) for x in cands]
+    scores = rerank(obj, cands, s)
     starts = [cands[i] for i in rank_order(scores, cands)[: s.starts]]
     if obj.load is not None:
         # the joint valley is narrow in (e, omega_s): one start per distinct (e, omega_s)
@@ -510,6 +508,15 @@ def search(
     obj.set_cov(measure_cov(obj, best.x, s.pilot_members))
     best = local_stage(obj, [best.x], s.members, max(8, s.local_nfev // 3), progress)
     return best
+
+
+def rerank(obj: Objective, cands: list[np.ndarray], s: SearchSettings) -> list[float]:
+    """``χ²`` of the candidates on ``s.members`` members under the model's covariance, measured
+    at the best of them (:func:`measure_cov`): one member per scan point is noisy where the model
+    is chaotic."""
+    scores = obj.map(lambda x: obj.chi2(x, s.members), cands)
+    obj.set_cov(measure_cov(obj, cands[rank_order(scores, cands)[0]], s.pilot_members))
+    return [obj.chi2(x, s.members) for x in cands]
 
 
 #: Local-search starts of a joint fit, distinct in ``(e, omega_s)`` (:func:`_distinct_axial`).
