@@ -278,6 +278,19 @@ def joint_missed(obj: Objective, scores: list[float]) -> bool:
     data when its ``χ²`` is below twice the 95 % point of ``χ²(n)`` (as for the scan's points,
     :func:`.uncertainty.scan_acceptable`). Above that for every candidate, the search has not
     reached the joint valley.
+
+    Parameters
+    ----------
+    obj : Objective
+        The joint objective (``parts`` ``"both"``: ``n`` counts the run-ups' statistics and
+        the readings).
+    scores : list of float
+        The candidates' joint ``χ²`` on the scan's ensemble size.
+
+    Returns
+    -------
+    bool
+        ``True`` when every score exceeds the limit.
     """
     return min(scores) > 2.0 * float(chi2_dist.ppf(0.95, obj.n_stats))
 
@@ -312,10 +325,26 @@ def joint_refine(
     around its best point so far and halves the patch at each of :data:`REFINE_LEVELS` levels.
     A chain ends where it meets the tube, not where the tube is deepest, so the walk then
     follows the tube from the best point found.
+
+    Parameters
+    ----------
+    obj : Objective
+        The joint objective, its covariance the pilot's.
+    centres : list of ndarray
+        Run-up candidates (search coordinates), best first.
+    s : SearchSettings
+        Seed and the scan's ensemble size (``global_members``).
+
+    Returns
+    -------
+    list of (ndarray, float)
+        Every point evaluated (the chains' starts, their patches and the walk's) with its joint
+        ``χ²``, in evaluation order.
     """
     ax = [obj.names.index(n) for n in ("e", "psi", "omega_s")]
-    best = [load_matched(obj, c) for c in centres for _ in range(REFINE_CHAINS)]
-    best = list(zip(best, obj.map(lambda x: obj.chi2(x, s.global_members), best), strict=True))
+    starts = [load_matched(obj, c) for c in centres for _ in range(REFINE_CHAINS)]
+    chis = obj.map(lambda x: obj.chi2(x, s.global_members), starts)
+    best = list(zip(starts, chis, strict=True))
     out = list(best)
     for level in range(REFINE_LEVELS):
         half = np.full(3, JOINT_ZOOM_HALF * 0.5**level)
@@ -335,6 +364,21 @@ def valley_walk(obj: Objective, start: np.ndarray, s: SearchSettings) -> list[tu
     the valley, the second around the first's best at a quarter of its half-widths
     (:data:`WALK_HALF`). The walk goes on past worse steps (the landscape is rough on the
     scan's few members); the re-ranking on ``members`` members picks among all its points.
+
+    Parameters
+    ----------
+    obj : Objective
+        The joint objective.
+    start : ndarray
+        A point in the valley (search coordinates).
+    s : SearchSettings
+        Seed and the scan's ensemble size (``global_members``).
+
+    Returns
+    -------
+    list of (ndarray, float)
+        Every point evaluated with its joint ``χ²`` (at most ``2 · WALK_STEPS · 2 ·
+        WALK_POINTS``; a walk stops at the range of ``e``).
     """
     ie, cross = obj.names.index("e"), [obj.names.index(n) for n in ("psi", "omega_s")]
     out: list[tuple] = []
@@ -513,7 +557,22 @@ def search(
 def rerank(obj: Objective, cands: list[np.ndarray], s: SearchSettings) -> list[float]:
     """``χ²`` of the candidates on ``s.members`` members under the model's covariance, measured
     at the best of them (:func:`measure_cov`): one member per scan point is noisy where the model
-    is chaotic."""
+    is chaotic.
+
+    Parameters
+    ----------
+    obj : Objective
+        The objective; its covariance (and the load part's) is set at the best candidate.
+    cands : list of ndarray
+        Candidates (search coordinates).
+    s : SearchSettings
+        ``members`` and ``pilot_members``.
+
+    Returns
+    -------
+    list of float
+        Each candidate's ``χ²`` under the new covariance.
+    """
     scores = obj.map(lambda x: obj.chi2(x, s.members), cands)
     obj.set_cov(measure_cov(obj, cands[rank_order(scores, cands)[0]], s.pilot_members))
     return [obj.chi2(x, s.members) for x in cands]
