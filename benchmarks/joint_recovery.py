@@ -17,7 +17,8 @@ search ended at chi2 1002, inadequate, nothing identified); 136 s wall. Periodic
 generating point's 3.10; 323 s. Chaotic: chi2 8.04, the generating point's 39.1 under the
 estimate's metric (run-ups 36.7): its intervals hold the truth through the widening to every
 consistent candidate, not the profiles; 90 s. The periodic and chaotic cases' chi2, chi2 at the
-generating point and interval widths are those measured before the refinement. At scan 64 the periodic case lands in a valley of chi2 76
+generating point and interval widths are those measured before the refinement (which the periodic
+case runs, the chaotic one does not). At scan 64 the periodic case lands in a valley of chi2 76
 (see the closing notes of issue 20; not re-run).
 """
 
