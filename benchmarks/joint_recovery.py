@@ -3,18 +3,23 @@
 for each, a synthetic run-up and load curve (``tests/test_joint_fit.py``'s ``make_data``), the
 joint fit, and its identifiability table against the generating values.
 
-Run:  python benchmarks/joint_recovery.py [--scan N] [--zoom N] [CASE ...]
+Run:  python benchmarks/joint_recovery.py [--scan N] [--zoom N] [--cores N] [CASE ...]
 
 Prints, per case, the fit's summary lines (the identifiability table and the chi2 at the
 generating point under the fit's final metric) and whether every joint interval holds the
 generating value, then one JSON line with the interval widths by data set. Not a test: a fit per
-case takes 1-5 minutes on 2 cores. At the defaults (scan 256, zoom 8; 2026-11-24): every joint
-interval holds the generating value in all three cases, but near the period doubling only because
-no adequate point was found (chi2 1002 on 21, nothing identified) while the generating point's is
-9.3: a valley narrower than the scan's spacing. Periodic: chi2 0.97, the generating point's 3.10.
-Chaotic: chi2 8.04, the generating point's 39.1 under the estimate's metric (run-ups 36.7): its
-intervals hold the truth through the widening to every consistent candidate, not the profiles.
-At scan 64 the periodic case lands in a valley of chi2 76 (see the closing notes of issue 20).
+case takes 1.5-5.5 minutes on one core. At the defaults (scan 256, zoom 8; 2026-11-25, ``--cores 1``
+beside other work): every joint interval holds the generating value in all three cases and is
+two-sided near the period doubling. Near the period doubling: chi2 14.46 on 21, the generating
+point's 7.39; the joint valley (a thin tube in (e, psi, omega_s)) lies between the scan's and the
+joint zoom's points and is reached by the joint refinement (``search.joint_refine``; before it the
+search ended at chi2 1002, inadequate, nothing identified); 136 s wall. Periodic: chi2 0.97, the
+generating point's 3.10; 323 s. Chaotic: chi2 8.04, the generating point's 39.1 under the
+estimate's metric (run-ups 36.7): its intervals hold the truth through the widening to every
+consistent candidate, not the profiles; 90 s. The periodic and chaotic cases' chi2, chi2 at the
+generating point and interval widths are those measured before the refinement (which the periodic
+case runs, the chaotic one does not). At scan 64 the periodic case lands in a valley of chi2 76
+(see the closing notes of issue 20; not re-run).
 """
 
 from __future__ import annotations
@@ -42,13 +47,13 @@ def _cases_module():
     return mod
 
 
-def recover(case: str, scan: int, zoom: int) -> dict:
+def recover(case: str, scan: int, zoom: int, cores: int = 2) -> dict:
     """Fit one case; its intervals by data set and whether the joint ones hold the truth."""
     cases = _cases_module()
     true, top = cases.CASES[case]
     with tempfile.TemporaryDirectory() as tmp:
         run, load = cases.make_data(Path(tmp), true, top, loads=10, seed=3)
-        settings = FitSettings(seed=1, scan=scan, zoom=zoom, zoom_centres=4, cores=2)
+        settings = FitSettings(seed=1, scan=scan, zoom=zoom, zoom_centres=4, cores=cores)
         ds = fit_dataset(fit_curve(read_curve(run), settings, load=[read_load_curve(load)]))
     print(f"\n{case}: chi2 {ds.attrs['chi2']:.4g} on {ds.attrs['n_statistics']}, "
           f"wall {ds.attrs['wall_time_s']:.1f} s")  # fmt: skip
@@ -74,8 +79,9 @@ def main() -> None:
     )
     ap.add_argument("--scan", type=int, default=256)
     ap.add_argument("--zoom", type=int, default=8)
+    ap.add_argument("--cores", type=int, default=2, help="threads of each fit (1: one core)")
     args = ap.parse_args()
-    print(json.dumps({c: recover(c, args.scan, args.zoom) for c in args.cases}))
+    print(json.dumps({c: recover(c, args.scan, args.zoom, args.cores) for c in args.cases}))
 
 
 if __name__ == "__main__":

@@ -12,7 +12,9 @@
    chaotic), ``C`` is measured again at the best of them. With load curves the candidates are
    the scan points that reproduce the run-ups, each also with ``R_φ`` moved to the load curve's
    torque scale, and a joint zoom around the best of them (:func:`joint_candidates`,
-   :func:`joint_zoom`), ranked by the joint ``χ²``.
+   :func:`joint_zoom`), ranked by the joint ``χ²``; when none of them reproduces both data sets,
+   shrinking patches in ``(e, ψ, omega_s)`` from the best run-up candidates and a walk along the
+   valley they reach (:func:`joint_refine`, :func:`valley_walk`).
 3. :func:`scipy.optimize.least_squares` on the whitened residuals, in coordinates scaled to the
    search box, from each of the best few re-ranked points (multi-start); then ``C`` is measured
    again at the new best point and the search polished.
@@ -34,6 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import least_squares
+from scipy.stats import chi2 as chi2_dist
 from scipy.stats import qmc
 
 from .basins import rank_key
@@ -189,13 +192,13 @@ def global_stage(
     return ranked
 
 
-def _sobol(n: int, seed: int) -> np.ndarray:
-    """``n`` scrambled Sobol points of the unit square (seeded)."""
+def _sobol(n: int, seed: int, dim: int = 2) -> np.ndarray:
+    """``n`` scrambled Sobol points of the unit square (cube for ``dim`` 3; seeded)."""
     with warnings.catch_warnings():
         # any size is allowed; the balance that scipy warns about is exact only at powers of
         # two, the low discrepancy holds
         warnings.filterwarnings("ignore", "The balance properties of Sobol", UserWarning)
-        return qmc.Sobol(2, seed=seed).random(n)
+        return qmc.Sobol(dim, seed=seed).random(n)
 
 
 def _scan(
@@ -231,27 +234,196 @@ def measure_cov(obj: Objective, x: np.ndarray, members: int) -> np.ndarray:
 
 
 def joint_candidates(
-    obj: Objective, ranked: list[Evaluation], s: SearchSettings
+    obj: Objective,
+    ranked: list[Evaluation],
+    s: SearchSettings,
+    progress: Callable[[str], None] | None = None,
 ) -> list[np.ndarray]:
     """The scan points to refine: with load curves, every distinct scan point that reproduces
     the run-ups (:func:`.uncertainty.scan_acceptable`), as it is and with its ``R_φ`` moved to the
     load curve's torque scale (:func:`load_matched`), re-ranked by the joint ``χ²`` on the scan's
     ensemble size — the run-ups leave a valley of points that reproduce them, the load curve picks along
-    it; without load curves, the best ``s.candidates`` distinct scan points."""
+    it; without load curves, the best ``s.candidates`` distinct scan points. When no candidate,
+    nor any point of the joint zoom, reproduces both data sets (:func:`joint_missed`), the best
+    run-up candidates are refined into the joint valley (:func:`joint_refine`)."""
     if obj.load is None:
         return [ev.x for ev in _distinct(ranked, obj.span, s.candidates)]
     from .uncertainty import scan_acceptable
 
     ok = {tuple(x) for x in scan_acceptable(obj, s.global_members)}
     pool = [ev.x for ev in _distinct([ev for ev in ranked if tuple(ev.x) in ok], obj.span, len(ok))]
-    pool = pool or [ev.x for ev in _distinct(ranked, obj.span, s.candidates)]
+    runup = pool or [ev.x for ev in _distinct(ranked, obj.span, s.candidates)]  # best first
     # each point as the run-ups matched it and with R_phi moved to the load curve's torque scale
-    pool = pool + obj.map(lambda x: load_matched(obj, x), pool)
+    pool = runup + obj.map(lambda x: load_matched(obj, x), runup)
     scores = obj.map(lambda x: obj.chi2(x, s.global_members), pool)
     near = joint_zoom(obj, [pool[i] for i in rank_order(scores, pool)], s)
     pool = pool + near
     scores = scores + obj.map(lambda x: obj.chi2(x, s.global_members), near)
+    if joint_missed(obj, scores):
+        # no candidate reproduces both data sets: the joint valley lies between the scan's
+        # points; refine the best run-up candidates (distinct in (e, omega_s)) into it
+        _say(progress, f"no joint candidate reproduces both data sets (best chi2 "
+                       f"{min(scores):.4g} on {s.global_members} member(s)): the best run-up "
+                       "candidates refined into the joint valley")  # fmt: skip
+        more = joint_refine(obj, _distinct_axial(obj, runup, REFINE_CENTRES), s)
+        pool = pool + [x for x, _ in more]
+        scores = scores + [c for _, c in more]
     return [pool[i] for i in rank_order(scores, pool)[: s.candidates]]
+
+
+def joint_missed(obj: Objective, scores: list[float]) -> bool:
+    """Whether no joint candidate reproduces both data sets on the scan's ensemble size.
+
+    A cheap candidate is one model realization against the data's, so it is consistent with the
+    data when its ``χ²`` is below twice the 95 % point of ``χ²(n)`` (as for the scan's points,
+    :func:`.uncertainty.scan_acceptable`). Above that for every candidate, the search has not
+    reached the joint valley.
+
+    Parameters
+    ----------
+    obj : Objective
+        The joint objective (``parts`` ``"both"``: ``n`` counts the run-ups' statistics and
+        the readings).
+    scores : list of float
+        The candidates' joint ``χ²`` on the scan's ensemble size.
+
+    Returns
+    -------
+    bool
+        ``True`` when every score exceeds the limit.
+    """
+    return min(scores) > 2.0 * float(chi2_dist.ppf(0.95, obj.n_stats))
+
+
+#: The joint refinement (:func:`joint_refine`): run-up candidates refined, independent chains
+#: from each, levels of each chain and points of each level (its patch halves at every level).
+REFINE_CENTRES = 2
+REFINE_CHAINS = 2
+REFINE_LEVELS = 6
+REFINE_POINTS = 12
+#: The valley walk (:func:`valley_walk`): steps each way along ``e`` and their length, as a
+#: fraction of the range of ``e``; points of each step's two patches; the first patch's
+#: half-widths across the valley, as fractions of the ranges of ``ψ`` and ``omega_s``.
+WALK_STEPS = 5
+WALK_STEP = 0.011
+WALK_POINTS = 12
+WALK_HALF = (0.016, 0.007)
+
+
+def joint_refine(
+    obj: Objective, centres: list[np.ndarray], s: SearchSettings
+) -> list[tuple[np.ndarray, float]]:
+    """Shrinking patches in ``(e, ψ, omega_s)`` from the best run-up candidates into the joint
+    valley, then a walk along it (:func:`valley_walk`); every point evaluated, with its joint
+    ``χ²`` on the scan's ensemble size.
+
+    Near a bifurcation the joint valley is a thin tube along a curve of ``(e, ψ, omega_s)`` (the
+    ``near_boundary`` recovery case: about 0.005 in ``e``, 0.02 in ``ψ`` and 0.002 in ``omega_s``
+    across), narrower than the joint zoom's spacing, and ``ψ`` must move with ``(e, omega_s)``
+    along it, which the zoom (``ψ`` held) cannot do. Each of :data:`REFINE_CHAINS` chains per
+    centre samples a patch of :data:`REFINE_POINTS` points ``± JOINT_ZOOM_HALF`` of the ranges
+    around its best point so far and halves the patch at each of :data:`REFINE_LEVELS` levels.
+    A chain ends where it meets the tube, not where the tube is deepest, so the walk then
+    follows the tube from the best point found.
+
+    Parameters
+    ----------
+    obj : Objective
+        The joint objective, its covariance the pilot's.
+    centres : list of ndarray
+        Run-up candidates (search coordinates), best first.
+    s : SearchSettings
+        Seed and the scan's ensemble size (``global_members``).
+
+    Returns
+    -------
+    list of (ndarray, float)
+        Every point evaluated (the chains' starts, their patches and the walk's) with its joint
+        ``χ²``, in evaluation order.
+    """
+    ax = [obj.names.index(n) for n in ("e", "psi", "omega_s")]
+    starts = [load_matched(obj, c) for c in centres for _ in range(REFINE_CHAINS)]
+    chis = obj.map(lambda x: obj.chi2(x, s.global_members), starts)
+    best = list(zip(starts, chis, strict=True))
+    out = list(best)
+    for level in range(REFINE_LEVELS):
+        half = np.full(3, JOINT_ZOOM_HALF * 0.5**level)
+        seeds = [s.seed + 3 + 97 * i + level for i in range(len(best))]
+        found = _patches(obj, [c for c, _ in best], ax, half, seeds, REFINE_POINTS, s)
+        best = [_best_of([b, *f]) for b, f in zip(best, found, strict=True)]
+        out += [p for f in found for p in f]
+    return out + valley_walk(obj, _best_of(best)[0], s)
+
+
+def valley_walk(obj: Objective, start: np.ndarray, s: SearchSettings) -> list[tuple]:
+    """Points along the joint valley from ``start``, both ways in ``e``, with their ``χ²``.
+
+    The load curve pins ``omega_s`` (and with the run-ups ``ψ``) far more tightly than ``e``, so
+    the valley is followed in steps of :data:`WALK_STEP` of the range of ``e``: at each, ``(ψ,
+    omega_s)`` is predicted from the last two steps (linearly) and sampled by two patches across
+    the valley, the second around the first's best at a quarter of its half-widths
+    (:data:`WALK_HALF`). The walk goes on past worse steps (the landscape is rough on the
+    scan's few members); the re-ranking on ``members`` members picks among all its points.
+
+    Parameters
+    ----------
+    obj : Objective
+        The joint objective.
+    start : ndarray
+        A point in the valley (search coordinates).
+    s : SearchSettings
+        Seed and the scan's ensemble size (``global_members``).
+
+    Returns
+    -------
+    list of (ndarray, float)
+        Every point evaluated with its joint ``χ²`` (at most ``2 · WALK_STEPS · 2 ·
+        WALK_POINTS``; a walk stops at the range of ``e``).
+    """
+    ie, cross = obj.names.index("e"), [obj.names.index(n) for n in ("psi", "omega_s")]
+    out: list[tuple] = []
+    for sign in (-1.0, 1.0):
+        prev, cur = None, start
+        for k in range(WALK_STEPS):
+            pred = cur.copy()
+            pred[ie] = cur[ie] + sign * WALK_STEP * obj.span[ie]
+            if not obj.lo[ie] <= pred[ie] <= obj.hi[ie]:
+                break
+            if prev is not None:
+                slope = (cur[cross] - prev[cross]) / (cur[ie] - prev[ie])
+                pred[cross] = cur[cross] + slope * (pred[ie] - cur[ie])
+            half = np.array(WALK_HALF)
+            for level in range(2):
+                seed = s.seed + 5 + 31 * k + 2 * level + (sign > 0)
+                found = _patches(obj, [pred], cross, half, [seed], WALK_POINTS, s)[0]
+                out += found
+                pred, half = _best_of(found)[0], half / 4.0
+            prev, cur = cur, pred
+    return out
+
+
+def _patches(
+    obj: Objective, centres: list[np.ndarray], dims: list[int], half: np.ndarray,
+    seeds: list[int], n: int, s: SearchSettings,
+) -> list[list[tuple[np.ndarray, float]]]:  # fmt: skip
+    """``n`` Sobol points ``± half`` of the ranges in coordinates ``dims`` around each centre
+    (its own seed), ``R_φ`` load-matched, with their joint ``χ²`` on the scan's ensemble size;
+    all centres' points evaluated together (threads). One list of ``(x, χ²)`` per centre."""
+    batch = []
+    for c, seed in zip(centres, seeds, strict=True):
+        for d in (2.0 * _sobol(n, seed, len(dims)) - 1.0) * half:
+            x = c.copy()
+            x[dims] = np.clip(c[dims] + d * obj.span[dims], obj.lo[dims], obj.hi[dims])
+            batch.append(snap(x))
+    batch = obj.map(lambda x: load_matched(obj, x), batch)
+    chis = obj.map(lambda x: obj.chi2(x, s.global_members), batch)
+    pairs = list(zip(batch, chis, strict=True))
+    return [pairs[i * n : (i + 1) * n] for i in range(len(centres))]
+
+
+def _best_of(pairs: list[tuple[np.ndarray, float]]) -> tuple[np.ndarray, float]:
+    """The best ``(x, χ²)`` by :func:`.basins.rank_key`."""
+    return min(pairs, key=lambda p: rank_key(p[1], p[0]))
 
 
 #: The joint zoom (:func:`joint_zoom`): centres, points around each, and the patch's half-width
@@ -361,14 +533,12 @@ def search(
     obj.set_cov(measure_cov(obj, ranked[0].x, s.pilot_members))
     # one member per scan point is noisy where the model is chaotic: re-rank the best distinct
     # scan points on `members` members under the model's covariance, measured at the best of them
-    cands = joint_candidates(obj, ranked, s)
+    cands = joint_candidates(obj, ranked, s, progress)
     if obj.load is not None:
         _say(progress, f"load curve read at the distinct scan points that reproduce the run-ups, "
                        f"R_phi matched to its torque scale; the best {len(cands)} by the joint "
                        "chi2 go on")  # fmt: skip
-    scores = obj.map(lambda x: obj.chi2(x, s.members), cands)
-    obj.set_cov(measure_cov(obj, cands[rank_order(scores, cands)[0]], s.pilot_members))
-    scores = [obj.chi2(x, s.members) for x in cands]
+    scores = rerank(obj, cands, s)
     starts = [cands[i] for i in rank_order(scores, cands)[: s.starts]]
     if obj.load is not None:
         # the joint valley is narrow in (e, omega_s): one start per distinct (e, omega_s)
@@ -382,6 +552,30 @@ def search(
     obj.set_cov(measure_cov(obj, best.x, s.pilot_members))
     best = local_stage(obj, [best.x], s.members, max(8, s.local_nfev // 3), progress)
     return best
+
+
+def rerank(obj: Objective, cands: list[np.ndarray], s: SearchSettings) -> list[float]:
+    """``χ²`` of the candidates on ``s.members`` members under the model's covariance, measured
+    at the best of them (:func:`measure_cov`): one member per scan point is noisy where the model
+    is chaotic.
+
+    Parameters
+    ----------
+    obj : Objective
+        The objective; its covariance (and the load part's) is set at the best candidate.
+    cands : list of ndarray
+        Candidates (search coordinates).
+    s : SearchSettings
+        ``members`` and ``pilot_members``.
+
+    Returns
+    -------
+    list of float
+        Each candidate's ``χ²`` under the new covariance.
+    """
+    scores = obj.map(lambda x: obj.chi2(x, s.members), cands)
+    obj.set_cov(measure_cov(obj, cands[rank_order(scores, cands)[0]], s.pilot_members))
+    return [obj.chi2(x, s.members) for x in cands]
 
 
 #: Local-search starts of a joint fit, distinct in ``(e, omega_s)`` (:func:`_distinct_axial`).
