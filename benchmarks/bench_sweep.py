@@ -8,10 +8,14 @@ the pipeline's ``sweep_shard`` jobs). Measured here on the regime map's base sce
 (``workflow/config/scenes/regime_map.yaml``) over a small ``(e, omega_s)`` grid:
 
 - the whole grid in one shard (one core);
-- two shards at once in two threads of this process (the kernel and the members' reduction
-  release the GIL);
-- two shards at once in two processes (as two pipeline jobs run; forked, so the numba cache
-  is already loaded).
+- ``--shards`` shards (default 4, as the pipeline's regime map) handed to two threads of this
+  process (the kernel and the members' reduction release the GIL);
+- the same shards handed to two processes (as the pipeline's shard jobs run on ``--cores 2``;
+  forked, so the numba cache is already loaded).
+
+A shard is a contiguous block of the first axis (the joined file must be ordered), and the cost
+of a point varies along it, so two shards of equal size can take unequal times: more shards than
+cores balance the load (the two-shard split is printed too).
 
 Wall times are the best of ``--repeat`` rounds, all in this run, so the ratios compare like with
 like; the machine's other load makes every ratio smaller, never larger. The joined shards are
@@ -61,31 +65,42 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--e", type=int, default=12, help="values of e (default 12)")
     ap.add_argument("--omega", type=int, default=8, help="values of omega_s (default 8)")
+    ap.add_argument("--shards", type=int, default=4, help="shards on 2 workers (default 4)")
     ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args()
     _shard((0, 1, 2, 1))  # load the numba cache (not timed)
     one = (0, 1, args.e, args.omega)
     two = [(i, 2, args.e, args.omega) for i in range(2)]
-    serial, threads, procs = [], [], []
+    many = [(i, args.shards, args.e, args.omega) for i in range(args.shards)]
+    serial, threads, procs, halves = [], [], [], []
     ctx = multiprocessing.get_context("fork")
     for _ in range(args.repeat):
         t1, whole = _timed(lambda: _shard(one))
         with ThreadPoolExecutor(2) as pool:
-            t2, parts = _timed(lambda pool=pool: list(pool.map(_shard, two)))
+            t2, parts = _timed(lambda pool=pool: list(pool.map(_shard, many)))
         with ProcessPoolExecutor(2, mp_context=ctx) as pool:
             pool.submit(sum, [0]).result()  # the workers exist before the clock starts
-            t3, parts_p = _timed(lambda pool=pool: list(pool.map(_shard, two)))
-        if not (_same(whole, combine_shards(parts)) and _same(whole, combine_shards(parts_p))):
-            raise SystemExit("the joined shards differ from the one-shard sweep")
+            t3, parts_p = _timed(lambda pool=pool: list(pool.map(_shard, many)))
+            t4, halves_p = _timed(lambda pool=pool: list(pool.map(_shard, two)))
+        for joined in (parts, parts_p, halves_p):
+            if not _same(whole, combine_shards(joined)):
+                raise SystemExit("the joined shards differ from the one-shard sweep")
         serial.append(t1)
         threads.append(t2)
         procs.append(t3)
+        halves.append(t4)
     points = args.e * args.omega
     print(f"machine: {platform.machine()}  python {platform.python_version()}")
     print(f"regime-map sweep, {points} points (6 members each), best of {args.repeat}")
-    print(f"one shard, one core        {min(serial):7.2f} s")
-    print(f"two shards, two threads    {min(threads):7.2f} s   {min(serial) / min(threads):.2f}x")
-    print(f"two shards, two processes  {min(procs):7.2f} s   {min(serial) / min(procs):.2f}x")
+    n = args.shards
+    print(f"one shard, one core             {min(serial):7.2f} s")
+    print(
+        f"{n} shards on two threads        {min(threads):7.2f} s   {min(serial) / min(threads):.2f}x"
+    )
+    print(f"{n} shards on two processes      {min(procs):7.2f} s   {min(serial) / min(procs):.2f}x")
+    print(
+        f"2 shards on two processes       {min(halves):7.2f} s   {min(serial) / min(halves):.2f}x"
+    )
     print("joined shards equal the one-shard sweep: yes")
 
 
