@@ -212,7 +212,7 @@ def test_run_ups_without_phi0_cannot_take_a_load_curve(data_dir, tmp_path, capsy
 # ------------------------------------------------------------------ a small joint fit, whole
 
 TINY = FitSettings(seed=5, scan=16, zoom=4, zoom_centres=2, members=4, pilot_members=8,
-                   band_members=8, local_nfev=4, bootstrap=40, cores=2)  # fmt: skip
+                   band_members=8, local_nfev=4, bootstrap=40, cores=2, joint_zoom=8)  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -223,7 +223,7 @@ def tiny_fit(data_dir):
 
 
 @pytest.mark.xdist_group("tiny_joint_fit")  # one worker fits, not both
-@pytest.mark.cost(18)  # the tiny joint fit
+@pytest.mark.cost(10)  # the tiny joint fit
 def test_the_fit_file_holds_the_load_curves_and_the_identifiability_table(tiny_fit, tmp_path):
     from bouncedisk.io.netcdf import write_dataset
 
@@ -234,6 +234,7 @@ def test_the_fit_file_holds_the_load_curves_and_the_identifiability_table(tiny_f
     n = back.sizes["reading"]
     assert n == 6 and back.attrs["n_load_readings"] == 6
     assert back.attrs["n_statistics"] == 11 + 6  # the run-up's statistics and the readings
+    assert back.attrs["joint_zoom_points"] == 8  # TINY's joint zoom, recorded
     assert list(back["data_set"].values) == ["run-ups", "load curve", "both"]
     assert back["interval_low"].shape == (3, 4)
     np.testing.assert_array_less(back["load_speed_fitted_low"].values,

@@ -68,6 +68,7 @@ class FitSettings:
     zoom: int = 16  # scan points around each of the best zoom_centres (search module)
     zoom_centres: int = 6
     local_nfev: int = 12
+    joint_zoom: int = SearchSettings.joint_zoom  # points around each joint candidate (search)
     e_sigma: float = MODEL_E_SIGMA  # restitution noise of the members (MODEL.md), stated
     cores: int = 1
     profile: tuple[str, ...] | None = None  # coordinates to profile (None: all)
@@ -97,6 +98,7 @@ class FitSettings:
             seed=self.seed, scan=self.scan, zoom=self.zoom, zoom_centres=self.zoom_centres,
             global_members=self.global_members, members=self.members,
             pilot_members=self.pilot_members, local_nfev=self.local_nfev,
+            joint_zoom=self.joint_zoom,
         )  # fmt: skip
 
 

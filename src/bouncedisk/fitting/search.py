@@ -64,6 +64,7 @@ class SearchSettings:
     zoom_centres: int = 6
     candidates: int = 24
     starts: int = 4
+    joint_zoom: int = 48  # points around each joint candidate (:func:`joint_zoom`)
 
     def __post_init__(self) -> None:
         for name, (low, high) in SIZE_LIMITS.items():
@@ -429,7 +430,7 @@ def _best_of(pairs: list[tuple[np.ndarray, float]]) -> tuple[np.ndarray, float]:
 #: The joint zoom (:func:`joint_zoom`): centres, points around each, and the patch's half-width
 #: as a fraction of the range of ``e`` and of ``omega_s``.
 JOINT_ZOOM_CENTRES = 4
-JOINT_ZOOM_POINTS = 48
+JOINT_ZOOM_POINTS = SearchSettings.joint_zoom  # the default; ``SearchSettings.joint_zoom`` sets it
 JOINT_ZOOM_HALF = 0.04
 
 
@@ -440,13 +441,14 @@ def joint_zoom(obj: Objective, ranked: list[np.ndarray], s: SearchSettings) -> l
     shipped motor a change of 0.04 in ``omega_s`` at fixed ``(e, ψ, R_φ)`` raises the load part's
     ``χ²`` by hundreds), so a candidate of the scan lies beside it, not in it. Around each of the
     best :data:`JOINT_ZOOM_CENTRES` candidates distinct in ``(e, omega_s)``, a Sobol patch of
-    :data:`JOINT_ZOOM_POINTS` points ``± JOINT_ZOOM_HALF`` of the range keeps the centre's
+    ``s.joint_zoom`` points (:data:`JOINT_ZOOM_POINTS` by default) ``± JOINT_ZOOM_HALF`` of the
+    range keeps the centre's
     ``(ψ, R_φ)`` with ``R_φ`` load-matched (:func:`load_matched`); the local search refines the
     best of them. Cheap because a load curve costs about one run
     (:mod:`bouncedisk.engine.loads`).
     """
     ax = [obj.names.index("e"), obj.names.index("omega_s")]
-    patch = (2.0 * _sobol(JOINT_ZOOM_POINTS, s.seed + 2) - 1.0) * JOINT_ZOOM_HALF
+    patch = (2.0 * _sobol(s.joint_zoom, s.seed + 2) - 1.0) * JOINT_ZOOM_HALF
     pts = []
     for c in _distinct_axial(obj, ranked, JOINT_ZOOM_CENTRES):
         for d in patch:

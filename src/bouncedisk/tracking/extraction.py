@@ -73,6 +73,7 @@ PARAM_ATTRS = {
     "n_bootstrap",
     "scan_points",
     "zoom_points",
+    "joint_zoom_points",
     "tail",
     "shard",
     "n_shards",
