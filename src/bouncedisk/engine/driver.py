@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import kernel as K
-from .layout import OK_STATUSES, STATUS_TEXT  # noqa: F401  (re-exported: records, loads)
+from .layout import OK_STATUSES, STATUS_TEXT
 
 
 @dataclass(frozen=True)

@@ -36,7 +36,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import least_squares
-from scipy.stats import chi2 as chi2_dist
 from scipy.stats import qmc
 
 from .basins import rank_key
@@ -276,8 +275,8 @@ def joint_missed(obj: Objective, scores: list[float]) -> bool:
     """Whether no joint candidate reproduces both data sets on the scan's ensemble size.
 
     A cheap candidate is one model realization against the data's, so it is consistent with the
-    data when its ``χ²`` is below twice the 95 % point of ``χ²(n)`` (as for the scan's points,
-    :func:`.uncertainty.scan_acceptable`). Above that for every candidate, the search has not
+    data when its ``χ²`` is below twice the 95 % point of ``χ²(n)``
+    (:func:`.uncertainty.realization_limit`, as for the scan's points). Above that for every candidate, the search has not
     reached the joint valley.
 
     Parameters
@@ -293,7 +292,9 @@ def joint_missed(obj: Objective, scores: list[float]) -> bool:
     bool
         ``True`` when every score exceeds the limit.
     """
-    return min(scores) > 2.0 * float(chi2_dist.ppf(0.95, obj.n_stats))
+    from .uncertainty import realization_limit
+
+    return min(scores) > realization_limit(obj.n_stats)
 
 
 #: The joint refinement (:func:`joint_refine`): run-up candidates refined, independent chains
@@ -412,14 +413,22 @@ def _patches(
     all centres' points evaluated together (threads). One list of ``(x, χ²)`` per centre."""
     batch = []
     for c, seed in zip(centres, seeds, strict=True):
-        for d in (2.0 * _sobol(n, seed, len(dims)) - 1.0) * half:
-            x = c.copy()
-            x[dims] = np.clip(c[dims] + d * obj.span[dims], obj.lo[dims], obj.hi[dims])
-            batch.append(snap(x))
+        batch += _around(obj, c, dims, (2.0 * _sobol(n, seed, len(dims)) - 1.0) * half)
     batch = obj.map(lambda x: load_matched(obj, x), batch)
     chis = obj.map(lambda x: obj.chi2(x, s.global_members), batch)
     pairs = list(zip(batch, chis, strict=True))
     return [pairs[i * n : (i + 1) * n] for i in range(len(centres))]
+
+
+def _around(obj: Objective, c: np.ndarray, dims: list[int], offsets: np.ndarray) -> list:
+    """``c`` moved by each row of ``offsets`` times the ranges in coordinates ``dims``, clipped
+    to the search box and snapped (:func:`.objective.snap`): one patch of points."""
+    pts = []
+    for d in offsets:
+        x = c.copy()
+        x[dims] = np.clip(c[dims] + d * obj.span[dims], obj.lo[dims], obj.hi[dims])
+        pts.append(snap(x))
+    return pts
 
 
 def _best_of(pairs: list[tuple[np.ndarray, float]]) -> tuple[np.ndarray, float]:
@@ -449,12 +458,11 @@ def joint_zoom(obj: Objective, ranked: list[np.ndarray], s: SearchSettings) -> l
     """
     ax = [obj.names.index("e"), obj.names.index("omega_s")]
     patch = (2.0 * _sobol(s.joint_zoom, s.seed + 2) - 1.0) * JOINT_ZOOM_HALF
-    pts = []
-    for c in _distinct_axial(obj, ranked, JOINT_ZOOM_CENTRES):
-        for d in patch:
-            x = c.copy()
-            x[ax] = np.clip(c[ax] + d * obj.span[ax], obj.lo[ax], obj.hi[ax])
-            pts.append(snap(x))
+    pts = [
+        x
+        for c in _distinct_axial(obj, ranked, JOINT_ZOOM_CENTRES)
+        for x in _around(obj, c, ax, patch)
+    ]
     return obj.map(lambda x: load_matched(obj, x), pts)
 
 

@@ -259,6 +259,16 @@ def birge(chi2_min: float, n_stats: int, n_params: int) -> float:
     return THRESHOLD * max(1.0, chi2_min / dof)
 
 
+def realization_limit(n: int) -> float:
+    """``χ²`` below which one model realization is consistent with the data on ``n`` statistics.
+
+    A cheap evaluation compares one realization with another (the data's): twice the variance,
+    so the limit is twice the 95 % point of ``χ²(n)``. Used for the scan's points
+    (:func:`scan_acceptable`) and the joint candidates (:func:`.search.joint_missed`).
+    """
+    return 2.0 * float(chi2_dist.ppf(0.95, n))
+
+
 def scan_acceptable(obj: Objective, members: int) -> np.ndarray:
     """Scan points that reproduce the data's statistics within the data's own scales.
 
@@ -273,10 +283,7 @@ def scan_acceptable(obj: Objective, members: int) -> np.ndarray:
         return np.empty((0, len(obj.names)))
     chis = np.array([ev.chi2 for ev in evs])
     thr = birge(float(chis.min()), len(obj.target), len(obj.names))
-    # a cheap point is one realization compared with another: twice the variance, so it is
-    # consistent with the data when its chi2 is below twice the 95 % point of chi2(n_stats)
-    consistent = 2.0 * float(chi2_dist.ppf(0.95, len(obj.target)))
-    limit = max(chis.min() + thr, consistent)
+    limit = max(chis.min() + thr, realization_limit(len(obj.target)))
     return np.array([ev.x for ev, c in zip(evs, chis, strict=True) if c <= limit])
 
 
