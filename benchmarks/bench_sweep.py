@@ -8,6 +8,8 @@ the pipeline's ``sweep_shard`` jobs). Measured here on the regime map's base sce
 (``workflow/config/scenes/regime_map.yaml``) over a small ``(e, omega_s)`` grid:
 
 - the whole grid in one shard (one core);
+- the whole grid in one shard on two threads (``run_sweep(..., cores=2)``: each thread takes the
+  next point as it finishes one, so unequal points balance themselves);
 - ``--shards`` shards (default 4, as the pipeline's regime map) handed to two threads of this
   process (the kernel and the members' reduction release the GIL);
 - the same shards handed to two processes (as the pipeline's shard jobs run on ``--cores 2``;
@@ -43,10 +45,10 @@ def _axes(n_e: int, n_omega: int) -> list[tuple[str, np.ndarray]]:
     return [("e", np.linspace(0.05, 0.95, n_e)), ("omega_s", np.linspace(1.05, 4.0, n_omega))]
 
 
-def _shard(args: tuple[int, int, int, int]):
+def _shard(args: tuple[int, int, int, int], cores: int = 1):
     """One shard of the benchmark's sweep (a picklable task for the process pool)."""
     shard, n_shards, n_e, n_omega = args
-    return run_sweep(load_scene(SCENE), _axes(n_e, n_omega), shard, n_shards, tail=10)
+    return run_sweep(load_scene(SCENE), _axes(n_e, n_omega), shard, n_shards, tail=10, cores=cores)
 
 
 def _timed(run) -> tuple[float, object]:
@@ -72,10 +74,11 @@ def main() -> None:
     one = (0, 1, args.e, args.omega)
     two = [(i, 2, args.e, args.omega) for i in range(2)]
     many = [(i, args.shards, args.e, args.omega) for i in range(args.shards)]
-    serial, threads, procs, halves = [], [], [], []
+    serial, threads, procs, halves, pointwise = [], [], [], [], []
     ctx = multiprocessing.get_context("fork")
     for _ in range(args.repeat):
         t1, whole = _timed(lambda: _shard(one))
+        t5, whole2 = _timed(lambda: _shard(one, cores=2))
         with ThreadPoolExecutor(2) as pool:
             t2, parts = _timed(lambda pool=pool: list(pool.map(_shard, many)))
         with ProcessPoolExecutor(2, mp_context=ctx) as pool:
@@ -85,15 +88,22 @@ def main() -> None:
         for joined in (parts, parts_p, halves_p):
             if not _same(whole, combine_shards(joined)):
                 raise SystemExit("the joined shards differ from the one-shard sweep")
+        if not _same(whole, whole2):
+            raise SystemExit("the sweep on two threads differs from the one on one")
         serial.append(t1)
         threads.append(t2)
         procs.append(t3)
         halves.append(t4)
+        pointwise.append(t5)
     points = args.e * args.omega
     print(f"machine: {platform.machine()}  python {platform.python_version()}")
     print(f"regime-map sweep, {points} points (6 members each), best of {args.repeat}")
     n = args.shards
     print(f"one shard, one core             {min(serial):7.2f} s")
+    print(
+        f"one shard, points on two threads {min(pointwise):6.2f} s   "
+        f"{min(serial) / min(pointwise):.2f}x"
+    )
     print(
         f"{n} shards on two threads        {min(threads):7.2f} s   {min(serial) / min(threads):.2f}x"
     )
@@ -101,7 +111,7 @@ def main() -> None:
     print(
         f"2 shards on two processes       {min(halves):7.2f} s   {min(serial) / min(halves):.2f}x"
     )
-    print("joined shards equal the one-shard sweep: yes")
+    print("joined shards and the two-thread sweep equal the one-shard sweep: yes")
 
 
 if __name__ == "__main__":

@@ -44,10 +44,16 @@ def test_shards_join_to_the_unsharded_sweep(tmp_path):
     scene = scene_from_mapping(BASE)
     axes = [("e", np.linspace(0.1, 0.7, 5)), ("omega_s", np.array([1.5, 2.5]))]
     whole = run_sweep(scene, axes, tail=20)
-    parts = [run_sweep(scene, axes, shard=i, n_shards=3, tail=20) for i in range(3)]
+    # the shards' points on 1, 2 and 3 threads: the numbers do not depend on how many run at once
+    parts = [run_sweep(scene, axes, shard=i, n_shards=3, tail=20, cores=i + 1) for i in range(3)]
     joined = combine_shards(parts)
-    for name in ("phase", "v_rel", "regime", "lyapunov"):
+    for name in ("phase", "v_rel", "regime", "lyapunov", "mean_omega_ci_low", "n_events"):
         np.testing.assert_array_equal(joined[name].values, whole[name].values)
+    steps = []
+    threaded = run_sweep(scene, axes, tail=20, cores=2, progress=lambda d, n: steps.append((d, n)))
+    assert steps == [(k, 10) for k in range(1, 11)]  # in grid order, every point once
+    for name in whole.data_vars:
+        np.testing.assert_array_equal(threaded[name].values, whole[name].values, err_msg=name)
     for i, p in enumerate(parts):
         p.to_netcdf(tmp_path / f"shard-{i}.nc")
     with xr.open_mfdataset(str(tmp_path / "shard-*.nc"), combine="by_coords") as mf:

@@ -16,6 +16,12 @@ with log_to(snakemake.log[0]) as log:
             log.info("%d / %d grid points", done, total)
 
     ds = run_sweep(
-        scene, axes, shard=shard, n_shards=spec["shards"], tail=spec["tail"], progress=progress
+        scene,
+        axes,
+        shard=shard,
+        n_shards=spec["shards"],
+        tail=spec["tail"],
+        progress=progress,
+        cores=snakemake.threads,
     )
     write_dataset(ds, snakemake.output[0])

@@ -16,6 +16,7 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import xarray as xr
@@ -71,7 +72,8 @@ class PointResult:
 
 
 def run_point(scene: Scene, init: InitialState | None = None) -> PointResult:
-    """Run a scene's ensemble at one grid point (members in turn; shards give parallelism)."""
+    """Run a scene's ensemble at one grid point, members in turn (:func:`run_sweep` runs points
+    side by side, and shards split a sweep over jobs)."""
     t_from, t_end = ensemble_window(scene)
     cfg = engine_config(scene)
     init = init or scene.initial
@@ -196,12 +198,16 @@ def run_sweep(
     n_shards: int = 1,
     tail: int = 200,
     progress: Callable[[int, int], None] | None = None,
+    cores: int = 1,
 ) -> xr.Dataset:
     """Run one shard of a sweep over the grid ``axes`` (name, values) pairs.
 
     Returns a Dataset with the swept parameters as dimensions (the first one restricted to this
     shard's block) and per point the ensemble means of :data:`SWEPT` with their 95 % intervals
     (``<name>_ci_low``, ``<name>_ci_high``), the regime, and member 0's last ``tail`` events.
+    The points run on ``cores`` threads (the kernel releases the GIL), each handed the next point
+    as it finishes one, so points of unequal cost balance themselves; a point's numbers do not
+    depend on ``cores``. ``progress(done, total)`` is called in grid order.
     """
     names = [a for a, _ in axes]
     for name in names:
@@ -214,11 +220,21 @@ def run_sweep(
     grid = _Grid(shape, tail)
     total = int(np.prod(shape))
     start = time.perf_counter()
-    for count, idx in enumerate(np.ndindex(*shape)):
+    indices = list(np.ndindex(*shape))
+
+    def one(idx: tuple[int, ...]) -> PointResult:
         point = {names[d]: float(values[d][i]) for d, i in enumerate(idx)}
-        grid.put(idx, run_point(with_params(scene, **point)))
-        if progress:
-            progress(count + 1, total)
+        return run_point(with_params(scene, **point))
+
+    pool = ThreadPoolExecutor(max_workers=max(1, cores))
+    try:
+        # map keeps grid order, whatever order the threads finish in
+        for count, (idx, result) in enumerate(zip(indices, pool.map(one, indices), strict=True)):
+            grid.put(idx, result)
+            if progress:
+                progress(count + 1, total)
+    finally:  # an error or Ctrl-C: the points not started are dropped, not run
+        pool.shutdown(wait=True, cancel_futures=True)
     coords = {
         n: (n, v, {"units": "rad" if n == "psi" else "1", "long_name": n})
         for n, v in zip(names, values, strict=True)
