@@ -13,7 +13,7 @@ with log_to(snakemake.log[0]) as log:
         bootstrap=snakemake.params.bootstrap,
         **({} if snakemake.params.e_sigma is None else {"e_sigma": snakemake.params.e_sigma}),
         **snakemake.params.search,  # scan, zoom: the fit's defaults unless the config sets them
-        cores=snakemake.threads,
+        cores=max(snakemake.threads, snakemake.params.threads),
     )
     # the load curve and its sidecar when the config names one (a joint fit), else none
     loads = [read_load_curve(p) for p in snakemake.input.load if p.endswith(".csv")]
