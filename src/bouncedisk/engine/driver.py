@@ -224,6 +224,67 @@ class ChunkView:
     t_now: float
 
 
+def _kernel_calls(
+    cfg: EngineConfig,
+    init: InitialState,
+    event_buffers: Callable[[], tuple[tuple[np.ndarray, ...], np.ndarray]],
+    chunk_samples: int,
+) -> Iterator[tuple[int, np.ndarray, np.ndarray, int, float]]:
+    """Call the kernel until the run ends, each call writing its events to ``event_buffers()``.
+
+    ``event_buffers()`` gives the event columns (``EV_COLS`` arrays, indices ``EV_*``) and the
+    kinds of one call, all of one length (:func:`~.kernel.run_chunk`); it is called again before
+    every call, so the buffers of the last call may be reallocated then. Yields
+    ``(events, traj, strobe, n_events_total, t_now)`` after each call that wrote anything: the
+    number of event rows written and views of the sample rows. The generator's return value is
+    ``(status_code, final_state)``.
+    """
+    prm, flg = _pack(cfg)
+    st, ist = initial_state(cfg, init)
+    traj = np.empty((chunk_samples if cfg.traj_dt > 0 else 0, K.TRAJ_COLS))
+    strobe = np.empty((chunk_samples if cfg.stroboscopic else 0, K.STROBE_COLS))
+    # status, rows written, rows still needed (kernel's O_* slots)
+    info = np.zeros(K.N_OUT, dtype=np.int64)
+    w = cfg.omega_s
+    while True:
+        K.run_chunk(prm, flg, st, ist, *event_buffers(), traj, strobe, info)
+        status, n_ev = int(info[K.O_STATUS]), int(info[K.O_EVENTS])
+        n_tr, n_sb = int(info[K.O_TRAJ]), int(info[K.O_STROBE])
+        if status in (K.ST_NEED_TRAJ, K.ST_NEED_STROBE):
+            # the buffers are full: stream them out; the next call resumes the same segment
+            n_tr, n_sb = int(info[K.O_TRAJ_PARTIAL]), int(info[K.O_STROBE_PARTIAL])
+        t_now = (ist[K.I_PERIOD] * K.TWO_PI + st[K.S_PHASE]) / w
+        if n_ev or n_tr or n_sb:
+            yield n_ev, traj[:n_tr], strobe[:n_sb], int(ist[K.I_EVENTS]), t_now
+        if status in (K.ST_CHUNK, K.ST_NEED_TRAJ, K.ST_NEED_STROBE):
+            continue
+        if status in (K.ST_NEED_CONTACT, K.ST_NUMERICAL):
+            raise EngineError(
+                f"{STATUS_TEXT[status]} (at t = {t_now:.9g}, after {ist[K.I_EVENTS]} events)",
+                status,
+            )
+        return status, _final_state(cfg, st, ist, flg, t_now)
+
+
+def _final_state(
+    cfg: EngineConfig, st: np.ndarray, ist: np.ndarray, flg: np.ndarray, t_now: float
+) -> dict:
+    """The state at the end of a run (:func:`iterate`'s ``final_state``)."""
+    final = {
+        "t": t_now,
+        "u": float(st[K.S_U]),
+        "v": float(st[K.S_V]),
+        "omega": float(st[K.S_OMEGA]),
+        # the kernel marks a finished run MODE_DONE and keeps the mode it ended in
+        "in_contact": float(ist[K.I_LASTMODE] == K.MODE_CONTACT),
+        "omega_integral": float(st[K.S_OMEGA_INTEGRAL]),
+        "phase": float(st[K.S_PHASE]),  # the stator phase, exact (t is rounded)
+    }
+    if flg[K.F_STATS]:
+        final["audit"] = _audit_terms(cfg, st, ist, bool(final["in_contact"]))
+    return final
+
+
 def iterate_views(
     cfg: EngineConfig,
     init: InitialState | None = None,
@@ -232,48 +293,16 @@ def iterate_views(
 ) -> Iterator[ChunkView]:
     """:func:`iterate` without copies: one :class:`ChunkView` per kernel call, valid until the
     next. The generator's return value is ``(status_code, final_state)``."""
-    init = init or InitialState()
-    prm, flg = _pack(cfg)
-    st, ist = initial_state(cfg, init)
-    ev = np.empty((chunk_events, K.EV_COLS))
-    evk = np.empty(chunk_events, dtype=np.int8)
-    traj = np.empty((chunk_samples if cfg.traj_dt > 0 else 0, K.TRAJ_COLS))
-    strobe = np.empty((chunk_samples if cfg.stroboscopic else 0, K.STROBE_COLS))
-    # status, rows written, rows still needed (kernel's O_* slots)
-    info = np.zeros(K.N_OUT, dtype=np.int64)
-    w = cfg.omega_s
+    # the kernel's event columns are the rows of one block; a view shows them as columns
+    block = np.empty((K.EV_COLS, chunk_events))
+    buffers = (tuple(block), np.empty(chunk_events, dtype=np.int8))
+    calls = _kernel_calls(cfg, init or InitialState(), lambda: buffers, chunk_samples)
     while True:
-        K.run_chunk(prm, flg, st, ist, ev, evk, traj, strobe, info)
-        status, n_ev = int(info[K.O_STATUS]), int(info[K.O_EVENTS])
-        n_tr, n_sb = int(info[K.O_TRAJ]), int(info[K.O_STROBE])
-        if status in (K.ST_NEED_TRAJ, K.ST_NEED_STROBE):
-            # the buffers are full: stream them out; the next call resumes the same segment
-            n_tr, n_sb = int(info[K.O_TRAJ_PARTIAL]), int(info[K.O_STROBE_PARTIAL])
-        t_now = (ist[K.I_PERIOD] * K.TWO_PI + st[K.S_PHASE]) / w
-        if n_ev or n_tr or n_sb:
-            yield ChunkView(
-                ev[:n_ev], evk[:n_ev], traj[:n_tr], strobe[:n_sb], int(ist[K.I_EVENTS]), t_now
-            )
-        if status in (K.ST_CHUNK, K.ST_NEED_TRAJ, K.ST_NEED_STROBE):
-            continue
-        if status in (K.ST_NEED_CONTACT, K.ST_NUMERICAL):
-            raise EngineError(
-                f"{STATUS_TEXT[status]} (at t = {t_now:.9g}, after {ist[K.I_EVENTS]} events)",
-                status,
-            )
-        final = {
-            "t": t_now,
-            "u": float(st[K.S_U]),
-            "v": float(st[K.S_V]),
-            "omega": float(st[K.S_OMEGA]),
-            # the kernel marks a finished run MODE_DONE and keeps the mode it ended in
-            "in_contact": float(ist[K.I_LASTMODE] == K.MODE_CONTACT),
-            "omega_integral": float(st[K.S_OMEGA_INTEGRAL]),
-            "phase": float(st[K.S_PHASE]),  # the stator phase, exact (t is rounded)
-        }
-        if flg[K.F_STATS]:
-            final["audit"] = _audit_terms(cfg, st, ist, bool(final["in_contact"]))
-        return status, final
+        try:
+            n_ev, traj, strobe, total, t_now = next(calls)
+        except StopIteration as stop:
+            return stop.value
+        yield ChunkView(block[:, :n_ev].T, buffers[1][:n_ev], traj, strobe, total, t_now)
 
 
 def iterate(
@@ -355,7 +384,8 @@ def audit_balances(terms: dict) -> tuple[float, float]:
     return ax, tor
 
 
-#: Kernel buffer of :func:`simulate_arrays`, in events and samples (fits a core's cache).
+#: Events and samples of one kernel call of :func:`simulate_arrays` (the sample buffers fit a
+#: core's cache).
 _COLLECT_CHUNK = 1 << 14
 #: Largest event count :func:`simulate_arrays` allocates at once for a run that stops on events.
 _COLLECT_PREALLOCATE = 1 << 22
@@ -363,23 +393,47 @@ _COLLECT_PREALLOCATE = 1 << 22
 
 class _Filling:
     """An array filled block by block, its capacity doubled in place (``ndarray.resize``:
-    ``realloc``, no copy for a large block) and trimmed at the end: each value is copied once."""
+    ``realloc``, no copy for a large block) and trimmed at the end: each value is written once,
+    by :meth:`add` or in place into a :meth:`window`."""
 
     def __init__(self, cap: int, cols: int | None, dtype=float):
         self.a = np.empty((max(cap, 1),) if cols is None else (max(cap, 1), cols), dtype=dtype)
         self.n = 0
 
-    def add(self, block: np.ndarray) -> None:
-        m = len(block)
+    def _reserve(self, m: int) -> None:
         if self.n + m > len(self.a):
             cap = max(2 * len(self.a), self.n + m)
-            self.a.resize((cap, *self.a.shape[1:]), refcheck=False)  # no view exists yet
+            # no view is in use: a window is valid only until the next window or add
+            self.a.resize((cap, *self.a.shape[1:]), refcheck=False)
+
+    def add(self, block: np.ndarray) -> None:
+        m = len(block)
+        self._reserve(m)
         self.a[self.n : self.n + m] = block
+        self.n += m
+
+    def window(self, m: int) -> np.ndarray:
+        """The next ``m`` rows, to be written in place; :meth:`take` counts those written."""
+        self._reserve(m)
+        return self.a[self.n : self.n + m]
+
+    def take(self, m: int) -> None:
         self.n += m
 
     def done(self) -> np.ndarray:
         self.a.resize((self.n, *self.a.shape[1:]), refcheck=False)
         return self.a
+
+
+#: The event columns of :attr:`RunResult.events` (``kind`` apart), by name.
+_EVENT_COLUMNS = {
+    "t": K.EV_T,
+    "phase": K.EV_PHASE,
+    "v_rel": K.EV_V_REL,
+    "omega_after": K.EV_OMEGA_AFTER,
+    "u": K.EV_U,
+    "omega_before": K.EV_OMEGA_BEFORE,
+}
 
 
 def simulate_arrays(
@@ -389,8 +443,9 @@ def simulate_arrays(
 ) -> RunResult:
     """Run to the end and collect events and samples in memory.
 
-    Each value is copied once, from the kernel's buffer into its output array (the arrays of
-    :func:`iterate`'s chunks, concatenated, are the same values).
+    The kernel writes the events straight into their output arrays, and each sample is copied
+    once, from the kernel's buffer into its output array (the arrays of :func:`iterate`'s
+    chunks, concatenated, are the same values).
 
     Raises
     ------
@@ -402,25 +457,28 @@ def simulate_arrays(
     stops_on_events = math.isinf(cfg.t_end)
     cap = cfg.max_events if stops_on_events else 1 << 16
     cap = min(cap, _COLLECT_PREALLOCATE)
-    names = ("t", "phase", "v_rel", "omega_after", "u", "omega_before")
-    cols = (K.EV_T, K.EV_PHASE, K.EV_V_REL, K.EV_OMEGA_AFTER, K.EV_U, K.EV_OMEGA_BEFORE)
-    out = [_Filling(cap, None) for _ in names]
+    out = [_Filling(cap, None) for _ in range(K.EV_COLS)]  # by column index EV_*
     kind = _Filling(cap, None, np.int8)
     traj = _Filling(1 << 12 if cfg.traj_dt > 0 else 0, K.TRAJ_COLS)
     strobe = _Filling(1 << 12 if cfg.stroboscopic else 0, K.STROBE_COLS)
-    raw = iterate_views(cfg, init, _COLLECT_CHUNK, _COLLECT_CHUNK)
+
+    def event_buffers() -> tuple[tuple[np.ndarray, ...], np.ndarray]:
+        # the next rows of the outputs; no more than the run's remaining events
+        m = min(_COLLECT_CHUNK, cfg.max_events - kind.n)
+        return tuple(f.window(m) for f in out), kind.window(m)
+
+    calls = _kernel_calls(cfg, init or InitialState(), event_buffers, _COLLECT_CHUNK)
     while True:
         try:
-            c = next(raw)
+            n_ev, c_traj, c_strobe, _total, _t_now = next(calls)
         except StopIteration as stop:
             status, final = stop.value
             break
-        for f, j in zip(out, cols, strict=True):
-            f.add(c.ev[:, j])
-        kind.add(c.evk)
-        traj.add(c.traj)
-        strobe.add(c.strobe)
-    events = {name: f.done() for name, f in zip(names, out, strict=True)}
+        for f in (*out, kind):
+            f.take(n_ev)
+        traj.add(c_traj)
+        strobe.add(c_strobe)
+    events = {name: out[j].done() for name, j in _EVENT_COLUMNS.items()}
     events["kind"] = kind.done()
     return RunResult(events, traj.done(), strobe.done(), STATUS_TEXT[status], status, final)
 

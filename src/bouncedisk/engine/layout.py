@@ -86,6 +86,8 @@ O_TRAJ_PARTIAL, O_STROBE_PARTIAL = 5, 6  # ST_NEED_*: rows written, with the seg
 N_OUT = 7
 ST_CONTINUE = -1  # a mode function's return value when the event loop goes on
 # --- columns of the output buffers ------------------------------------------------------------
+# the event buffer is a tuple of EV_COLS column arrays (kernel.run_chunk), indexed by EV_*; a
+# ChunkView's ``ev`` shows them as rows (n, EV_COLS) with these columns
 EV_T, EV_PHASE, EV_V_REL, EV_OMEGA_AFTER, EV_U, EV_OMEGA_BEFORE = range(6)
 EV_COLS = 6
 TR_T, TR_U, TR_V, TR_U_STATOR, TR_OMEGA = range(5)

@@ -87,8 +87,9 @@ def run_loads(prm, flg, st, ist, ev, evk, traj, strobe, info):
         Effect flags (shared; no trajectory or stroboscopic samples).
     st, ist : ndarray, shape (L, N_ST), (L, N_IST)
         Each load's float and integer state, from the same initial state.
-    ev, evk, traj, strobe : ndarray
-        Scratch buffers of the kernel's layouts (at least one event row).
+    ev, evk, traj, strobe : tuple of ndarray, ndarray
+        Scratch buffers of the kernel's layouts (:func:`~.kernel.run_chunk`; at least one event
+        row).
     info : ndarray, shape (L, N_OUT)
         Scratch output counters.
 
@@ -190,7 +191,7 @@ def omega_integrals(
     st = np.array([s for s, _ in states])
     ist = np.array([i for _, i in states])
     rows = len(loads)
-    ev = np.empty((1, K.EV_COLS))
+    ev = tuple(np.empty((K.EV_COLS, 1)))  # the kernel's event columns, one row
     evk = np.empty(1, dtype=np.int8)
     traj = np.empty((0, K.TRAJ_COLS))
     strobe = np.empty((0, K.STROBE_COLS))
