@@ -9,7 +9,7 @@ the pipeline's ``sweep_shard`` jobs). Measured here on the regime map's base sce
 
 - the whole grid in one shard (one core);
 - the whole grid in one shard on two threads (``run_sweep(..., cores=2)``: each thread takes the
-  next point as it finishes one, so unequal points balance themselves);
+  next member of the next point as it finishes one, so unequal points balance themselves);
 - ``--shards`` shards (default 4, as the pipeline's regime map) handed to two threads of this
   process (the kernel and the members' reduction release the GIL);
 - the same shards handed to two processes (as the pipeline's shard jobs run on ``--cores 2``;

@@ -21,7 +21,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 import xarray as xr
 
-from ..engine import InitialState
+from ..engine import EngineConfig, InitialState
 from ..io.provenance import base_attrs, new_run_id
 from ..model import stator
 from ..model.engine_config import engine_config
@@ -71,19 +71,28 @@ class PointResult:
     final: dict[str, float]
 
 
-def run_point(scene: Scene, init: InitialState | None = None) -> PointResult:
-    """Run a scene's ensemble at one grid point, members in turn (:func:`run_sweep` runs points
-    side by side, and shards split a sweep over jobs)."""
-    t_from, t_end = ensemble_window(scene)
+MemberTask = tuple[EngineConfig, InitialState, int, float]
+
+
+def _member_tasks(scene: Scene, init: InitialState | None = None) -> list[MemberTask]:
+    """The runs of a point's ensemble: :func:`run_member`'s arguments, member by member."""
+    t_from, _ = ensemble_window(scene)
     cfg = engine_config(scene)
-    init = init or scene.initial
-    members, tail, final = [], {}, {}
-    for m in range(scene.ensemble.members):
-        st, fin, tl = run_member(cfg, init, m, t_from)
-        members.append(st)
-        if m == 0:
-            tail, final = tl, fin
-    return PointResult(EnsembleStats(members, scene.stats.discard, t_end - t_from), tail, final)
+    return [(cfg, init or scene.initial, m, t_from) for m in range(scene.ensemble.members)]
+
+
+def _point_result(scene: Scene, runs: Sequence[tuple]) -> PointResult:
+    """A point's statistics from its members' runs (:func:`run_member`'s results, in order)."""
+    t_from, t_end = ensemble_window(scene)
+    stats = EnsembleStats([st for st, _, _ in runs], scene.stats.discard, t_end - t_from)
+    _, final, tail = runs[0]
+    return PointResult(stats, tail, final)
+
+
+def run_point(scene: Scene, init: InitialState | None = None) -> PointResult:
+    """Run a scene's ensemble at one grid point, members in turn (:func:`run_sweep` runs the
+    members of its points side by side, and shards split a sweep over jobs)."""
+    return _point_result(scene, [run_member(*task) for task in _member_tasks(scene, init)])
 
 
 class _Grid:
@@ -205,9 +214,10 @@ def run_sweep(
     Returns a Dataset with the swept parameters as dimensions (the first one restricted to this
     shard's block) and per point the ensemble means of :data:`SWEPT` with their 95 % intervals
     (``<name>_ci_low``, ``<name>_ci_high``), the regime, and member 0's last ``tail`` events.
-    The points run on ``cores`` threads (the kernel releases the GIL), each handed the next point
-    as it finishes one, so points of unequal cost balance themselves; a point's numbers do not
-    depend on ``cores``. ``progress(done, total)`` is called in grid order.
+    The members of every point run on ``cores`` threads (the kernel releases the GIL), each
+    thread taking the next member as it finishes one, so members and points of unequal cost
+    balance themselves; a point's numbers do not depend on ``cores``. ``progress(done, total)``
+    is called in grid order.
     """
     names = [a for a, _ in axes]
     for name in names:
@@ -221,19 +231,19 @@ def run_sweep(
     total = int(np.prod(shape))
     start = time.perf_counter()
     indices = list(np.ndindex(*shape))
-
-    def one(idx: tuple[int, ...]) -> PointResult:
-        point = {names[d]: float(values[d][i]) for d, i in enumerate(idx)}
-        return run_point(with_params(scene, **point))
-
+    scenes = [with_params(scene, **{names[d]: float(values[d][i]) for d, i in enumerate(idx)})
+              for idx in indices]  # fmt: skip
+    tasks = [task for sc in scenes for task in _member_tasks(sc)]
     pool = ThreadPoolExecutor(max_workers=max(1, cores))
     try:
-        # map keeps grid order, whatever order the threads finish in
-        for count, (idx, result) in enumerate(zip(indices, pool.map(one, indices), strict=True)):
-            grid.put(idx, result)
+        # map keeps the tasks' order (point by point, member by member) whatever order the
+        # threads finish in
+        runs = pool.map(lambda task: run_member(*task), tasks)
+        for count, (idx, sc) in enumerate(zip(indices, scenes, strict=True)):
+            grid.put(idx, _point_result(sc, [next(runs) for _ in range(sc.ensemble.members)]))
             if progress:
                 progress(count + 1, total)
-    finally:  # an error or Ctrl-C: the points not started are dropped, not run
+    finally:  # an error or Ctrl-C: the members not started are dropped, not run
         pool.shutdown(wait=True, cancel_futures=True)
     coords = {
         n: (n, v, {"units": "rad" if n == "psi" else "1", "long_name": n})
