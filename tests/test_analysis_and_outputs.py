@@ -73,6 +73,29 @@ def test_shards_join_to_the_unsharded_sweep(tmp_path):
     assert float(w["mean_omega_ci_high"] - w["mean_omega_ci_low"]) == pytest.approx(0, abs=1e-6)
 
 
+def test_a_sweeps_threads_run_members_in_order_a_bounded_number_ahead(monkeypatch):
+    """Results in the tasks' order, and never more than ``ahead`` tasks submitted and not taken:
+    a sweep's memory does not grow with its grid."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from bouncedisk.analysis import sweeps
+
+    pulled = []
+    monkeypatch.setattr(sweeps, "run_member", lambda cfg, init, member, t_from: member)
+
+    def tasks():
+        for i in range(100):
+            pulled.append(i)
+            yield (None, None, i, 0.0)
+
+    out = []
+    with ThreadPoolExecutor(2) as pool:
+        for result in sweeps._ordered_runs(pool, tasks(), ahead=5):
+            out.append(result)
+            assert len(pulled) <= len(out) + 5
+    assert out == list(range(100))
+
+
 def test_continuation_follows_both_coexisting_attractors():
     """e in [0.19, 0.25] at omega_s = 1.5: sweeping down follows the period-1 orbit, sweeping up
     stays on the coexisting locked chattering cycles (MODEL.md "Regimes")."""

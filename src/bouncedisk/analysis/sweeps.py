@@ -15,8 +15,9 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
+from collections import deque
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 import xarray as xr
@@ -87,6 +88,21 @@ def _point_result(scene: Scene, runs: Sequence[tuple]) -> PointResult:
     stats = EnsembleStats([st for st, _, _ in runs], scene.stats.discard, t_end - t_from)
     _, final, tail = runs[0]
     return PointResult(stats, tail, final)
+
+
+def _ordered_runs(
+    pool: ThreadPoolExecutor, tasks: Iterator[MemberTask], ahead: int
+) -> Iterator[tuple]:
+    """:func:`run_member` of every task on ``pool``, the results in the tasks' order, whatever
+    order the threads finish in; at most ``ahead`` tasks are submitted and not yet taken, so the
+    memory is bounded whatever the sweep's size."""
+    pending: deque[Future] = deque()
+    for task in tasks:
+        pending.append(pool.submit(run_member, *task))
+        if len(pending) >= ahead:
+            yield pending.popleft().result()
+    while pending:
+        yield pending.popleft().result()
 
 
 def run_point(scene: Scene, init: InitialState | None = None) -> PointResult:
@@ -230,17 +246,22 @@ def run_sweep(
     grid = _Grid(shape, tail)
     total = int(np.prod(shape))
     start = time.perf_counter()
-    indices = list(np.ndindex(*shape))
-    scenes = [with_params(scene, **{names[d]: float(values[d][i]) for d, i in enumerate(idx)})
-              for idx in indices]  # fmt: skip
-    tasks = [task for sc in scenes for task in _member_tasks(sc)]
+    made: deque[tuple[tuple[int, ...], Scene]] = deque()  # points whose members are submitted
+
+    def tasks() -> Iterator[MemberTask]:
+        for idx in np.ndindex(*shape):
+            point = {names[d]: float(values[d][i]) for d, i in enumerate(idx)}
+            made.append((idx, with_params(scene, **point)))
+            yield from _member_tasks(made[-1][1])
+
+    members = scene.ensemble.members  # every point's (a sweep changes parameters only)
     pool = ThreadPoolExecutor(max_workers=max(1, cores))
     try:
-        # map keeps the tasks' order (point by point, member by member) whatever order the
-        # threads finish in
-        runs = pool.map(lambda task: run_member(*task), tasks)
-        for count, (idx, sc) in enumerate(zip(indices, scenes, strict=True)):
-            grid.put(idx, _point_result(sc, [next(runs) for _ in range(sc.ensemble.members)]))
+        runs = _ordered_runs(pool, tasks(), ahead=2 * max(1, cores) * members)
+        for count in range(total):
+            point_runs = [next(runs) for _ in range(members)]
+            idx, sc = made.popleft()
+            grid.put(idx, _point_result(sc, point_runs))
             if progress:
                 progress(count + 1, total)
     finally:  # an error or Ctrl-C: the members not started are dropped, not run
