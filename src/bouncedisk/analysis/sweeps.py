@@ -250,9 +250,9 @@ def run_sweep(
 
     def tasks() -> Iterator[MemberTask]:
         for idx in np.ndindex(*shape):
-            point = {names[d]: float(values[d][i]) for d, i in enumerate(idx)}
-            made.append((idx, with_params(scene, **point)))
-            yield from _member_tasks(made[-1][1])
+            sc = with_params(scene, **{names[d]: float(values[d][i]) for d, i in enumerate(idx)})
+            made.append((idx, sc))
+            yield from _member_tasks(sc)
 
     members = scene.ensemble.members  # every point's (a sweep changes parameters only)
     pool = ThreadPoolExecutor(max_workers=max(1, cores))
