@@ -1,4 +1,4 @@
-"""What the motor under load costs (issue "The motor under load", MODEL.md).
+"""What the motor under load costs (issue "The motor under load", docs/model.md).
 
 Run:  python benchmarks/bench_load.py [--events N] [--rounds R] [--skip-curve]
 

@@ -1,4 +1,4 @@
-"""Independent checks of a run's invariants (MODEL.md), shared by the hard-case and property tests.
+"""Independent checks of a run's invariants (docs/model.md), shared by the hard-case and property tests.
 
 They recompute everything from the event table with numpy, without the engine: each free flight
 is re-sampled densely to prove that no earlier root of the gap was skipped.

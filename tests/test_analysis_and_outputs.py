@@ -59,7 +59,7 @@ def test_shards_join_to_the_unsharded_sweep(tmp_path):
     with xr.open_mfdataset(str(tmp_path / "shard-*.nc"), combine="by_coords") as mf:
         np.testing.assert_array_equal(mf["regime"].values, whole["regime"].values)
 
-    # MODEL.md's regimes show up at omega_s = 1.5: a locked chattering cycle at e = 0.1 (exponent
+    # docs/model.md's regimes show up at omega_s = 1.5: a locked chattering cycle at e = 0.1 (exponent
     # -inf in every member), the period-2 orbit at e = 0.3, chaos at e = 0.6
     pts = run_sweep(scene, [("e", np.array([0.1, 0.3, 0.6])), ("omega_s", np.array([1.5]))])
     pts = pts.isel(omega_s=0)
@@ -98,7 +98,7 @@ def test_a_sweeps_threads_run_members_in_order_a_bounded_number_ahead(monkeypatc
 
 def test_continuation_follows_both_coexisting_attractors():
     """e in [0.19, 0.25] at omega_s = 1.5: sweeping down follows the period-1 orbit, sweeping up
-    stays on the coexisting locked chattering cycles (MODEL.md "Regimes")."""
+    stays on the coexisting locked chattering cycles (docs/model.md "Regimes")."""
     scene = scene_from_mapping(BASE)
     values = np.linspace(0.12, 0.3, 10)
     up = run_continuation(scene, "e", values, "up", tail=20)

@@ -1,4 +1,4 @@
-"""The engine against closed forms and classic bouncing-ball results (MODEL.md)."""
+"""The engine against closed forms and classic bouncing-ball results (docs/model.md)."""
 
 import math
 
@@ -90,7 +90,7 @@ def test_impact_map_jacobian_at_period_1_fixed_point():
 
 @pytest.mark.parametrize("n", [1, 2])
 def test_period_n_existence_threshold_within_1e_3(n):
-    """Bisect Γ on 'a run started at the orbit's phase settles on it' (MODEL.md Γ_n), with the
+    """Bisect Γ on 'a run started at the orbit's phase settles on it' (docs/model.md Γ_n), with the
     reproduction check's own bisection (bouncedisk.studies.reproduction)."""
     e = 0.3
     g_n = ob.period_n_threshold(n, e)

@@ -1,6 +1,6 @@
 """One axial trajectory carrying several loads (bouncedisk.engine.loads) equals one run per load.
 
-The invariant behind it (MODEL.md "Events", "The motor under load"): the axial motion and the
+The invariant behind it (docs/model.md "Events", "The motor under load"): the axial motion and the
 restitution noise never depend on ``Ω``, so runs that differ only in the load torque share every
 impact. ``omega_integrals`` must therefore give, bit for bit, what :func:`iterate` gives load by
 load, whatever the regime: flights only, chattering and sticking contact, stick–slip under load,

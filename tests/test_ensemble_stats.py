@@ -1,4 +1,4 @@
-"""Ensemble statistics (MODEL.md "Long-run statistics of chaotic motion"; INTERFACES.md "Statistics").
+"""Ensemble statistics (docs/model.md "Long-run statistics of chaotic motion"; docs/formats.md "Statistics").
 
 Restitution noise, members, confidence intervals, regimes and the ``bouncedisk stats`` command.
 """

@@ -90,7 +90,7 @@ def test_the_statistics_of_many_records_are_each_records_own_bit_for_bit():
 
 @pytest.mark.slow
 def test_kicks_carry_r_phi_where_the_time_constant_scatters():
-    """MODEL.md: an impact changes ``x = R_φ Ω`` by ``R_φ H``; noise-free members' increment
+    """docs/model.md: an impact changes ``x = R_φ Ω`` by ``R_φ H``; noise-free members' increment
     variance goes like ``R_φ²`` at an unchanged steady speed, and spreads by a few percent across
     the members of a chaotic ensemble while their time constants spread by tens of percent."""
     base, _ = _members(0.0027)

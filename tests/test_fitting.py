@@ -30,7 +30,7 @@ CASES = {
     # period-1 orbit (noise-free: one impact per stator period), Gamma = 1.88
     "periodic": {"e": 0.31, "r_phi": 0.0041, "psi": 0.25, "omega_s": 1.37},
     "chaotic_reinjection": {"e": 0.62, "r_phi": 0.0027, "psi": -0.35, "omega_s": 1.48},
-    # 3 % below the period-doubling of the period-1 orbit (Gamma 1.96 vs 2.02, MODEL.md); at
+    # 3 % below the period-doubling of the period-1 orbit (Gamma 1.96 vs 2.02, docs/model.md); at
     # omega_s 1.41 restitution noise already kicks 9 of 64 members off the orbit
     "near_boundary": {"e": 0.33, "r_phi": 0.0052, "psi": 0.7, "omega_s": 1.40},
 }

@@ -652,7 +652,7 @@ def test_item17_changed_since_previous_names_only_changed_inputs():
 #: "Sharing results"): its §5.1 check wants ``standard_name: time`` on the coordinate of any
 #: dimension *named* ``time`` (CF gives names no meaning; ioos/compliance-checker#1245, and the
 #: open PR #1353 removes the rule). Ours is nondimensional (units "1") or seconds from an undated
-#: start: not a CF time coordinate, which needs "UNIT since DATE" (§4.4); INTERFACES.md fixes
+#: start: not a CF time coordinate, which needs "UNIT since DATE" (§4.4); docs/formats.md fixes
 #: the name. Only exactly this message, on such a ``time``, is let through.
 SECTION_5_1 = "§5.1 Independent Latitude, Longitude, Vertical, and Time Axes"
 TIME_NAME_RULE = "Coordinate variable 'time' should have standard_name='time', found: 'None'"

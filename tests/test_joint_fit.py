@@ -77,7 +77,7 @@ def make_data(
 
 
 def test_torque_scale_is_the_closed_form():
-    """``μ m_r g_eff r_eff = R_φ m_r r_g² Φ0 / t_c²`` (MODEL.md eqs. 2, 15: g_eff cancels), the
+    """``μ m_r g_eff r_eff = R_φ m_r r_g² Φ0 / t_c²`` (docs/model.md eqs. 2, 15: g_eff cancels), the
     speed scale ``R_φ Φ0 / t_c``, ``t_c = ω_s / 2πf``."""
     theta = {"e": 0.4, "log10_r_phi": -2.3, "psi": 0.1, "omega_s": 1.9}
     t_c, speed, torque = lp.motor_scales(theta, _fake_load_data())

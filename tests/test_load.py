@@ -1,4 +1,4 @@
-"""The motor under load (MODEL.md "The motor under load"): closed forms, the energy audit,
+"""The motor under load (docs/model.md "The motor under load"): closed forms, the energy audit,
 the momentum bound, the torque–speed curve and bad input."""
 
 from __future__ import annotations
@@ -185,7 +185,7 @@ REGIMES = {
 @pytest.mark.parametrize("load", [0.0, 0.3])
 @pytest.mark.parametrize("regime", sorted(REGIMES))
 def test_energy_audit_closes_to_round_off(regime, load):
-    """MODEL.md "Power and energy audit": both balances close to ≤ 1e-9 relative over 10⁶
+    """docs/model.md "Power and energy audit": both balances close to ≤ 1e-9 relative over 10⁶
     events (flights, slips, sticks, impacts, chattering tails)."""
     res = simulate_arrays(_cfg(stats_from=0.0, load_torque=load, **REGIMES[regime]))
     assert res.ok
@@ -385,7 +385,7 @@ def test_clipped_model_takes_the_load():
     assert len(k) > 100 and np.allclose(slope, -0.3, atol=1e-9)
 
 
-# --- measured load curves (INTERFACES.md): the shipped synthetic one and bad files ------------
+# --- measured load curves (docs/formats.md): the shipped synthetic one and bad files ------------
 
 
 def test_shipped_synthetic_load_curve_is_regenerated_byte_for_byte(tmp_path):
@@ -455,7 +455,7 @@ def test_load_curve_and_run_ups_must_share_the_drive(tmp_path):
 
 
 def test_simulation_files_carry_the_energy_audit(scene_file, tmp_path):
-    """Every simulated run records its audit (per run, MODEL.md): residuals and terms."""
+    """Every simulated run records its audit (per run, docs/model.md): residuals and terms."""
     f = scene_file(
         "parameters: {e: 0.6, omega_s: 1.5, r_phi: 0.01, psi: 0.0, load_torque: 0.2}\n"
         "effects: [impacts, contact, torsion, load]\nstop: {impacts: 3000}\n"

@@ -1,6 +1,6 @@
 """bouncedisk: exact event-driven simulation of a rotor bouncing on a vibrating, twisting stator.
 
-See MODEL.md for the model; :mod:`bouncedisk.engine` for the simulator kernel. The public API is
+See docs/model.md for the model; :mod:`bouncedisk.engine` for the simulator kernel. The public API is
 importable from here, loaded on first use (``import bouncedisk`` alone imports no numba, xarray,
 matplotlib or mlflow)::
 

@@ -1,5 +1,5 @@
 # Stage 2b: ensemble statistics, bands behind single trajectories, continuation, and what
-# statistics cost (MODEL.md "Long-run statistics of chaotic motion").
+# statistics cost (docs/model.md "Long-run statistics of chaotic motion").
 
 
 rule ensemble_stats:

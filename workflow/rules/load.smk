@@ -1,4 +1,4 @@
-# Stage 2c: the motor under load (MODEL.md "The motor under load"): torque-speed curves by
+# Stage 2c: the motor under load (docs/model.md "The motor under load"): torque-speed curves by
 # continuation, both branches, with the energy audit (bouncedisk.studies.torque_speed).
 import re
 

@@ -20,7 +20,7 @@ rule compile_engine:
 
 
 rule simulate:
-    """Run one scene: results/simulations/<scene>.nc (INTERFACES.md names and provenance)."""
+    """Run one scene: results/simulations/<scene>.nc (docs/formats.md names and provenance)."""
     input:
         scene=scene_path("{scene}"),
         compiled=rules.compile_engine.output,

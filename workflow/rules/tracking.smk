@@ -1,4 +1,4 @@
-# Experiment tracking (MLflow, INTERFACES.md "Experiment tracking"): one parent run per invocation
+# Experiment tracking (MLflow, docs/formats.md "Experiment tracking"): one parent run per invocation
 # that does work, a nested run per job that ran, all logged from the main Snakemake process by the
 # Snakefile's onstart/onsuccess/onerror handlers (the jobs never import mlflow). A no-op run
 # reaches no handler and logs nothing. `--config tracking='{enabled: false}'` runs untracked.

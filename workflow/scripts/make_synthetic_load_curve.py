@@ -1,4 +1,4 @@
-"""Adapter: generate the synthetic prototype load curve from the model (INTERFACES.md format)."""
+"""Adapter: generate the synthetic prototype load curve from the model (docs/formats.md format)."""
 
 import filecmp
 

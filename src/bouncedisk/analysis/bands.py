@@ -1,7 +1,7 @@
 """Ensemble bands of the rotor speed ``Ω(t)``: the spread behind a single trajectory.
 
 A single run of a chaotic scene is one realization; the band shows where the others lie. The
-members are the scene's runs with restitution noise (MODEL.md "Long-run statistics of chaotic
+members are the scene's runs with restitution noise (docs/model.md "Long-run statistics of chaotic
 motion"), sampled on the scene's trajectory grid. Per time: the ensemble mean with its 95 %
 Student-t interval, and the central 95 % of the members. Per member: the first-order trend of
 its rise (steady speed, time constant, ripple; :func:`bouncedisk.analysis.observables.first_order_trend`).
@@ -26,7 +26,7 @@ from ..model.scene import Scene
 from ..run.runner import scene_attrs
 from . import observables as ob
 
-#: Restitution noise of the band's members when the scene has none (MODEL.md: enough to
+#: Restitution noise of the band's members when the scene has none (docs/model.md: enough to
 #: sample the natural measure, physically meaningless).
 DEFAULT_E_SIGMA = 1e-9
 

@@ -2,7 +2,7 @@
 
 Every member is one run of the engine (:func:`bouncedisk.engine.driver.iterate_views`) with its own noise
 stream ``(seed, member)`` (:mod:`bouncedisk.engine.noise`), reduced chunk by chunk to the
-long-run observables of MODEL.md "Long-run statistics of chaotic motion": the time-averaged
+long-run observables of docs/model.md "Long-run statistics of chaotic motion": the time-averaged
 rotor speed and slip, impact and chatter rates, the Lyapunov exponent between resets, and the
 regime. Memory per member is bounded (a tail of events), whatever the run's length. Members run
 on a thread pool: the compiled kernel releases the GIL, so ``cores`` threads use ``cores`` cores,
@@ -39,7 +39,7 @@ class MemberStats:
 
     ``lyapunov`` is ``-inf`` for a chattering-periodic member (its cycle passes through a reset,
     whose Jacobian is zero) and ``nan`` when too few free flights were seen. The powers are the
-    energy audit's terms over the window divided by its duration (MODEL.md "Power and energy
+    energy audit's terms over the window divided by its duration (docs/model.md "Power and energy
     audit"): the load's ``τ_L Ω̄``, the stator's torsional and axial inputs, the axial energy left
     to summed chattering tails; ``efficiency_torsion = W_L / W_t``; the residuals are the
     balances' relative residuals (:func:`bouncedisk.engine.driver.audit_balances`).

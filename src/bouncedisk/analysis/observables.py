@@ -165,7 +165,7 @@ def impact_jacobians(
         ∂v'/∂t = c ∂t'/∂t − e,                   ∂v'/∂v = c ∂t'/∂v − e.
 
     At a period-1 fixed point this gives ``det J = e²`` and
-    ``trace J = 1 + e² − (1 + e)² Γ sin φ`` (MODEL.md "Impact map Jacobian").
+    ``trace J = 1 + e² − (1 + e)² Γ sin φ`` (docs/model.md "Impact map Jacobian").
 
     Returns
     -------
@@ -210,7 +210,7 @@ def benettin(jac, idx, vec, prev, skip):
     ``jac[j]`` maps the tangent vector across the free flight from impact ``idx[j]`` to
     ``idx[j] + 1``. A pair that does not follow the previous one (``idx[j] != prev + 1``: contact
     or a complete chatter in between) starts a fresh vector: the chatter's Jacobian is zero
-    (MODEL.md "Long-run statistics"), so growth is only measured between resets.
+    (docs/model.md "Long-run statistics"), so growth is only measured between resets.
 
     Parameters
     ----------
@@ -286,7 +286,7 @@ def lyapunov_exponent(
 def mean_rotor_speed(t: np.ndarray, omega_after: np.ndarray, t_from: float = 0.0) -> float:
     """Time average of the rotor angular velocity from the events, ``Σ Ω_k Δt_k / Σ Δt_k``.
 
-    ``Ω`` is constant in flight (MODEL.md "Flight"), so this is exact for runs without contact
+    ``Ω`` is constant in flight (docs/model.md "Flight"), so this is exact for runs without contact
     and a first-order approximation of the contact segments otherwise.
     """
     sel = t[:-1] >= t_from
@@ -364,7 +364,7 @@ def first_order_trend(t: np.ndarray, omega: np.ndarray) -> FirstOrderTrend:
     )
 
 
-#: Regime codes and names (MODEL.md "Long-run statistics of chaotic motion"); ``unresolved``:
+#: Regime codes and names (docs/model.md "Long-run statistics of chaotic motion"); ``unresolved``:
 #: no period up to the search limit, no chatter and no positive exponent (run longer).
 REGIMES: dict[int, str] = {
     0: "unresolved",
@@ -413,7 +413,7 @@ def chatter_cycle(
 ) -> tuple[int, int] | None:
     """``(p, q)`` if the tail repeats one chatter-to-chatter cycle, else ``None``.
 
-    A complete chatter resets the state (MODEL.md), so a cycle that contains one repeats exactly:
+    A complete chatter resets the state (docs/model.md), so a cycle that contains one repeats exactly:
     the last three chatters must be equally spaced in events, and the events of the last two
     cycles must agree in kind, phase and relative velocity within ``tol``.
     """
@@ -488,7 +488,7 @@ def classify(
     chatters: int | None = None,
     max_period: int = 32,
 ) -> Regime:
-    """Classify the tail of a run (MODEL.md "Regimes").
+    """Classify the tail of a run (docs/model.md "Regimes").
 
     Parameters
     ----------
@@ -527,12 +527,12 @@ def classify(
 
 
 def period_n_threshold(n: int, e: float) -> float:
-    """``Γ_n = nπ(1 − e)/(1 + e)``: smallest ``Γ`` with a period-n orbit (MODEL.md)."""
+    """``Γ_n = nπ(1 − e)/(1 + e)``: smallest ``Γ`` with a period-n orbit (docs/model.md)."""
     return n * math.pi * (1.0 - e) / (1.0 + e)
 
 
 def period_doubling_threshold(n: int, e: float) -> float:
-    """``Γ = sqrt(Γ_n² + (2(1 + e²)/(1 + e)²)²)``: the period-n orbit doubles (MODEL.md)."""
+    """``Γ = sqrt(Γ_n² + (2(1 + e²)/(1 + e)²)²)``: the period-n orbit doubles (docs/model.md)."""
     g = period_n_threshold(n, e)
     return math.sqrt(g * g + (2.0 * (1.0 + e * e) / (1.0 + e) ** 2) ** 2)
 

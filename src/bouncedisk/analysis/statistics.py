@@ -1,6 +1,6 @@
-"""Ensemble statistics with confidence intervals (``bouncedisk stats``; INTERFACES.md "Statistics").
+"""Ensemble statistics with confidence intervals (``bouncedisk stats``; docs/formats.md "Statistics").
 
-A long-run number of a chaotic scene is an ensemble average (MODEL.md "Long-run statistics of
+A long-run number of a chaotic scene is an ensemble average (docs/model.md "Long-run statistics of
 chaotic motion"): every member's time average over ``[t0 + discard, t_end]`` is one sample, and
 the 95 % interval is Student's ``t`` across members, ``mean ± t_{0.975, K−1} s / sqrt(K)``.
 """
@@ -25,7 +25,7 @@ from ..run.runner import scene_attrs
 from . import observables as ob
 from .ensembles import MemberStats, run_ensemble
 
-#: Ensemble statistics: field -> (long name, units) in nondimensional units (INTERFACES.md).
+#: Ensemble statistics: field -> (long name, units) in nondimensional units (docs/formats.md).
 QUANTITIES: dict[str, tuple[str, str]] = {
     "mean_omega": ("time-averaged rotor angular velocity", "1"),
     "mean_slip": ("time-averaged slip s = r_phi * omega - omega_stator", "1"),
@@ -44,7 +44,7 @@ QUANTITIES: dict[str, tuple[str, str]] = {
 }
 #: Quantities reported only for scenes with the ``load`` effect (zero by definition without it).
 LOAD_ONLY = ("power_out", "efficiency_torsion")
-#: Largest relative residuals of the energy balances over the members (MODEL.md).
+#: Largest relative residuals of the energy balances over the members (docs/model.md).
 AUDIT = {
     "audit_residual_axial": "largest relative residual of the axial energy balance",
     "audit_residual_torsion": "largest relative residual of the torsional energy balance",
@@ -83,7 +83,7 @@ def confidence_interval(
 
 @dataclass(frozen=True)
 class EnsembleStats:
-    """An ensemble's members and their summary (INTERFACES.md fields)."""
+    """An ensemble's members and their summary (docs/formats.md fields)."""
 
     members: list[MemberStats]
     discard: float
@@ -147,7 +147,7 @@ class EnsembleStats:
 
     def _physical_powers(self) -> dict:
         """Powers in W and the motor's mechanical efficiency ``η = P_out / (P_ax + P_t)``
-        (MODEL.md "The motor under load"), each with its interval across members."""
+        (docs/model.md "The motor under load"), each with its interval across members."""
         sc = self.scales
         out: dict = {}
         watts = {}

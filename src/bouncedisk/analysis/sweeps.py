@@ -3,7 +3,7 @@
 A sweep takes a base scene and a grid of parameter values. Every grid point is the scene's
 ensemble (:mod:`bouncedisk.analysis.ensembles`), reduced to ensemble statistics with 95 % intervals
 (:mod:`bouncedisk.analysis.statistics`): a long-run number from one run of a chaotic scene is not a result
-(MODEL.md "Long-run statistics of chaotic motion"). The first swept parameter is split into
+(docs/model.md "Long-run statistics of chaotic motion"). The first swept parameter is split into
 contiguous shards, so every shard is a hypercube block and shards join with
 ``xarray.combine_by_coords`` / ``open_mfdataset``.
 
@@ -305,7 +305,7 @@ def run_continuation(
     tail: int = 150,
     progress: Callable[[int, int], None] | None = None,
 ) -> xr.Dataset:
-    """Numerical continuation along one parameter (MODEL.md "Regimes": coexisting attractors).
+    """Numerical continuation along one parameter (docs/model.md "Regimes": coexisting attractors).
 
     The points are visited in increasing (``up``) or decreasing (``down``) order; every point
     starts from member 0's final state at the previous point, with the clock reset to the

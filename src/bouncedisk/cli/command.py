@@ -1,4 +1,4 @@
-"""The ``bouncedisk`` command (INTERFACES.md "Package and commands").
+"""The ``bouncedisk`` command (docs/formats.md "Package and commands").
 
 Errors a user can cause print one line ``bouncedisk: error: FILE: FIELD: what is wrong`` and
 exit with status 2; nothing is written then. An interrupted run (Ctrl-C) leaves no output and

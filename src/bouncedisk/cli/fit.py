@@ -23,7 +23,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
 
 
 def _add_fit(sub) -> None:
-    """``bouncedisk fit CURVE.csv [CURVE.csv ...] -o FIT.nc`` (INTERFACES.md)."""
+    """``bouncedisk fit CURVE.csv [CURVE.csv ...] -o FIT.nc`` (docs/formats.md)."""
     p = sub.add_parser("fit", help="fit the model to a measured velocity-time curve")
     p.add_argument(
         "curve",

@@ -60,7 +60,7 @@ def _one_line_error(prefix: str):
 
 
 def _add_runs(sub) -> None:
-    """``bouncedisk runs [list | show RUN | diff A B]`` (INTERFACES.md "Experiment tracking")."""
+    """``bouncedisk runs [list | show RUN | diff A B]`` (docs/formats.md "Experiment tracking")."""
     p = sub.add_parser(
         "runs",
         help="the tracked runs: list, show RUN, diff A B",

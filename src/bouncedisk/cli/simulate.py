@@ -33,7 +33,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def _add_simulate(sub) -> None:
-    """``bouncedisk simulate SCENE -o OUT.nc`` (INTERFACES.md)."""
+    """``bouncedisk simulate SCENE -o OUT.nc`` (docs/formats.md)."""
     p = sub.add_parser("simulate", help="run one scene and write one netCDF file")
     p.add_argument("scene", help="scene file (YAML)")
     p.add_argument("-o", "--output", required=True, help="netCDF file to write")

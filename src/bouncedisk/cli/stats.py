@@ -125,7 +125,7 @@ def _cmd_stats(args: argparse.Namespace) -> int:
 
 
 def _add_stats(sub) -> None:
-    """``bouncedisk stats SCENE [-o STATS.nc] [--json]`` (INTERFACES.md "Statistics")."""
+    """``bouncedisk stats SCENE [-o STATS.nc] [--json]`` (docs/formats.md "Statistics")."""
     p = sub.add_parser(
         "stats", help="long-run statistics of a scene's ensemble, with 95%% confidence intervals"
     )

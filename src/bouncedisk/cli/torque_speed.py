@@ -1,4 +1,4 @@
-"""The ``bouncedisk torque-speed`` command: a scene's load characteristic (INTERFACES.md)."""
+"""The ``bouncedisk torque-speed`` command: a scene's load characteristic (docs/formats.md)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from .stats import _progress
 from .tracking_options import _add_track_options, _track, _tracking_store
 
 #: Loads of a curve when ``--loads`` is not given: from no load to the momentum bound
-#: ``τ_L = 1`` (MODEL.md "The motor under load"), in units of the scene's load torque.
+#: ``τ_L = 1`` (docs/model.md "The motor under load"), in units of the scene's load torque.
 DEFAULT_LOADS = "0:1:11"
 
 
@@ -99,7 +99,7 @@ def _with_load(scene_file: str, overrides: list[str]) -> list[str]:
 
 
 def add_torque_speed(sub, add_set, add_track) -> None:
-    """``bouncedisk torque-speed SCENE [--loads ...] [-o CURVE.nc] [--json]`` (INTERFACES.md)."""
+    """``bouncedisk torque-speed SCENE [--loads ...] [-o CURVE.nc] [--json]`` (docs/formats.md)."""
     p = sub.add_parser(
         "torque-speed",
         help="the motor's load characteristic: speed, power and efficiency against load torque",

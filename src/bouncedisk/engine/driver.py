@@ -24,9 +24,9 @@ class EngineConfig:
     Parameters
     ----------
     e, omega_s, r_phi, psi : float
-        Nondimensional parameters (MODEL.md).
+        Nondimensional parameters (docs/model.md).
     contact, torsion, impulse_cap : bool
-        Effects (MODEL.md "Optional effects").
+        Effects (docs/model.md "Optional effects").
     inertia_ratio : float
         ``J_s/J_r`` for the ``stator_inertia`` effect; ``inf`` for a stator not moved by
         impacts (eq. 19).
@@ -48,7 +48,7 @@ class EngineConfig:
         ``max(0, 1 + a_s)``. Needs a time stop.
     e_sigma : float
         Standard deviation ``σ_e`` of the per-impact restitution (effect ``restitution_noise``,
-        MODEL.md "Long-run statistics"); 0 for none. The ``k``-th event draws
+        docs/model.md "Long-run statistics"); 0 for none. The ``k``-th event draws
         ``e_k = e + σ_e ξ_k`` clipped to ``[0, 1]``, ``ξ_k`` from the counter-based stream
         ``(seed, member)`` (:mod:`bouncedisk.engine.noise`).
     seed, member : int
@@ -58,7 +58,7 @@ class EngineConfig:
         ``final["audit"]``, :func:`audit_balances`); ``inf`` for none.
     load_torque : float
         Constant load torque ``τ_L >= 0`` on the rotor against positive rotation (effect
-        ``load``; MODEL.md "The motor under load"), in units of the friction torque at the static
+        ``load``; docs/model.md "The motor under load"), in units of the friction torque at the static
         normal load; 0 for none.
     """
 
@@ -88,7 +88,7 @@ class EngineConfig:
 
 @dataclass(frozen=True)
 class InitialState:
-    """Initial condition (MODEL.md "Initial condition").
+    """Initial condition (docs/model.md "Initial condition").
 
     ``u is None`` (default) puts the rotor in contact, moving with the stator, at ``t``.
     Otherwise the rotor starts in flight at height ``u >= u_s(t)`` with velocity ``v``.
@@ -364,7 +364,7 @@ def _audit_terms(cfg: EngineConfig, st: np.ndarray, ist: np.ndarray, in_contact:
 
 
 def audit_balances(terms: dict) -> tuple[float, float]:
-    """Relative residuals of the two energy balances (MODEL.md "Power and energy audit").
+    """Relative residuals of the two energy balances (docs/model.md "Power and energy audit").
 
     Axial ``W_ax = ΔE_ax + D_ax (+ C_ax)``, torsional ``W_t = Δ(Ω²/2) + D_f + W_L``, each
     residual divided by the largest of its terms (0 when every term is 0). ``C_ax`` is the

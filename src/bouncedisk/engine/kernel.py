@@ -4,10 +4,10 @@ One call of :func:`run_chunk` advances the simulation until its output buffers a
 run ends; the whole state lives in two small arrays so that a run can be resumed chunk after
 chunk (streaming output, progress reporting, interruption). Time is carried as an integer
 stator-period count ``n`` and a phase ``θ ∈ [0, 2π)``: ``t = (2πn + θ)/w``. Every event phase is
-therefore exact to the rounding of one period, however long the run (MODEL.md "Things that are
+therefore exact to the rounding of one period, however long the run (docs/model.md "Things that are
 easy to get wrong").
 
-One compiled function per mode of motion (MODEL.md "Phases of motion", "Events"):
+One compiled function per mode of motion (docs/model.md "Phases of motion", "Events"):
 
 - flight → impact: :func:`_flight_step`, i.e. :func:`flight_next_impact` (first root of the
   gap, eq. 20) and :func:`_impact` (restitution and angular impulse, eqs. 4, 8, 19; flight,
@@ -111,7 +111,7 @@ def flight_next_impact(
     The flight starts at the origin ``(u0, v0)`` at stator phase ``th0``; the search starts at
     the anchor ``ta >= 0`` after the origin, where the gap is ``ga >= 0``. The rotor cannot hit
     the stator while ``u > 1``, so a flight rising above the band ``|u| <= 1`` is searched only
-    while ascending below 1 and after it falls back to ``u = 1`` (MODEL.md "Events").
+    while ascending below 1 and after it falls back to ``u = 1`` (docs/model.md "Events").
     ``infl`` is the gap's :func:`~bouncedisk.engine.roots.inflections` ``(0, −1, −1/2, w)``, the
     same for every flight of a run (:func:`run_chunk` computes it once).
 
@@ -195,7 +195,7 @@ def _gap_root(g0, v, th, s, c, w, t_max, xtol, fd, dl, bt):
 @njit(cache=True, inline="always")
 def _seg_state(kind, u0, v0, om0, sig, w, r, psi, load, th0, tau):
     """Rotor ``(u, v, Ω)`` at ``tau`` into a segment, from the closed forms (with the load
-    torque ``τ_L``, MODEL.md "The motor under load")."""
+    torque ``τ_L``, docs/model.md "The motor under load")."""
     if kind == SEG_FLIGHT:
         return u0 + v0 * tau - 0.5 * tau * tau, v0 - tau, loaded_omega(om0, load, tau)
     ph = th0 + w * tau
@@ -366,7 +366,7 @@ def _accumulate(st, ist, prm, flg, kind, n_a, th_a, length, u0, v0, om0, sig):
 @_on_arrays
 def _audit_segment(st, prm, flg, kind, sig, om, th, length):
     """The energy audit's terms of a segment from phase ``th``, with ``Ω = om`` there, ``length``
-    long (MODEL.md "Power and energy audit"; closed forms in :mod:`.laws`): the stator's axial
+    long (docs/model.md "Power and energy audit"; closed forms in :mod:`.laws`): the stator's axial
     work in contact, and in contact with torsion its torsional input and the friction loss."""
     if kind == SEG_FLIGHT:
         return
@@ -385,7 +385,7 @@ def _audit_segment(st, prm, flg, kind, sig, om, th, length):
 
 @_on_arrays
 def _audit_impact(st, prm, flg, w, r, psi, phase, v_minus, v_plus, om_minus, om_plus, settles):
-    """The energy audit's terms of an impact (MODEL.md "Power and energy audit").
+    """The energy audit's terms of an impact (docs/model.md "Power and energy audit").
 
     Axial: the impulse ``F = v⁺ − v⁻`` does the work ``F v_s`` and dissipates
     ``F (v_s − (v⁺ + v⁻)/2)``. Torsional: the angular impulse ``J = Ω⁺ − Ω⁻`` puts in
@@ -475,7 +475,7 @@ def _enter_flight(st, ist, u, v, anchor_tau, anchor_gap):
 def _flight_output(prm, flg, st, ist, traj, strobe, info, n, th, t_now, t_hit, tau):
     """Outputs of a flight up to its impact; or up to the run's end, if that comes first.
 
-    The flight is the parabola of MODEL.md "Phases of motion" (``u'' = −1``, ``Ω`` constant).
+    The flight is the parabola of docs/model.md "Phases of motion" (``u'' = −1``, ``Ω`` constant).
     When the run's end ``t_end < t_hit`` comes first, the state is moved to ``t_end`` and the run
     ends with ``ST_TIME``. Returns ``ST_CONTINUE`` or the status that ends this call.
     """
@@ -500,10 +500,10 @@ def _flight_output(prm, flg, st, ist, traj, strobe, info, n, th, t_now, t_hit, t
 def _impact(e_k, e, w, r, psi, phase, v_minus, omega, torsion, cap, inertia, tol):
     """An impact and what follows it: flight, contact, or a chattering sequence.
 
-    The impact law (MODEL.md "Events"; paper eqs. 4, 8, 19, or 11 with ``stator_inertia``) with
+    The impact law (docs/model.md "Events"; paper eqs. 4, 8, 19, or 11 with ``stator_inertia``) with
     this impact's restitution ``e_k``; then, if ``N >= 0``, contact when the rebound is below
     the grazing gap, or the accumulation time of a complete chattering sequence
-    (MODEL.md "Chattering", :func:`~bouncedisk.engine.laws.chatter_time`, with the mean ``e``).
+    (docs/model.md "Chattering", :func:`~bouncedisk.engine.laws.chatter_time`, with the mean ``e``).
 
     Returns
     -------
@@ -540,7 +540,7 @@ def _impact_sc(e_k, e, w, r, psi, phase, sph, cph, v_minus, omega, torsion, cap,
 def _enter_contact(st, ist, prm, torsion, n_hit, phase, t_acc):
     """Contact after the impact at ``(n_hit, phase)``, or a chattering sequence (``t_acc > 0``).
 
-    A chattering sequence (MODEL.md "Chattering") accumulates ``t_acc`` after the impact: the
+    A chattering sequence (docs/model.md "Chattering") accumulates ``t_acc`` after the impact: the
     rotor rides the stator until then, and the accumulation point is an event of its own
     (:func:`_chatter_tail`). With torsion, the slip state on entering contact
     (:func:`_enter_contact_torsion`).
@@ -563,7 +563,7 @@ def _enter_contact(st, ist, prm, torsion, n_hit, phase, t_acc):
 def _chatter_tail(st, ist, ev, evk, info, w, n1, th1):
     """The accumulation point of a chattering sequence: one event of kind ``KIND_CHATTER``.
 
-    MODEL.md "Counting impacts": the infinitely many impacts of a complete chattering sequence
+    docs/model.md "Counting impacts": the infinitely many impacts of a complete chattering sequence
     count as one event, at the accumulation time, with zero relative velocity.
     """
     ist[I_CHATTERING] = 0
@@ -574,7 +574,7 @@ def _chatter_tail(st, ist, ev, evk, info, w, n1, th1):
 @njit(cache=True)
 def _separation_constants(w):
     """``(never, θ_sep, T, g)``: whether contact never ends (``w <= 1`` or a grazing window),
-    the separation phase and the flight through the window ``N < 0`` (MODEL.md "Contact";
+    the separation phase and the flight through the window ``N < 0`` (docs/model.md "Contact";
     :func:`~bouncedisk.engine.laws.separation_window`)."""
     never_sep = w <= 1.0
     th_sep = -1.0
@@ -595,7 +595,7 @@ def _clipped_ride(prm, flg, st, ist, traj, strobe, info, n, th, t_now, th_sep):
 
     ``N = max(0, 1 + a_s)`` is clipped to 0 while ``1 + a_s < 0`` (phases ``(θ_sep, π − θ_sep)``):
     no friction torque, the rotor rides the stator and its ``Ω`` changes only under the load
-    torque (``Ω' = −τ_L``, MODEL.md "The motor under load"). Returns ``ST_CONTINUE`` or the
+    torque (``Ω' = −τ_L``, docs/model.md "The motor under load"). Returns ``ST_CONTINUE`` or the
     status that ends this call.
     """
     w = prm[P_W]
@@ -628,7 +628,7 @@ def _clipped_ride(prm, flg, st, ist, traj, strobe, info, n, th, t_now, th_sep):
 def _contact_horizon(n, th, t_now, st, ist, prm, never_sep, th_sep):
     """Times from now to the separation, the run's end and a chattering accumulation point.
 
-    Separation at ``θ_sep`` (``N = 0`` decreasing, MODEL.md "Contact"); ``inf`` for none.
+    Separation at ``θ_sep`` (``N = 0`` decreasing, docs/model.md "Contact"); ``inf`` for none.
     """
     w = prm[P_W]
     tau_sep = inf
@@ -651,7 +651,7 @@ def _contact_horizon(n, th, t_now, st, ist, prm, never_sep, th_sep):
 
 @njit(cache=True)
 def _slip_root(sig, guard, om, th, tau_end, w, r, psi, load, xtol):
-    """End of a slipping segment (MODEL.md "Stick–slip transitions"; paper eqs. 22–23).
+    """End of a slipping segment (docs/model.md "Stick–slip transitions"; paper eqs. 22–23).
 
     Slipping with ``σ = sgn(s)``, ``Ω' = −σN``. Just after leaving ``s = 0`` (``guard``) the
     segment ends where the slip has grown, ``RN + σα_s`` back to ``>= 0``; otherwise it ends
@@ -682,7 +682,7 @@ def _slip_root(sig, guard, om, th, tau_end, w, r, psi, load, xtol):
 
 @njit(cache=True)
 def _stick_root(th, tau_end, w, r, psi, rho, load, xtol):
-    """End of a sticking segment (MODEL.md "Stick–slip transitions"; paper §2.5 corrected).
+    """End of a sticking segment (docs/model.md "Stick–slip transitions"; paper §2.5 corrected).
 
     While ``RΩ = Ω_s`` the rotor sticks until ``|α_s| = ρRN`` (``ρ`` the static/kinetic
     ratio); with ``α_s < −ρRN`` the slip becomes positive, with ``α_s > ρRN`` negative. Searched
@@ -768,7 +768,7 @@ def _contact_end(st, ist, ev, evk, info, prm, clipped, taus, tau_end, n1, th1, s
     """What ends a contact segment at the first of its horizons ``taus = (sep, end, chatter)``.
 
     The run's end (``ST_TIME``); a chattering sequence's accumulation point (an event,
-    :func:`_chatter_tail`), after which contact goes on; separation (MODEL.md "Separation"):
+    :func:`_chatter_tail`), after which contact goes on; separation (docs/model.md "Separation"):
     the rotor flies through the window where ``N < 0`` and the impact search starts at its end
     (or, in the clipped model, rides unloaded, :func:`_clipped_ride`).
     """
@@ -794,7 +794,7 @@ def _contact_end(st, ist, ev, evk, info, prm, clipped, taus, tau_end, n1, th1, s
 
 @_on_arrays_inline
 def _flight_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, noise_key, infl):
-    """A flight and the impact that ends it (MODEL.md "Flight", "Impact").
+    """A flight and the impact that ends it (docs/model.md "Flight", "Impact").
 
     The first root of the gap (:func:`_flight_search`, eq. 20) with this impact's
     restitution (``restitution_noise``: ``e_k``, :mod:`.noise`), then :func:`_flight_land`.
@@ -878,7 +878,7 @@ def _flight_land(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, h
 
 @_on_arrays_inline
 def _contact_step(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, sep):
-    """One contact segment (MODEL.md "Contact", "Stick–slip transitions", "Separation").
+    """One contact segment (docs/model.md "Contact", "Stick–slip transitions", "Separation").
 
     The rotor rides the stator (``u = u_s``, ``v = v_s``) until the first of: separation, the
     run's end, a chattering accumulation point (:func:`_contact_horizon`), or a stick–slip
@@ -996,7 +996,7 @@ def _slip_is_zero(r, w, psi, omega, phase):
 def _contact_sigma(r, w, psi, rho, load, omega, phase):
     """Slip direction in contact: ``sgn(s)``, or at ``s = 0`` stick (0) when
     ``|α_s + Rτ_L| <= ρRN``, else the direction set by the stator's acceleration and the load
-    (paper §2.5, corrected; MODEL.md "The motor under load")."""
+    (paper §2.5, corrected; docs/model.md "The motor under load")."""
     if not _slip_is_zero(r, w, psi, omega, phase):
         return 1 if slip(r, w, psi, omega, phase) > 0.0 else -1
     n_load = normal_load(w, phase)

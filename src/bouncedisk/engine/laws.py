@@ -1,6 +1,6 @@
-"""The nonsmooth laws of the bouncing disk, as small compiled functions (MODEL.md "Events").
+"""The nonsmooth laws of the bouncing disk, as small compiled functions (docs/model.md "Events").
 
-Nondimensional throughout (MODEL.md "Variables and scales"): stator ``u_s = sin φ``,
+Nondimensional throughout (docs/model.md "Variables and scales"): stator ``u_s = sin φ``,
 ``v_s = w cos φ``, ``a_s = −w² sin φ``, twist rate ``Ω_s = w cos(φ + ψ)``, twist acceleration
 ``α_s = −w² sin(φ + ψ)``; normal load in contact ``N = 1 + a_s``; slip ``s = RΩ − Ω_s``.
 """
@@ -14,13 +14,13 @@ from . import _cache  # noqa: F401  (the cache locators, before anything here is
 
 @njit(cache=True, inline="always")
 def normal_load(w, phase):
-    """Normal load in contact ``N = 1 − w² sin φ`` (MODEL.md; paper eq. 17 corrected)."""
+    """Normal load in contact ``N = 1 − w² sin φ`` (docs/model.md; paper eq. 17 corrected)."""
     return 1.0 - w * w * sin(phase)
 
 
 @njit(cache=True, inline="always")
 def slip(r, w, psi, omega, phase):
-    """Slip ``s = RΩ − Ω_s`` with ``Ω_s = w cos(φ + ψ)`` (MODEL.md; paper eq. 19)."""
+    """Slip ``s = RΩ − Ω_s`` with ``Ω_s = w cos(φ + ψ)`` (docs/model.md; paper eq. 19)."""
     return r * omega - w * cos(phase + psi)
 
 
@@ -78,7 +78,7 @@ def impact_law_sc(e, w, r, psi, phase, cos_phase, v_minus, omega, torsion, cap, 
 
 
 #: Gap below which a separation is grazing: a flight that stays below it is not taken, the rotor
-#: stays in contact (MODEL.md "w <= 1"; the limit w → 1⁺).
+#: stays in contact (docs/model.md "w <= 1"; the limit w → 1⁺).
 GRAZE_GAP = 64.0 * 2.220446049250313e-16
 #: The rounding of a position near the top of the stator's stroke (one ulp of 1.0): a chattering
 #: sequence whose bounces all stay below it cannot be resolved bounce by bounce.
@@ -95,7 +95,7 @@ def chatter_time(e, w, phase, w_rel, tol):
 
     After an impact leaving relative velocity ``W = e v_rel``, bounces on a locally constant
     effective gravity ``N0`` take ``2 e^k W / N0`` and accumulate after
-    ``T = 2 W / (N0 (1 − e))`` (MODEL.md "Chattering"; Nordmark & Piiroinen 2009). The jump is
+    ``T = 2 W / (N0 (1 − e))`` (docs/model.md "Chattering"; Nordmark & Piiroinen 2009). The jump is
     taken when ``N`` stays positive over ``T`` and the neglected variation of ``N`` changes the
     accumulation time by less than ``tol``: ``(|N'| + w⁴T) T² / (N0 (1 − e²)) <= tol``.
 
@@ -163,7 +163,7 @@ def slip_omega(omega0, sigma, w, th0, tau, load):
     """Rotor angular velocity while slipping, eq. (23) corrected, with a load torque.
 
     ``Ω(τ) = Ω0 − σ [τ + (v_s(τ) − v_s(0))] − τ_L τ`` with ``v_s = w cos φ``, written in difference
-    form (MODEL.md "Stick–slip transitions"; "The motor under load": eq. 23 gains ``− τ_L τ``).
+    form (docs/model.md "Stick–slip transitions"; "The motor under load": eq. 23 gains ``− τ_L τ``).
     """
     half = 0.5 * w * tau
     dv = -2.0 * w * sin(th0 + half) * sin(half)
@@ -190,7 +190,7 @@ def slip_omega_integral(omega0, sigma, w, th0, tau, load):
 @njit(cache=True, inline="always")
 def loaded_omega(omega0, load, tau):
     """``Ω(τ) = Ω0 − τ_L τ`` with no friction: flight, or the clipped model's unloaded ride
-    (MODEL.md "The motor under load": ``Ω' = −τ_L``)."""
+    (docs/model.md "The motor under load": ``Ω' = −τ_L``)."""
     if load == 0.0:
         return omega0
     return omega0 - load * tau
@@ -214,11 +214,11 @@ def stick_omega_integral(w, r, psi, th0, tau):
 @njit(cache=True, inline="always")
 def stick_margin_shift(r, load):
     """``R τ_L``: the load's share of the stick condition ``|α_s + R τ_L| <= ρ R N``
-    (MODEL.md "The motor under load": the friction must supply ``α_s/R + τ_L``)."""
+    (docs/model.md "The motor under load": the friction must supply ``α_s/R + τ_L``)."""
     return r * load
 
 
-# --- the energy audit (MODEL.md "The motor under load", "Power and energy audit") ------------
+# --- the energy audit (docs/model.md "The motor under load", "Power and energy audit") ------------
 # Closed forms of the audit's integrals over one segment of length L that starts at phase th0
 # (φ = th0 + w τ), each in difference form: dsin(x, h) = sin(x + h) − sin(x) etc.
 
@@ -240,7 +240,7 @@ def contact_axial_work(w, th0, length):
     """Stator's work on a rotor riding it, ``∫ N v_s dt = Δu_s + Δ(v_s²/2)`` (units ``m_r g U0``).
 
     ``N v_s = (1 + a_s) v_s`` and ``a_s v_s = d(v_s²/2)/dt``: the work is the change of the
-    riding rotor's energy ``E_ax = v²/2 + u`` (MODEL.md "Power and energy audit").
+    riding rotor's energy ``E_ax = v²/2 + u`` (docs/model.md "Power and energy audit").
     """
     h = w * length
     du = dsin(th0, h)
@@ -255,7 +255,7 @@ def slip_twist_work(sigma, w, r, psi, th0, length):
     """Stator's torsional input while slipping, ``W_t = ∫ f Ω_s/R dt`` with ``f = −σN``.
 
     ``∫ N Ω_s dt = Δ sin(φ + ψ) + (w²/4) Δ cos(2φ + ψ) + (w³ L / 2) sin ψ`` (``N = 1 − w² sin φ``,
-    ``Ω_s = w cos(φ + ψ)``); units of ``Ω²/2`` (MODEL.md "Power and energy audit").
+    ``Ω_s = w cos(φ + ψ)``); units of ``Ω²/2`` (docs/model.md "Power and energy audit").
     """
     h = w * length
     n_os = dsin(th0 + psi, h) + 0.25 * w * w * dcos(2.0 * th0 + psi, 2.0 * h)
@@ -285,7 +285,7 @@ def slip_load_omega_integral(omega0, sigma, w, th0, length, load):
 @njit(cache=True, inline="always")
 def stick_twist_work(w, r, psi, load, th0, length):
     """Stator's torsional input while sticking, ``f = α_s/R + τ_L``:
-    ``W_t = Δ(Ω_s²/2)/R² + τ_L Δφ_s / R`` (MODEL.md "The motor under load")."""
+    ``W_t = Δ(Ω_s²/2)/R² + τ_L Δφ_s / R`` (docs/model.md "The motor under load")."""
     h = w * length
     x = th0 + psi
     dc = dcos(x, h)

@@ -19,7 +19,7 @@ P_TEND = 7  # end time
 P_DT, P_T0, P_T1 = 8, 9, 10  # trajectory grid: step, first and last sample time
 P_ESIG = 11  # restitution noise σ_e (effect `restitution_noise`)
 P_TSTAT = 12  # time from which ∫Ω dt and the energy audit are accumulated
-P_LOAD = 13  # load torque τ_L (effect `load`; MODEL.md "The motor under load")
+P_LOAD = 13  # load torque τ_L (effect `load`; docs/model.md "The motor under load")
 N_PRM = 14
 # --- flags (int64) ----------------------------------------------------------------------------
 F_CONTACT, F_TORSION, F_CAP, F_TRAJ, F_STROBE, F_MAXEV, F_CLIPPED = range(7)
@@ -34,7 +34,7 @@ S_ANCHOR_TAU = 4  # flight: time after the origin where the impact search starts
 S_ANCHOR_GAP = 5  # flight: the gap at that time
 S_CHATTER_PHASE = 6  # contact: stator phase of a chattering sequence's accumulation point
 S_OMEGA_INTEGRAL = 7  # ∫Ω dt since prm[P_TSTAT] (when flg[F_STATS])
-# energy audit since prm[P_TSTAT] (when flg[F_STATS]; MODEL.md "Power and energy audit"):
+# energy audit since prm[P_TSTAT] (when flg[F_STATS]; docs/model.md "Power and energy audit"):
 S_AUD_WAX = 8  # stator's axial work W_ax (impacts and contact)
 S_AUD_DAX = 9  # axial impact loss D_ax
 S_AUD_CAX = 10  # axial energy of summed chattering tails (their approximation, kept apart)

@@ -1,6 +1,6 @@
 """One axial trajectory, several load torques: ``∫Ω dt`` of every load from one impact search.
 
-The rotor's axial motion never depends on its rotation (MODEL.md "Events": the restitution law
+The rotor's axial motion never depends on its rotation (docs/model.md "Events": the restitution law
 and the normal load involve ``u``, ``v`` and the stator only; the load torque acts on ``Ω`` alone,
 "The motor under load"), and a member's restitution noise is a pure function of its stream and
 the event count (:mod:`.noise`). So runs of one member that differ only in ``τ_L`` share every
@@ -169,7 +169,7 @@ def omega_integrals(
         The member's configuration (its ``load_torque`` is ignored); finite ``stats_from``
         and ``t_end``, no samples, not clipped.
     loads : array_like of float
-        Nondimensional load torques ``τ_L`` (MODEL.md "The motor under load").
+        Nondimensional load torques ``τ_L`` (docs/model.md "The motor under load").
     init : InitialState, optional
         The common initial state (default: the kernel's default).
 

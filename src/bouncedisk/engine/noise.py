@@ -1,4 +1,4 @@
-"""Counter-based random numbers for the ``restitution_noise`` effect (MODEL.md "Long-run statistics").
+"""Counter-based random numbers for the ``restitution_noise`` effect (docs/model.md "Long-run statistics").
 
 Member ``m`` of an ensemble with seed ``S`` gets, at its ``k``-th event, the standard normal
 ``ξ_k = normal(member_key(S, m), k)``: a pure function of ``(S, m, k)``, so a member's noise does
@@ -54,7 +54,7 @@ def normal(key, k):
 
 @njit(cache=True)
 def noisy_restitution(e, e_sigma, key, k):
-    """Restitution of the ``k``-th event, ``e_k = e + σ_e ξ_k`` clipped to ``[0, 1]`` (MODEL.md)."""
+    """Restitution of the ``k``-th event, ``e_k = e + σ_e ξ_k`` clipped to ``[0, 1]`` (docs/model.md)."""
     ek = e + e_sigma * normal(key, k)
     if ek < 0.0:
         return 0.0

@@ -8,7 +8,7 @@ Every event function of the bouncing-disk model has the form
                + B(\\sin\\varphi - \\sin\\theta_0), \\qquad \\varphi = \\theta_0 + w\\tau,
 
 written in difference form so that :math:`f(0) = f_0` exactly and small departures are free of
-cancellation. Examples: the flight gap (MODEL.md "Events", paper eq. 20), the contact slip
+cancellation. Examples: the flight gap (docs/model.md "Events", paper eq. 20), the contact slip
 (eq. 23 corrected) and the stick margins (paper §2.5).
 
 Its second derivative :math:`f'' = 2c_2 - w^2(A\\cos\\varphi + B\\sin\\varphi)` changes sign at

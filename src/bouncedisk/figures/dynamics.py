@@ -65,7 +65,7 @@ def fig_bifurcation(up: xr.Dataset, down: xr.Dataset) -> Figure:
     Coexisting attractors appear as two branches; complete chatters (resets) are marked ×.
     The exponent is the ensemble mean with its 95 % interval; a cycle through a reset has
     exponent ``−∞`` (drawn as ▼ at the bottom). Dashed lines: the period-1 orbit's existence
-    ``Γ_1 = π(1−e)/(1+e)`` and its doubling (MODEL.md "Classic results") at ``Γ = ω_s²``.
+    ``Γ_1 = π(1−e)/(1+e)`` and its doubling (docs/model.md "Classic results") at ``Γ = ω_s²``.
     """
     from ..analysis.observables import period_doubling_threshold, period_n_threshold
 

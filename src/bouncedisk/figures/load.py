@@ -1,5 +1,5 @@
 """Figures of the motor under load: the torque–speed curve, output power and efficiency
-(MODEL.md "The motor under load"), each with its 95 % band and both continuation branches."""
+(docs/model.md "The motor under load"), each with its 95 % band and both continuation branches."""
 
 from __future__ import annotations
 

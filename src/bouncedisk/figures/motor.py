@@ -28,7 +28,7 @@ def fig5_motor(
     simulated : DataFrame, optional
         Model speed ``time_s``, ``omega_rad_s`` (unfitted scales) when no fit is given.
     fitted : Dataset, optional
-        A fit file (INTERFACES.md): ``omega_measured``, ``omega_fitted`` (the fitted model's
+        A fit file (docs/formats.md): ``omega_measured``, ``omega_fitted`` (the fitted model's
         ensemble mean) on ``time``, with ``omega_fitted_low``/``omega_fitted_high`` (its 95 %
         interval) and both first-order trends when present. The residual panel shows the data
         minus the ensemble mean, with the members' central 95 % (plus the measurement noise)

@@ -1,11 +1,11 @@
 """Fit the bouncing-disk model to a measured rotor velocity–time curve.
 
 The model is chaotic, so it is not fitted point by point: the measured curve and the model's
-ensemble (MODEL.md "Long-run statistics of chaotic motion") are reduced to statistics of the
+ensemble (docs/model.md "Long-run statistics of chaotic motion") are reduced to statistics of the
 trend and the ripple (:mod:`~bouncedisk.fitting.statistics`), compared by a synthetic likelihood that counts the
 model's across-member spread (:mod:`.objective`), searched globally then locally
 (:mod:`.search`), and profiled for every parameter (:mod:`.uncertainty`). :mod:`.model` holds the
-physical conversion (MODEL.md "Physical conversion"), :mod:`.output` the fit file, and
+physical conversion (docs/model.md "Physical conversion"), :mod:`.output` the fit file, and
 :mod:`.command` the ``bouncedisk fit`` command. Round-off chooses nothing (README,
 "Reproducible"): :mod:`.detlinalg` does the small linear algebra in a fixed order (no BLAS), and
 :mod:`.basins` lists the acceptable basins and holds the rule that picks the reported one.

@@ -1,7 +1,7 @@
 """``bouncedisk fit CURVE.csv [CURVE.csv ...] -o FIT.nc``: options checked before any work,
 progress, output (several curves: run-ups of one motor fitted together, :mod:`~bouncedisk.fitting.runs`).
 
-Every option a user can get wrong is checked before the curve is fitted (INTERFACES.md: exit 2,
+Every option a user can get wrong is checked before the curve is fitted (docs/formats.md: exit 2,
 one line ``bouncedisk: error: FILE: FIELD: message``, no output file).
 """
 
@@ -83,7 +83,7 @@ def validate(args) -> dict:
 
 
 def _e_sigma_option(text) -> float:
-    """``--e-sigma``: the members' restitution noise ``σ_e`` (MODEL.md), in ``(0, 0.5]``."""
+    """``--e-sigma``: the members' restitution noise ``σ_e`` (docs/model.md), in ``(0, 0.5]``."""
     from ..model.params import number
 
     value = number(ARG, "--e-sigma", text, positive=True)

@@ -69,7 +69,7 @@ class FitSettings:
     zoom_centres: int = 6
     local_nfev: int = 12
     joint_zoom: int = SearchSettings.joint_zoom  # points around each joint candidate (search)
-    e_sigma: float = MODEL_E_SIGMA  # restitution noise of the members (MODEL.md), stated
+    e_sigma: float = MODEL_E_SIGMA  # restitution noise of the members (docs/model.md), stated
     cores: int = 1
     profile: tuple[str, ...] | None = None  # coordinates to profile (None: all)
 

@@ -1,6 +1,6 @@
 """The joint fit's share of the fit file: measured and fitted load curves, identifiability.
 
-Added to the fit file (INTERFACES.md) when load curves were fitted (``bouncedisk fit … --load``):
+Added to the fit file (docs/formats.md) when load curves were fitted (``bouncedisk fit … --load``):
 on the dimension ``reading`` (every reading of every load curve, curve by curve) the load torque
 ``load_torque`` (N·m), ``load_speed_measured`` with its spread ``load_speed_sd`` and the standard
 deviation the likelihood gave it ``load_speed_sigma`` (:mod:`.loadpart`), the fitted model's

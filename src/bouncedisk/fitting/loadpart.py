@@ -1,9 +1,9 @@
 """The load curve's share of the joint likelihood: readings from rest under each load.
 
-A measured load curve (:mod:`bouncedisk.io.load_curves`, INTERFACES.md) holds at every load torque
+A measured load curve (:mod:`bouncedisk.io.load_curves`, docs/formats.md) holds at every load torque
 ``T_j`` (N·m) the mean rotor speed ``y_j`` (rad/s) over ``window_s = [t0, t1]`` after a start
 from rest under that load. At a parameter point ``θ = (e, ω_s, R_φ, ψ)`` the model predicts it
-exactly (MODEL.md "The motor under load", "Physical conversion"): with the drive ``(f, Φ0)`` and
+exactly (docs/model.md "The motor under load", "Physical conversion"): with the drive ``(f, Φ0)`` and
 the rotor known, ``t_c = ω_s / (2π f)``, the speed scale ``R_φ Φ0 / t_c`` and the torque scale
 ``μ m_r g_eff r_eff`` (:meth:`bouncedisk.model.params.PhysicalParameters.scales`) turn ``T_j`` into the
 nondimensional ``τ_L`` and the window into ``[t0, t1] / t_c``; member ``m`` runs the engine from
@@ -59,7 +59,7 @@ MAX_EVENTS = 50_000_000
 
 def motor_scales(theta: dict[str, float], data: LoadCurveData) -> tuple[float, float, float]:
     """``(t_c [s], speed scale [rad/s], torque scale [N·m])`` of a parameter point for a motor
-    (MODEL.md "Physical conversion"; the torque scale ``μ m_r g_eff r_eff`` of "The motor under
+    (docs/model.md "Physical conversion"; the torque scale ``μ m_r g_eff r_eff`` of "The motor under
     load"), by :meth:`~bouncedisk.model.params.PhysicalParameters.from_nondimensional`."""
     p = Parameters(e=theta["e"], omega_s=theta["omega_s"], r_phi=10.0 ** theta["log10_r_phi"],
                    psi=theta["psi"])  # fmt: skip

@@ -1,11 +1,11 @@
 """The model side of the fit: parameter space, physical scales, members on the curve's grid.
 
-Physical conversion (MODEL.md "Physical conversion"): with the drive frequency ``f`` known,
+Physical conversion (docs/model.md "Physical conversion"): with the drive frequency ``f`` known,
 ``omega_s = 2π f t_c`` gives the time scale ``t_c = omega_s / (2π f)``; time in seconds is
 ``t · t_c`` and the rotor speed in rad/s is ``Ω · R_φ Φ0 / t_c``. With ``Φ0`` unknown the speed
 scale ``R_φ Φ0 / t_c`` is a free parameter of its own (``log10_speed_scale``).
 
-An ensemble member (MODEL.md "Long-run statistics of chaotic motion") is one run of the engine
+An ensemble member (docs/model.md "Long-run statistics of chaotic motion") is one run of the engine
 from the rotor at rest in contact at ``t = 0`` with restitution noise ``σ_e`` on its own stream
 ``(seed, member)``, sampled on the measured curve's uniform time grid, plus Gaussian measurement
 noise of the curve's ``σ`` from a fixed stream per member (common random numbers: the same draw at
@@ -38,7 +38,7 @@ BOUNDS: dict[str, tuple[float, float]] = {
 #: Noise stream offset of the measurement noise added to members (independent of the engine's).
 _NOISE_STREAM = 0x5EED
 
-#: The model's restitution noise ``σ_e`` (MODEL.md "Long-run statistics of chaotic motion"): a
+#: The model's restitution noise ``σ_e`` (docs/model.md "Long-run statistics of chaotic motion"): a
 #: stated property of the fitted model, not a fitted parameter. Real impacts scatter their
 #: restitution by percent; at 3 % the members of a chaotic ensemble mix within a few
 #: milliseconds of a motor's run-up, so one measured curve is a typical member and the
@@ -60,7 +60,7 @@ def param_names(curve: MotorCurve) -> list[str]:
 
 
 def physical(theta: dict[str, float], curve: MotorCurve) -> dict[str, float]:
-    """Nondimensional parameters and SI scales of a parameter point (MODEL.md, conversion).
+    """Nondimensional parameters and SI scales of a parameter point (docs/model.md, conversion).
 
     Returns ``e, r_phi, psi, omega_s``, the time scale ``t_c`` (s) and ``speed_scale`` (rad/s
     per unit of nondimensional ``Ω``).
@@ -101,7 +101,7 @@ def simulate_curve(
 ) -> np.ndarray:
     """Noise-free model rotor speed (rad/s) of one member on the curve's uniform grid.
 
-    The run starts at ``t = 0`` with the rotor at rest in contact (MODEL.md "Initial
+    The run starts at ``t = 0`` with the rotor at rest in contact (docs/model.md "Initial
     condition") and samples ``Ω`` at ``(grid − grid[0]) / t_c``; ``e_sigma = 0`` is the single
     deterministic run.
     """
@@ -178,9 +178,9 @@ def synthesize_curve(
     Parameters
     ----------
     true : dict
-        ``e, r_phi, psi, omega_s`` (MODEL.md "Variables and scales").
+        ``e, r_phi, psi, omega_s`` (docs/model.md "Variables and scales").
     drive_frequency_hz, phi0_rad : float
-        The motor constants of the physical conversion (MODEL.md).
+        The motor constants of the physical conversion (docs/model.md).
     span_s, dt_s : float
         Record length and sampling interval (s); samples at ``k·dt_s`` from ``t = 0``.
     sigma : float
@@ -190,7 +190,7 @@ def synthesize_curve(
     member : int or None
         Ensemble member with restitution noise ``e_sigma`` (a realization of the model that a
         fit of ensemble statistics can reproduce); ``None``: the single deterministic run
-        (``e_sigma`` ignored), a round-off-chosen orbit (MODEL.md "Long-run statistics").
+        (``e_sigma`` ignored), a round-off-chosen orbit (docs/model.md "Long-run statistics").
     e_sigma : float
         Restitution noise ``σ_e`` of the member (default :data:`MODEL_E_SIGMA`).
     """

@@ -1,6 +1,6 @@
-"""The fit file (INTERFACES.md) and its one-screen summary.
+"""The fit file (docs/formats.md) and its one-screen summary.
 
-Names kept from INTERFACES.md: ``omega_measured(time)``, ``omega_fitted(time)`` (rad/s, on the
+Names kept from docs/formats.md: ``omega_measured(time)``, ``omega_fitted(time)`` (rad/s, on the
 measured ``time`` in s), one scalar per parameter with ``ci_low``/``ci_high``, and the global
 attributes ``steady_speed_rad_s``/``time_constant_s`` (the first-order trend of the data). Added:
 the fitted model's band ``omega_fitted_low``/``omega_fitted_high`` (95 % interval of its ensemble
@@ -75,7 +75,7 @@ def _curves(fit: FitResult, ds_time: np.ndarray) -> dict:
 def residual_band(band: dict, sigma: float, runs: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """95 % band of the measured curve minus the ensemble mean (Fig. 5's residual panel).
 
-    A measured curve is one member plus measurement noise (MODEL.md "Long-run statistics"), so
+    A measured curve is one member plus measurement noise (docs/model.md "Long-run statistics"), so
     ``data − mean`` should stay within the members' central 95 % about the mean, widened in
     quadrature by the measurement noise ``1.96 σ``. The mean of ``runs`` run-ups spreads
     ``√runs`` times less (both parts divided by ``√runs``).

@@ -1,6 +1,6 @@
 """Repeated run-ups of one motor, fitted together.
 
-One run-up of a chaotic motor is one realization of the model (MODEL.md "Long-run statistics of
+One run-up of a chaotic motor is one realization of the model (docs/model.md "Long-run statistics of
 chaotic motion"): its own steady speed and time constant scatter between realizations by more
 than a useful fit may be off (7.6 % and tens of percent for the chaotic recovery case of
 ``tests/test_fitting.py``, 0.06 s records). An experimenter repeats the run-up; ``M`` run-ups of

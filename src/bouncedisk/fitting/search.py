@@ -85,7 +85,7 @@ MATCHED = ("log10_r_phi", "log10_speed_scale")
 def matched_point(obj: Objective, x: np.ndarray, members: int, steps: int = 2) -> np.ndarray:
     """Move ``log10 R_φ`` (and the free speed scale) so the trend matches the data's.
 
-    MODEL.md's scaling: ``x = R_φ Ω`` evolves at a rate ``∝ R_φ`` while the axial motion does
+    docs/model.md's scaling: ``x = R_φ Ω`` evolves at a rate ``∝ R_φ`` while the axial motion does
     not depend on ``R_φ``, so the time constant goes like ``1/R_φ`` and the steady speed barely
     moves with it; with Φ0 unknown the speed in rad/s is proportional to the speed scale.
     ``steps`` such corrections, each one evaluation; the point with the best robust loss is kept.
@@ -122,7 +122,7 @@ def _inner(obj: Objective, x: np.ndarray, members: int) -> np.ndarray:
 
     The axial motion depends only on ``(e, omega_s)`` (torsion never feeds back), so at a fixed
     ``(e, omega_s)`` the statistics are smooth in ``ψ`` and scale simply with ``R_φ``
-    (MODEL.md); the rugged part of the problem is the 2-D ``(e, omega_s)`` plane only.
+    (docs/model.md); the rugged part of the problem is the 2-D ``(e, omega_s)`` plane only.
     """
     names = obj.names
     if "psi" not in names:
@@ -469,7 +469,7 @@ def joint_zoom(obj: Objective, ranked: list[np.ndarray], s: SearchSettings) -> l
 def load_matched(obj: Objective, x: np.ndarray) -> np.ndarray:
     """``x`` with ``log10 R_φ`` moved so the load curves' torque scale matches the data's.
 
-    MODEL.md's scaling: at fixed ``(e, ω_s, ψ)`` the speed in rad/s does not depend on ``R_φ``
+    docs/model.md's scaling: at fixed ``(e, ω_s, ψ)`` the speed in rad/s does not depend on ``R_φ``
     (``x = R_φ Ω`` is what evolves, and ``R_φ Φ0 / t_c`` converts ``Ω``), while the torque scale
     ``μ m_r g_eff r_eff`` is proportional to it; apart from the run-up transient inside the window,
     a reading at torque ``T`` under ``s R_φ`` is the reading at ``T / s`` under ``R_φ``. One

@@ -1,7 +1,7 @@
 """Summary statistics of a speed record, and of an ensemble of model records.
 
 The model is chaotic, so a measured curve is one realization; what the model predicts is the
-distribution of a realization's statistics (MODEL.md "Long-run statistics of chaotic motion").
+distribution of a realization's statistics (docs/model.md "Long-run statistics of chaotic motion").
 A record ``y(t)`` (rad/s on a uniform grid) is reduced to:
 
 * the trend: steady speed ``S`` and ``log τ`` of its first-order fit
@@ -13,7 +13,7 @@ A record ``y(t)`` (rad/s on a uniform grid) is reduced to:
   the fractions of its power in the low (``< f_N/8``) and middle (``f_N/8 … f_N/2``) bands of the
   sampled spectrum (``f_N`` the Nyquist frequency);
 * the kicks: ``log`` of the variance of the sample-to-sample increments over the ripple part.
-  Each impact changes ``x = R_φ Ω`` by ``R_φ H`` (MODEL.md "Events", ``H ≤ F``), so in rad/s the
+  Each impact changes ``x = R_φ Ω`` by ``R_φ H`` (docs/model.md "Events", ``H ≤ F``), so in rad/s the
   kicks scale with ``R_φ`` at a fixed steady speed, while the measurement noise adds ``2σ²``.
   Unlike the time constant, which one run-up realizes once (its spread across the members of a
   chaotic ensemble is tens of percent), this averages over every sample of the steady part: it
@@ -22,7 +22,7 @@ A record ``y(t)`` (rad/s on a uniform grid) is reduced to:
   ensemble mean of it is the ensemble-mean curve's (the first-order steady speed of one chaotic
   run-up is not: its members' mean differs from the mean curve's by percent).
 
-With the drive frequency and Φ0 known, MODEL.md's scaling (``x = R_φ Ω`` evolves at a rate
+With the drive frequency and Φ0 known, docs/model.md's scaling (``x = R_φ Ω`` evolves at a rate
 ``∝ R_φ`` while the axial motion does not depend on ``R_φ``) makes ``S`` fix one combination of
 ``(e, omega_s, ψ)`` and ``τ`` mainly ``R_φ``; the rise shape and the ripple carry the rest.
 """

@@ -2,7 +2,7 @@
 
 The spec (``workflow/config/synthetic_motor.yaml``) names the generating parameters, the motor
 constants, the record, the measurement noise and the model's restitution noise ``e_sigma``
-(MODEL.md "Long-run statistics of chaotic motion"). The curve is ensemble member ``member`` of
+(docs/model.md "Long-run statistics of chaotic motion"). The curve is ensemble member ``member`` of
 the model with that restitution noise, plus Gaussian measurement noise: a realization the fitted
 model (which uses the same stated ``e_sigma``) can reproduce, not a round-off-chosen orbit.
 """

@@ -8,7 +8,7 @@ Jacobian of the whitened residuals at the estimate (chord method, each step one 
 the exact residuals) starting from the previous step's optimum. A side that reaches its search
 bound below the threshold is open; a parameter whose profile stays below the threshold over its
 whole search range is **not identified**. Correlations come from the inverse of ``JᵀJ``;
-well-identified combinations are its eigenvectors (MODEL.md's scaling predicts one combination of
+well-identified combinations are its eigenvectors (docs/model.md's scaling predicts one combination of
 ``(e, omega_s, ψ)`` from the steady speed and ``R_φ`` from the time constant).
 """
 

@@ -1,6 +1,6 @@
 """Measured load curves: speed against load torque, CSV + YAML sidecar, read and validated.
 
-INTERFACES.md: CSV columns ``torque_Nm`` (load torque, N·m, >= 0, no repeats), ``speed_rad_s``
+docs/formats.md: CSV columns ``torque_Nm`` (load torque, N·m, >= 0, no repeats), ``speed_rad_s``
 (mean rotor speed, rad/s) and optional ``speed_sd_rad_s`` (spread of repeated readings). The
 sidecar (same stem, ``.yaml``) holds the drive as a run-up's does, the rotor and the window::
 
@@ -15,7 +15,7 @@ sidecar (same stem, ``.yaml``) holds the drive as a run-up's does, the rotor and
     protocol: "5 repeats per load"   # informative
 
 The torque scale ``μ m_r g_eff r_eff`` follows from the rotor and the fitted ``R_φ``
-(MODEL.md: ``R_φ = (r_eff/r_g)² μ / R_d``; :meth:`bouncedisk.model.params.PhysicalParameters.
+(docs/model.md: ``R_φ = (r_eff/r_g)² μ / R_d``; :meth:`bouncedisk.model.params.PhysicalParameters.
 from_nondimensional`), so a load curve is predicted by the model at any ``(e, ω_s, R_φ, ψ)``:
 :func:`bouncedisk.studies.torque_speed.readings_from_rest`.
 """

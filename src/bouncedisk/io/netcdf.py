@@ -1,6 +1,6 @@
 """netCDF files people share: writing simulation output, reading and validating it.
 
-Names, units and attributes follow INTERFACES.md ("netCDF files"). Simulation files are streamed
+Names, units and attributes follow docs/formats.md ("netCDF files"). Simulation files are streamed
 chunk by chunk (memory stays bounded for 10⁷-event runs) into a temporary file that is renamed
 only when complete. Derived datasets (Poincaré maps, sweeps, fits) are xarray Datasets written
 with :func:`write_dataset`, also atomically.
@@ -158,7 +158,7 @@ class SimulationWriter:
             nc.createDimension("time", None)
             self._var("time", "f8", "time")
             # nondimensional: no CF standard_name/axis "T", which need units of time
-            nc["time"].comment = "nondimensional time t/t_c (t_c = sqrt(U0/g_eff), MODEL.md)"
+            nc["time"].comment = "nondimensional time t/t_c (t_c = sqrt(U0/g_eff), docs/model.md)"
             if self.t_c is not None:  # elapsed seconds, no date: not a CF time (cf_time_attrs)
                 self._var("time_s", "f8", "time")
             for name in ("u_rotor", "v_rotor", "u_stator"):
@@ -330,7 +330,7 @@ def open_checked(
 
 
 def open_simulation(path: str | Path, lazy: bool = False) -> xr.Dataset:
-    """Open and validate a simulation file (INTERFACES.md variables and attributes).
+    """Open and validate a simulation file (docs/formats.md variables and attributes).
 
     ``lazy`` (:func:`open_checked`) leaves the data on disk and skips the check of their values.
     """

@@ -62,7 +62,7 @@ def sha256_file(path: str | Path, block: int = 1 << 20) -> str:
     return h.hexdigest()
 
 
-#: Global attributes of a simulation file (INTERFACES.md "netCDF files"), the one list: the run's
+#: Global attributes of a simulation file (docs/formats.md "netCDF files"), the one list: the run's
 #: scene and solver, the run itself, and the CF/ACDD attributes every file carries.
 SCENE_ATTRS = (
     "e",
@@ -85,7 +85,7 @@ RUN_ATTRS = (
     "status",
 )
 CF_ATTRS = ("Conventions", "title", "history", "source", "references")
-#: Every attribute INTERFACES.md requires of a simulation file.
+#: Every attribute docs/formats.md requires of a simulation file.
 REQUIRED_ATTRS = SCENE_ATTRS + RUN_ATTRS + CF_ATTRS
 #: MLflow tags of the code version a tracked run ran (:mod:`bouncedisk.tracking` writes them).
 TAG_VERSION = "bouncedisk.version"
@@ -134,7 +134,7 @@ METADATA_DEFAULTS = {
 STANDARD_NAME_VOCABULARY = (
     "CF Standard Name Table (none used: no standard name fits these quantities)"
 )
-#: The dates of a file (``created`` of INTERFACES.md and ACDD-1.3's), all the time of writing.
+#: The dates of a file (``created`` of docs/formats.md and ACDD-1.3's), all the time of writing.
 DATE_ATTRS = ("created", "date_created", "date_modified", "date_issued", "date_metadata_modified")
 
 
@@ -159,13 +159,13 @@ PROCESSING = {
     "model": (
         "model output (simulated), not measured data",
         "Quantities are nondimensional (units '1') unless their units say otherwise; "
-        "time is in units of t_c = sqrt(U0/g) (MODEL.md, 'Variables and scales').",
+        "time is in units of t_c = sqrt(U0/g) (docs/model.md, 'Variables and scales').",
     ),
     "fit": (
         "measured run-ups (omega_measured: their mean) and the model fitted to them (simulated)",
         "Variables named *measured* are the measured data (coverage_content_type "
         "physicalMeasurement), the others model results; time is in seconds from the start "
-        "of the measured run-up, the fitted parameters nondimensional (MODEL.md).",
+        "of the measured run-up, the fitted parameters nondimensional (docs/model.md).",
     ),
 }
 

@@ -46,7 +46,7 @@ class RunStatus(IntEnum):
 
 
 class EventKind(IntEnum):
-    """Kind of an event row (MODEL.md "Events"); the netCDF ``kind`` flag values."""
+    """Kind of an event row (docs/model.md "Events"); the netCDF ``kind`` flag values."""
 
     IMPACT = _K.KIND_IMPACT  # one impact
     CHATTER = _K.KIND_CHATTER  # the accumulated tail of a complete chattering sequence

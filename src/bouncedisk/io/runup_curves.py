@@ -26,7 +26,7 @@ from ..model.params import number
 from ..model.scene import read_yaml
 
 MIN_ROWS = 20
-#: Largest torsional amplitude Φ0 (rad) a sidecar may state: half a turn (MODEL.md's Φ0 is a
+#: Largest torsional amplitude Φ0 (rad) a sidecar may state: half a turn (docs/model.md's Φ0 is a
 #: small torsion angle of the stator; anything larger is a unit mistake).
 MAX_PHI0_RAD = 3.141592653589793
 #: The measurement noise may not exceed this multiple of the data's own standard deviation (the

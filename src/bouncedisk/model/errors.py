@@ -1,4 +1,4 @@
-"""Errors a user can cause, reported as one clear line (INTERFACES.md: exit status 2)."""
+"""Errors a user can cause, reported as one clear line (docs/formats.md: exit status 2)."""
 
 from __future__ import annotations
 

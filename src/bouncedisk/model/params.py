@@ -1,4 +1,4 @@
-"""Model parameters: the nondimensional set and the physical set it comes from (MODEL.md).
+"""Model parameters: the nondimensional set and the physical set it comes from (docs/model.md).
 
 Nondimensional (paper §2.3, eqs. 13–15): ``e`` restitution, ``omega_s = ω t_c`` stator
 frequency (peak stator acceleration ``Γ = omega_s²`` in units of g), ``r_phi = R_φ`` angular
@@ -79,7 +79,7 @@ def whole_number(source: str, name: str, value: object, *, minimum: int = 1) -> 
 
 @dataclass(frozen=True)
 class Parameters:
-    """Nondimensional model parameters (MODEL.md "Variables and scales").
+    """Nondimensional model parameters (docs/model.md "Variables and scales").
 
     Parameters
     ----------
@@ -97,10 +97,10 @@ class Parameters:
         ``μ_static / μ_kinetic >= 1`` for the ``kinetic_static`` effect.
     e_sigma : float
         ``σ_e >= 0``, standard deviation of the per-impact restitution for the
-        ``restitution_noise`` effect (MODEL.md "Long-run statistics of chaotic motion").
+        ``restitution_noise`` effect (docs/model.md "Long-run statistics of chaotic motion").
     load_torque : float
         ``τ_L >= 0``, the constant load torque of the ``load`` effect in units of the friction
-        torque at the static normal load, ``μ m_r g_eff r_eff`` (MODEL.md "The motor under load").
+        torque at the static normal load, ``μ m_r g_eff r_eff`` (docs/model.md "The motor under load").
     """
 
     e: float
@@ -177,7 +177,7 @@ class Scales:
     """Conversion from nondimensional to SI units.
 
     ``time_s = t * t_c``; ``omega_rad_s = Ω * omega_scale`` with ``omega_scale = R_φ Φ0 / t_c``;
-    ``length_m = u * U0``; ``torque_Nm = τ * torque`` with ``torque = μ m_r g_eff r_eff`` (MODEL.md
+    ``length_m = u * U0``; ``torque_Nm = τ * torque`` with ``torque = μ m_r g_eff r_eff`` (docs/model.md
     "The motor under load"); powers in W are ``P * torsion_power`` (torsional terms, units
     ``J_r omega_scale² / t_c``, equal to ``torque * omega_scale``) and ``P * axial_power`` (axial
     terms, units ``m_r g_eff U0 / t_c``).
@@ -194,7 +194,7 @@ class Scales:
 
 @dataclass(frozen=True)
 class PhysicalParameters:
-    """Dimensional description of a motor (SI units; MODEL.md "Physical conversion").
+    """Dimensional description of a motor (SI units; docs/model.md "Physical conversion").
 
     Parameters
     ----------
@@ -296,7 +296,7 @@ class PhysicalParameters:
 
     def to_nondimensional(self) -> Parameters:
         """The four nondimensional parameters ``(e, omega_s, r_phi, psi)`` and the load
-        ``τ_L = T_L / (μ m_r g_eff r_eff)`` (MODEL.md "The motor under load")."""
+        ``τ_L = T_L / (μ m_r g_eff r_eff)`` (docs/model.md "The motor under load")."""
         sc = self.scales()
         return Parameters(
             e=self.e,
@@ -326,7 +326,7 @@ class PhysicalParameters:
     ) -> PhysicalParameters:
         """The motor whose nondimensional parameters are ``p``, given its drive and rotor.
 
-        The inverse of :meth:`to_nondimensional` (MODEL.md "Physical conversion"):
+        The inverse of :meth:`to_nondimensional` (docs/model.md "Physical conversion"):
         ``t_c = ω_s / (2π f)``, ``U0 = g_eff t_c²``, ``R_d = r_eff Φ0 / U0`` and
         ``μ = R_φ R_d (r_g / r_eff)²`` (eq. 15); ``load_torque`` is in N·m.
         """

@@ -1,4 +1,4 @@
-"""Scenes: parameters, initial state, effects, stop rule, outputs and solver (INTERFACES.md).
+"""Scenes: parameters, initial state, effects, stop rule, outputs and solver (docs/formats.md).
 
 A scene is read from YAML, ``--set key=value`` overrides are applied to the raw mapping, and the
 result is validated field by field; every problem raises :class:`~bouncedisk.model.errors.InputError`
@@ -21,7 +21,7 @@ from . import stator, yamlio
 from .errors import InputError
 from .params import Parameters, PhysicalParameters, Scales, number, whole_number
 
-#: Effects a scene may name (MODEL.md "Optional effects").
+#: Effects a scene may name (docs/model.md "Optional effects").
 EFFECTS = (
     "impacts",
     "contact",
@@ -54,7 +54,7 @@ TOP_KEYS = (
 #: Largest ensemble a scene may ask for (members run one after another on each core).
 MAX_MEMBERS = 100_000
 #: Smallest restitution noise, in units in the last place of ``e``, that can perturb ``e``: below
-#: it ``e + e_sigma * xi`` rounds back to ``e`` for most deviates ``|xi| <~ 2`` (MODEL.md).
+#: it ``e + e_sigma * xi`` rounds back to ``e`` for most deviates ``|xi| <~ 2`` (docs/model.md).
 NOISE_MIN_ULPS = 4
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 
@@ -320,7 +320,7 @@ def _name(src: str, raw: dict) -> tuple[str, str]:
 
 
 def _parameters(src: str, raw: dict) -> tuple[Parameters, PhysicalParameters | None]:
-    """``parameters`` (nondimensional) or ``physical`` (SI, converted: MODEL.md eqs. 2, 13–15)."""
+    """``parameters`` (nondimensional) or ``physical`` (SI, converted: docs/model.md eqs. 2, 13–15)."""
     if "parameters" in raw and "physical" in raw:
         raise InputError(src, "physical", "give either 'parameters' or 'physical', not both")
     if "physical" in raw:
@@ -342,7 +342,7 @@ def _parameters(src: str, raw: dict) -> tuple[Parameters, PhysicalParameters | N
 def _check_effect_parameters(
     src: str, raw: dict, effects: frozenset[str], params: Parameters
 ) -> None:
-    """The parameters an effect needs are given (MODEL.md "Optional effects")."""
+    """The parameters an effect needs are given (docs/model.md "Optional effects")."""
     if "stator_inertia" in effects and math.isinf(params.inertia_ratio):
         raise InputError(
             src, "parameters.inertia_ratio", "is required by the 'stator_inertia' effect"
@@ -490,7 +490,7 @@ def _check_paired(src: str, raw: dict, effects: frozenset[str]) -> None:
 
 
 def _ensemble(src: str, v: Any, effects: frozenset[str], params: Parameters) -> Ensemble:
-    """Validate ``ensemble: {members, seed}`` (INTERFACES.md)."""
+    """Validate ``ensemble: {members, seed}`` (docs/formats.md)."""
     em = _mapping(src, "ensemble", v, ("members", "seed"))
     if isinstance(em.get("members"), str):  # a quoted '3' is text, not a count
         raise InputError(

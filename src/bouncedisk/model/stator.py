@@ -1,9 +1,9 @@
-"""Stator kinematics and normal load: the one numpy copy (MODEL.md "Variables and scales").
+"""Stator kinematics and normal load: the one numpy copy (docs/model.md "Variables and scales").
 
 The stator moves as prescribed (paper eq. 1, nondimensional): axial ``u_s = sin(w t)``,
 ``v_s = w cos(w t)``, ``a_s = −w² sin(w t)``; twist ``φ_s = sin(w t + ψ)``,
 ``Ω_s = w cos(w t + ψ)`` (``α_s`` is needed by the compiled kernel only). The normal load in
-contact is ``N = 1 + a_s`` (eq. 17, corrected in MODEL.md).
+contact is ``N = 1 + a_s`` (eq. 17, corrected in docs/model.md).
 
 Every function takes the stator phase ``θ = w t`` (the engine records events by their phase), so
 a caller with a time passes ``w * t``. A Python ``float`` goes through :mod:`math` (fast in

@@ -80,7 +80,7 @@ def ivp_events(
     rtol, atol = tol, tol * 0.1
 
     def rhs(t, y):
-        """Gap dynamics in flight: ``z'' = −1 − a_s = −1 + w² sin(wt)`` (MODEL.md "Flight")."""
+        """Gap dynamics in flight: ``z'' = −1 − a_s = −1 + w² sin(wt)`` (docs/model.md "Flight")."""
         return [y[1], -1.0 - stator.acceleration(w * t, w)]
 
     def gap(t, y):

@@ -30,7 +30,7 @@ from ..model.scene import Scene
 def _chunks(scene: Scene) -> Iterator[Chunk]:
     """Chunks from the scene's solver (the exact engine or a comparator)."""
     if scene.solver.method == "exact":
-        # the energy audit over the whole run (MODEL.md "Power and energy audit")
+        # the energy audit over the whole run (docs/model.md "Power and energy audit")
         cfg = dataclasses.replace(engine_config(scene), stats_from=scene.initial.t)
         return iterate(cfg, scene.initial)
     from .comparators import iterate_comparator
@@ -161,7 +161,7 @@ class RunSummary:
 
 
 def scene_attrs(scene: Scene) -> dict:
-    """Global attributes describing a scene (INTERFACES.md)."""
+    """Global attributes describing a scene (docs/formats.md)."""
     p = scene.params
     i = scene.initial
     attrs = {

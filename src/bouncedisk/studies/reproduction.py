@@ -202,14 +202,14 @@ def _load_curve(src: _Source, name: str) -> tuple[dict, str]:
 
 
 def _load_checks(src: _Source) -> list[CheckResult]:
-    """The motor under load (MODEL.md): the energy audit closes, the stall torque respects the
+    """The motor under load (docs/model.md): the energy audit closes, the stall torque respects the
     momentum bound, and the speed falls (or stays, within its interval) as the load grows."""
     out = []
     for name in LOAD_CURVES:
         c, where = _load_curve(src, name)
         e = c["e"]
         out.append(CheckResult(
-            f"e = {e:g}: the energy audit closes to round-off on every load (MODEL.md)",
+            f"e = {e:g}: the energy audit closes to round-off on every load (docs/model.md)",
             f"largest relative residual {c['residual']:.2g} over both balances, branches, loads",
             "<= 1e-9", c["residual"] <= 1e-9, where,
         ))  # fmt: skip
@@ -218,7 +218,7 @@ def _load_checks(src: _Source) -> list[CheckResult]:
         ok = (stall <= 1.0) if math.isfinite(stall) else top < 1.0
         shown = f"{stall:.4g}" if math.isfinite(stall) else f"not reached up to {top:g}"
         out.append(CheckResult(
-            f"e = {e:g}: stall torque within the momentum bound (mean N = 1, MODEL.md)",
+            f"e = {e:g}: stall torque within the momentum bound (mean N = 1, docs/model.md)",
             f"stall torque {shown}", "<= 1 (units of the friction torque)", ok, where,
         ))  # fmt: skip
         rises = [
@@ -289,7 +289,7 @@ def _locked_check(src: _Source) -> CheckResult:
     st, where = src.stats("stats_locked")
     ok = st["regime"] == "chattering-periodic" and st["lyapunov_reset_fraction"] == 1.0
     return CheckResult(
-        "e = 0.5, omega_s = 1.126 is a locked chattering cycle, not chaos (MODEL.md, Regimes)",
+        "e = 0.5, omega_s = 1.126 is a locked chattering cycle, not chaos (docs/model.md, Regimes)",
         f"regime {st['regime']} {st['period']} in {100 * st['regime_fraction']:.0f}% of "
         f"members; {100 * st['lyapunov_reset_fraction']:.0f}% reset every cycle (exponent -inf)",
         "chattering-periodic in the majority, every member's exponent -inf (reset)",

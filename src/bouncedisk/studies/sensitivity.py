@@ -4,7 +4,7 @@ The study (README "Sensitivity of the motor") samples ``(e, omega_s, log10_r_phi
 configured ranges with SALib's Sobol' sequence (Saltelli's scheme, first-order and total indices,
 ``N (D + 2)`` points), evaluates the figures of merit at every point, and lets SALib estimate the
 indices with their bootstrap intervals. Every figure of merit is an ensemble statistic with a 95 %
-interval (MODEL.md "Long-run statistics of chaotic motion"); its squared standard error is the
+interval (docs/model.md "Long-run statistics of chaotic motion"); its squared standard error is the
 ensemble noise in that point's value, so :func:`analyse` reports which share of each output's
 variance over the sample is noise rather than parameters (an index is never read off noise).
 
@@ -39,7 +39,7 @@ from .sensitivity_settings import PARAMETERS, StudySettings
 
 LEVEL = 0.95
 #: Figures of merit: name -> (long name, units, needs the ``load`` effect). Speeds and powers are
-#: scaled by ``R_φ``: ``R_φ Ω`` is the rotor speed in units of ``Φ0/t_c`` (MODEL.md "Variables and
+#: scaled by ``R_φ``: ``R_φ Ω`` is the rotor speed in units of ``Φ0/t_c`` (docs/model.md "Variables and
 #: scales"), so they compare motors of the same stator at different ``R_φ``.
 OUTPUTS: dict[str, tuple[str, str, bool]] = {
     "no_load_speed": ("no-load rotor speed R_phi * mean Omega (units Phi0/t_c)", "1", False),
@@ -121,19 +121,19 @@ class MotorModel:
     """The motor's figures of merit at a point ``(e, omega_s, log10_r_phi, psi)``.
 
     Each point is an ensemble of ``members`` runs from rest, differing by restitution noise
-    ``e_sigma`` (MODEL.md "Long-run statistics of chaotic motion"), over ``(discard + duration)/R_φ``:
+    ``e_sigma`` (docs/model.md "Long-run statistics of chaotic motion"), over ``(discard + duration)/R_φ``:
     no-load speed, chatter rate and regime from :func:`bouncedisk.analysis.statistics.run_stats` (after the
     transient ``discard/R_φ``), the run-up time constant from the first-order trend
     (:func:`bouncedisk.analysis.observables.first_order_trend`) of the members' mean run-up with a
     jackknife interval over members, and with ``loads`` the torque–speed curve's stall torque,
-    maximum power and the torsional efficiency at it (MODEL.md "The motor under load").
+    maximum power and the torsional efficiency at it (docs/model.md "The motor under load").
     """
 
     def __init__(self, settings: StudySettings, torque_speed: Callable | None = None):
         self.s = settings
         self._torque_speed = torque_speed
         if settings.loads and torque_speed is None:
-            from .torque_speed import torque_speed as ts  # the load effect (MODEL.md)
+            from .torque_speed import torque_speed as ts  # the load effect (docs/model.md)
 
             self._torque_speed = ts
         self.outputs = tuple(k for k, v in OUTPUTS.items() if settings.loads or not v[2])
@@ -188,7 +188,7 @@ class MotorModel:
 
     def _load(self, point: Mapping[str, float], r: float) -> dict:
         """Stall torque, maximum power and the efficiency at it, from the torque–speed curve's
-        up branch (loads increasing by continuation; MODEL.md "The motor under load").
+        up branch (loads increasing by continuation; docs/model.md "The motor under load").
 
         The stall torque and its bootstrap interval are the curve's. The maximum power is the
         largest mean power ``τ_L Ω̄`` over the loads asked for, with its Student interval, and

@@ -6,7 +6,7 @@ naming the field. :data:`LIMITS` and :data:`DOMAIN` are the one copy of the boun
 ``workflow/schemas/config.schema.yaml`` repeats them and a test checks that it does.
 
 Times are in units of ``1/R_φ``, the run-up's own time scale: the rotor's ``x = R_φ Ω`` evolves
-at a rate proportional to ``R_φ`` (MODEL.md "Events", "Contact, slipping"), so a run of
+at a rate proportional to ``R_φ`` (docs/model.md "Events", "Contact, slipping"), so a run of
 ``discard + duration`` in these units covers the same number of run-up time constants at every
 ``R_φ``.
 """
@@ -67,7 +67,7 @@ class StudySettings:
     seed : int
         Seed of the Sobol' sequence's scrambling, the ensembles and the bootstrap.
     e_sigma : float
-        Restitution noise of the members (MODEL.md "Long-run statistics of chaotic motion").
+        Restitution noise of the members (docs/model.md "Long-run statistics of chaotic motion").
     map_e, map_omega_s, map_points
         Design maps over ``(psi, log10_r_phi)``: one per ``e`` in ``map_e`` at ``map_omega_s``,
         ``map_points = (n_psi, n_r_phi)``.

@@ -1,6 +1,6 @@
 """What statistics cost: the 95 % half-width of the mean rotor speed against CPU time.
 
-For chaotic motion the statistic, not the trajectory, is what users need (MODEL.md "Long-run
+For chaotic motion the statistic, not the trajectory, is what users need (docs/model.md "Long-run
 statistics of chaotic motion"). The half-width of an ensemble mean shrinks like
 ``1/sqrt(members × duration)``; a single run's time average does not converge to anything
 reproducible: it jumps when ``e`` moves by 1e-9. This study measures both.

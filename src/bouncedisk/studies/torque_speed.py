@@ -1,6 +1,6 @@
 """The motor under load: torque–speed curves by continuation (``bouncedisk torque-speed``).
 
-A motor is read from its load characteristic (MODEL.md "The motor under load"): the ensemble's
+A motor is read from its load characteristic (docs/model.md "The motor under load"): the ensemble's
 mean speed, output power and efficiency at each load torque ``τ_L``, with 95 % intervals across
 members, and the derived no-load speed, stall torque (the first zero of the mean speed) and
 maximum-power point. The loads are swept **up and down by continuation**: each member at each
@@ -91,7 +91,7 @@ class LoadCurve:
         return np.stack([s.column(name) for s in self.branches[branch]], axis=1)
 
     def summary(self) -> dict:
-        """The JSON object of ``bouncedisk torque-speed --json`` (INTERFACES.md): the up branch's
+        """The JSON object of ``bouncedisk torque-speed --json`` (docs/formats.md): the up branch's
         statistics per load as lists, the derived quantities with intervals, the down branch
         under ``"down"`` and the loads where the branches differ."""
         out: dict = {"loads": [float(x) for x in self.loads]}
@@ -137,7 +137,7 @@ def _per_load(stats: list[EnsembleStats]) -> dict:
 
 
 def first_zero(loads: np.ndarray, speed: np.ndarray) -> float:
-    """The first load at which ``speed`` reaches 0, linearly interpolated (MODEL.md "stall
+    """The first load at which ``speed`` reaches 0, linearly interpolated (docs/model.md "stall
     torque": the smallest ``τ_L`` with ``Ω̄ <= 0``); ``nan`` when it stays positive."""
     if speed[0] <= 0.0:
         return float(loads[0])
@@ -195,7 +195,7 @@ def derived(loads: np.ndarray, speed: np.ndarray, power: np.ndarray) -> dict:
     return out
 
 
-#: The load curve's derived quantities (INTERFACES.md), each with its ``*_ci95``.
+#: The load curve's derived quantities (docs/formats.md), each with its ``*_ci95``.
 DERIVED = ("no_load_speed", "stall_torque", "max_power", "max_power_load")
 
 
@@ -360,7 +360,7 @@ CURVE_QUANTITIES = (
 
 
 def to_dataset(scene: Scene, curve: LoadCurve, wall_time_s: float):
-    """The load curve as an xarray Dataset (INTERFACES.md): per branch and load the ensemble
+    """The load curve as an xarray Dataset (docs/formats.md): per branch and load the ensemble
     means with their 95 % intervals, per member the speed and output power, the audit residuals,
     and the derived quantities as attributes, with the scene's provenance."""
     import xarray as xr
@@ -477,7 +477,7 @@ def readings_from_rest(
 ) -> list[EnsembleStats]:
     """What a lab reads at each load: the scene's ensemble started from its initial condition
     (at rest) under that load, each member's mean speed over the scene's stats window
-    (``[initial.t + discard, stop.time]``; INTERFACES.md, a load curve's ``window_s``).
+    (``[initial.t + discard, stop.time]``; docs/formats.md, a load curve's ``window_s``).
 
     Unlike :func:`torque_speed` there is no continuation: every reading starts afresh. Member
     ``m`` uses the noise stream ``(seed, m)`` at every load (common random numbers), or with
@@ -498,7 +498,7 @@ def readings_from_rest(
 
 
 def synthetic_load_curve(spec: dict, spec_path: str = "") -> tuple:
-    """A synthetic load curve of the synthetic motor (INTERFACES.md load-curve format).
+    """A synthetic load curve of the synthetic motor (docs/formats.md load-curve format).
 
     ``spec`` is ``workflow/config/synthetic_motor.yaml``: the generating ``parameters`` and
     ``e_sigma``, the drive, ``rotor``, ``preload_N`` and ``load_curve: {loads_Nm, repeats,
