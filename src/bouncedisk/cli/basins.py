@@ -1,0 +1,139 @@
+"""The ``bouncedisk basins`` command: which motion each start reaches (docs/formats.md "Basins file")."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+from ..io.history import write_with_history
+from ..model.errors import InputError
+from ..run.cores import available_cores
+from .common import _add_set_option
+from .tracking_options import _add_track_options, _track, _tracking_store
+
+
+def format_basins(summary: dict) -> str:
+    """A human-readable table of :func:`bouncedisk.studies.basins.summary`."""
+    lo, hi = summary["window"]
+    lines = [
+        f"{summary['starts']} starts, averaged over [{lo:g}, {hi:g}] time units after switch-on",
+        f"{'label':>5} {'mean speed':>12} {'regime':>22} {'starts':>7} {'fraction':>9} "
+        f"{'95% CI (Wilson)':>18}",
+    ]
+    for a in summary["attractors"]:
+        period = a["period"]
+        regime = a["regime"] + (f" {period[0]}/{period[1]}" if period else "")
+        f_lo, f_hi = a["fraction_ci95"]
+        lines.append(
+            f"{a['label']:>5} {a['mean_speed']:>12.6g} {regime:>22} {a['starts']:>7} "
+            f"{a['fraction']:>9.3f} {f'[{f_lo:.3f}, {f_hi:.3f}]':>18}"
+        )
+    u = summary["unsettled"]
+    f_lo, f_hi = u["fraction_ci95"]
+    lines.append(
+        f"{-1:>5} {'not settled':>12} {'':>22} {u['starts']:>7} {u['fraction']:>9.3f} "
+        f"{f'[{f_lo:.3f}, {f_hi:.3f}]':>18}"
+    )
+    lines.append(f"rule: {summary['rule']} (settle = {summary['settle']:g})")
+    return "\n".join(lines)
+
+
+def _values(text: str | None, field: str, default: list[float]) -> list[float]:
+    """Speeds or heights from ``A:B:K`` or ``a,b,c`` (:func:`parse_loads`'s forms)."""
+    from ..studies.torque_speed import parse_loads
+
+    if text is None:
+        return default
+    return [float(x) for x in parse_loads(text, "<arguments>", field)]
+
+
+def basins_command(args: argparse.Namespace) -> dict:
+    """Run ``bouncedisk basins``; returns the printed summary."""
+    from ..io.output_checks import check_output_path
+    from ..model.scene import load_scene
+    from ..run.runner import deferred_interrupts
+    from ..studies.basins import basins, check_scene, start_grid, summary
+
+    if args.cores is not None and args.cores < 1:
+        raise InputError("<arguments>", "--cores", f"must be >= 1, got {args.cores}")
+    if not 0.0 < args.settle < 1.0:
+        raise InputError("<arguments>", "--settle", f"must be in (0, 1), got {args.settle}")
+    if args.output is not None:
+        check_output_path(args.output, "-o", inputs=[args.scene])
+    scene = load_scene(args.scene, args.set or [])
+    check_scene(scene)
+    speeds = _values(args.speeds, "--speeds", [scene.initial.omega])
+    heights = _values(args.heights, "--heights", [0.0])
+    grid = start_grid(args.phases, speeds, heights)
+    cores = args.cores or available_cores()
+    start = time.perf_counter()
+    with deferred_interrupts() as req:
+
+        def progress(done: int, total: int) -> None:
+            if req.signum is not None:
+                raise KeyboardInterrupt
+
+        ds = basins(scene, grid, cores=cores, settle=args.settle, progress=progress)
+        wall = time.perf_counter() - start
+        ds.attrs["wall_time_s"] = round(wall, 6)
+        if args.output:
+            write_with_history(ds, args.output)
+    out = summary(ds)
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(format_basins(out))
+        if args.output:
+            print(f"{args.output}: per start and per attractor ({wall:.2f} s on {cores} cores)")
+    return out
+
+
+def _cmd_basins(args: argparse.Namespace) -> int:
+    store = _tracking_store(args)
+    out = basins_command(args)
+    params = {"scene_file": args.scene, "set": args.set or [], "phases": args.phases}
+    metrics = {"n_attractors": len(out["attractors"]), "unsettled": out["unsettled"]["fraction"]}
+    _track(args, store, "basins", [args.output] if args.output else [], params, metrics)
+    return 0
+
+
+def _add_basins(sub) -> None:
+    """``bouncedisk basins SCENE --phases N [--speeds ..] [--heights ..] [-o F.nc] [--json]``."""
+    p = sub.add_parser(
+        "basins",
+        help="coexisting motions: which attractor each start reaches, basin fractions with 95%% intervals",
+    )
+    p.add_argument("scene", help="scene file (YAML) with torsion, stop.time and stats.discard")
+    p.add_argument(
+        "--phases",
+        type=int,
+        required=True,
+        metavar="N",
+        help="stator phases at switch-on, N evenly over one period",
+    )
+    p.add_argument(
+        "--speeds",
+        metavar="A:B:K | a,b,c",
+        help="initial rotor speeds (default: the scene's initial.omega)",
+    )
+    p.add_argument(
+        "--heights",
+        metavar="A:B:M | a,b,c",
+        help="initial heights above the stator: 0 in contact, above 0 released at rest (default 0)",
+    )
+    p.add_argument(
+        "--settle",
+        type=float,
+        default=0.01,
+        help="settle tolerance: the halves' mean speeds within this fraction of the largest "
+        "mean speed (default 0.01; chaotic: 10x)",
+    )
+    p.add_argument("-o", "--output", help="write the starts and the attractors to this netCDF file")
+    _add_set_option(p, "parameters.load_torque=0.075")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    p.add_argument(
+        "--cores", type=int, default=None, help="starts run on this many cores (default: all)"
+    )
+    _add_track_options(p)
+    p.set_defaults(func=_cmd_basins)

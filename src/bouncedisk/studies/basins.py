@@ -1,0 +1,622 @@
+"""Coexisting motions and their basins (``bouncedisk basins``; docs/formats.md "Basins file").
+
+Which motion a start reaches: starts over the stator's phase at switch-on, the rotor's initial
+speed and its initial height above the stator (height 0: resting on it, in contact and moving
+with it; above 0: released at absolute rest, docs/model.md "Things that are easy to get wrong",
+initial condition), each run over the scene's statistics window ``[discard, stop]`` with the
+scene's effects (load, noise). Every start is one run of the engine reduced by
+:func:`~bouncedisk.analysis.ensembles.run_member` (regime, period, mean speed, as ``stats``
+measures them), the starts run side by side on threads (:mod:`bouncedisk.analysis.sweeps`'s
+ordered runs), and start ``i`` uses the noise stream ``(seed, i)``: its numbers do not depend
+on the shard it is in or on the number of cores.
+
+**The rule** (:data:`RULE`). A start's window is measured in two halves, each a run from the
+start (the first to the window's middle, the second to its end), so the start's mean speed is
+the mean of its two halves' means and its regime that of the window's end:
+
+1. its class is its regime with its period: ``periodic`` and ``chattering-periodic`` with
+   ``(p, q)`` (and, for these, the impact phases of one cycle), ``chaotic`` (chaotic or with
+   chatter reinjection: one class, the tail's naming may flip between them), ``rest``;
+   ``unresolved`` is not a class: the start has **not settled**;
+2. a start has **settled** when its two halves' mean speeds differ by at most the class's
+   tolerance: ``settle x scale`` (``scale``: the largest absolute mean speed of all starts, at
+   least 1), ten times that for the chaotic class, whose finite-time means fluctuate; a start
+   that has not settled is labelled ``-1`` (a drifting speed: run longer);
+3. settled starts of one class (and, for periodic classes, one cycle of impact phases within
+   :data:`PHASE_TOL`) belong to one attractor when a chain of them joins their mean speeds with
+   steps of at most the class's tolerance. A chaotic attractor is not split by its finite-time
+   means: each start's halves differ by less than the tolerance, and the means of its starts
+   spread less than that, so consecutive means are closer still;
+4. attractors are numbered by decreasing mean speed (label 0: the fastest).
+
+The basin fraction of an attractor is its starts over all starts, with the Wilson score interval
+(95 %), and the same for the starts that have not settled.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections import Counter
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+
+from ..analysis import observables as ob
+from ..analysis.statistics import confidence_interval, ensemble_window
+from ..analysis.sweeps import _ordered_runs, shard_slice, with_params
+from ..engine import InitialState
+from ..io.provenance import base_attrs, new_run_id
+from ..model.engine_config import engine_config
+from ..model.errors import InputError
+from ..model.scene import Scene
+from ..run.runner import scene_attrs
+
+#: The settle tolerance's default, relative to the largest mean speed (rule 2).
+SETTLE = 1e-2
+#: The chaotic class's tolerance, in units of the others' (rule 2).
+CHAOTIC_FACTOR = 10.0
+#: Largest difference of two cycles' impact phases (rad) of one periodic attractor (rule 3).
+PHASE_TOL = 1e-4
+#: Impact phases of one cycle kept per start (a cycle of up to 32 events, the regime search's).
+ORBIT_SLOTS = 33
+#: Largest number of starts one computation may ask for.
+MAX_STARTS = 100_000
+#: Standard normal quantile of the 95 % Wilson interval.
+Z95 = 1.959963984540054
+#: The grouping rule, as the files and ``--json`` state it.
+RULE = (
+    "start settled when its two half-window mean speeds differ by <= settle * scale "
+    "(chaotic class: 10x; scale = max |mean speed|, >= 1); settled starts of one class "
+    "(regime + period + cycle phases; chaotic and chaotic-reinjection one class) form one "
+    "attractor when chained by mean-speed steps <= that tolerance; unresolved or unsettled: -1"
+)
+#: Per-start variables of a shard (docs/formats.md "Basins file").
+START_VARS = (
+    "phase", "speed", "height", "mean_omega", "mean_omega_first_half",
+    "mean_omega_second_half", "regime", "period_p", "period_q", "lyapunov", "n_impacts",
+    "orbit_phases",
+)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class StartGrid:
+    """The starts: ``phases`` (rad, stator phase at switch-on), ``speeds`` (initial ``Ω``),
+    ``heights`` (above the stator; 0: in contact), flattened with the phase varying fastest,
+    then the speed, then the height."""
+
+    phases: np.ndarray
+    speeds: np.ndarray
+    heights: np.ndarray
+
+    @property
+    def size(self) -> int:
+        """Number of starts."""
+        return len(self.phases) * len(self.speeds) * len(self.heights)
+
+    def flat(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(phase, speed, height)`` of every start, in start order."""
+        h, s, p = np.meshgrid(self.heights, self.speeds, self.phases, indexing="ij")
+        return p.ravel(), s.ravel(), h.ravel()
+
+
+def start_grid(
+    n_phases: int,
+    speeds: Sequence[float],
+    heights: Sequence[float] = (0.0,),
+    source: str = "<arguments>",
+) -> StartGrid:
+    """``n_phases`` phases ``2 pi k / n_phases`` over one stator period, with the speeds and
+    heights given.
+
+    Raises
+    ------
+    InputError
+        No phase, a negative or non-finite height or speed, or more than :data:`MAX_STARTS`.
+    """
+    if isinstance(n_phases, bool) or not isinstance(n_phases, int | np.integer) or n_phases < 1:
+        raise InputError(source, "--phases", f"must be a whole number >= 1, got {n_phases!r}")
+    for name, values in (("--speeds", speeds), ("--heights", heights)):
+        arr = np.asarray(values, float)
+        if arr.size == 0 or not np.all(np.isfinite(arr)) or np.any(arr < 0.0):
+            raise InputError(source, name, f"must be finite values >= 0, got {list(values)}")
+    grid = StartGrid(
+        2.0 * math.pi * np.arange(n_phases) / n_phases,
+        np.asarray(speeds, float),
+        np.asarray(heights, float),
+    )
+    if grid.size > MAX_STARTS:
+        raise InputError(source, "--phases", f"asks for {grid.size} starts, more than {MAX_STARTS}")
+    return grid
+
+
+def start_state(scene: Scene, phase: float, speed: float, height: float) -> InitialState:
+    """The initial state of one start: at time ``phase / omega_s`` (the stator's phase at
+    switch-on), rotor speed ``speed``; in contact for ``height == 0``, else released at rest
+    (``v = 0``) at ``u = u_s + height`` (eq. 1)."""
+    t = phase / scene.params.omega_s
+    if height == 0.0:
+        return InitialState(t=t, omega=speed)
+    return InitialState(t=t, omega=speed, u=math.sin(phase) + height, v=0.0)
+
+
+def check_scene(scene: Scene) -> tuple[float, float]:
+    """The scene's window ``(discard, duration)``; a basin computation needs a time stop with a
+    window of a stator period or more (:func:`ensemble_window`), torsion and the exact solver.
+
+    Raises
+    ------
+    InputError
+        Naming the scene's field at fault.
+    """
+    t_from, t_end = ensemble_window(scene)
+    if "torsion" not in scene.effects:
+        raise InputError(scene.source, "effects", "basins compare rotor speeds: add 'torsion'")
+    if scene.solver.method != "exact" or scene.model != "bouncing":
+        raise InputError(scene.source, "solver.method", "basins run the exact bouncing model only")
+    return t_from - scene.initial.t, t_end - scene.initial.t
+
+
+def _tasks(scene: Scene, grid: StartGrid, index: np.ndarray) -> Iterator[tuple]:
+    """:func:`run_member`'s arguments: two per start (the window's halves), in start order."""
+    discard, duration = check_scene(scene)
+    cfg = engine_config(scene)
+    mid = discard + 0.5 * (duration - discard)
+    phase, speed, height = grid.flat()
+    for i in index:
+        init = start_state(scene, float(phase[i]), float(speed[i]), float(height[i]))
+        t0 = init.t
+        yield dataclasses.replace(cfg, t_end=t0 + mid), init, int(i), t0 + discard
+        yield dataclasses.replace(cfg, t_end=t0 + duration), init, int(i), t0 + mid
+
+
+def _orbit(stats, tail: dict) -> np.ndarray:
+    """The sorted impact phases of one cycle of a (chattering-)periodic start, NaN-padded."""
+    out = np.full(ORBIT_SLOTS, np.nan)
+    if stats.regime == ob.REGIME_CODES["periodic"]:
+        n = stats.period_p
+    elif stats.regime == ob.REGIME_CODES["chattering-periodic"]:
+        n = stats.period_p + 1
+    else:
+        return out
+    n = min(n, ORBIT_SLOTS, len(tail["phase"]))
+    if n:
+        out[:n] = np.sort(np.mod(tail["phase"][-n:], 2.0 * math.pi))
+    return out
+
+
+def run_starts(
+    scene: Scene,
+    grid: StartGrid,
+    shard: int = 0,
+    n_shards: int = 1,
+    cores: int = 1,
+    progress: Callable[[int, int], None] | None = None,
+) -> xr.Dataset:
+    """Run one shard of the starts (a contiguous block of start indices) and return their
+    per-start values (:data:`START_VARS`) with the scene's provenance; join shards with
+    :func:`join_shards`, or group one complete set with :func:`group`."""
+    start = time.perf_counter()
+    check_scene(scene)
+    index = np.arange(grid.size)[shard_slice(grid.size, shard, n_shards)]
+    n = len(index)
+    vals = {k: np.full(n, np.nan) for k in START_VARS[3:6] + ("lyapunov",)}
+    ints = {k: np.zeros(n, np.int64) for k in ("regime", "period_p", "period_q", "n_impacts")}
+    orbit = np.full((n, ORBIT_SLOTS), np.nan)
+    pool = ThreadPoolExecutor(max_workers=max(1, cores))
+    try:
+        runs = _ordered_runs(pool, _tasks(scene, grid, index), ahead=4 * max(1, cores))
+        for j in range(n):
+            first, _, _ = next(runs)
+            second, _, tail = next(runs)
+            vals["mean_omega_first_half"][j] = first.mean_omega
+            vals["mean_omega_second_half"][j] = second.mean_omega
+            vals["mean_omega"][j] = 0.5 * (first.mean_omega + second.mean_omega)
+            vals["lyapunov"][j] = second.lyapunov
+            ints["regime"][j] = second.regime
+            ints["period_p"][j], ints["period_q"][j] = second.period_p, second.period_q
+            ints["n_impacts"][j] = first.n_impacts + second.n_impacts
+            orbit[j] = _orbit(second, tail)
+            if progress:
+                progress(j + 1, n)
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+    phase, speed, height = (a[index] for a in grid.flat())
+    ds = _start_dataset(index, phase, speed, height, vals, ints, orbit)
+    ds.attrs.update(_attrs(scene, grid, start, f"basins{shard}"))
+    ds.attrs.update({"shard": shard, "n_shards": n_shards, "n_impacts": int(ds["n_impacts"].sum())})
+    return ds
+
+
+def _start_dataset(index, phase, speed, height, vals, ints, orbit) -> xr.Dataset:
+    """The per-start variables (docs/formats.md "Basins file")."""
+    d = ("start",)
+    data = {
+        "phase": (d, phase, {"long_name": "stator phase at switch-on", "units": "rad"}),
+        "speed": (d, speed, {"long_name": "initial rotor angular velocity"}),
+        "height": (d, height, {"long_name": "initial height above the stator (0: in contact)"}),
+        "mean_omega": (
+            d,
+            vals["mean_omega"],
+            {"long_name": "time-averaged rotor angular velocity over the window"},
+        ),  # fmt: skip
+        "mean_omega_first_half": (
+            d,
+            vals["mean_omega_first_half"],
+            {"long_name": "mean rotor angular velocity over the window's first half"},
+        ),  # fmt: skip
+        "mean_omega_second_half": (
+            d,
+            vals["mean_omega_second_half"],
+            {"long_name": "mean rotor angular velocity over the window's second half"},
+        ),  # fmt: skip
+        "regime": (
+            d,
+            ints["regime"],
+            {"long_name": "dynamical regime at the window's end", **ob.regime_flags(np.int64)},
+        ),  # fmt: skip
+        "period_p": (
+            d,
+            ints["period_p"],
+            {"long_name": "impacts per cycle (periodic regimes; 0 otherwise)"},
+        ),  # fmt: skip
+        "period_q": (
+            d,
+            ints["period_q"],
+            {"long_name": "stator periods per cycle (periodic regimes; 0 otherwise)"},
+        ),  # fmt: skip
+        "lyapunov": (
+            d,
+            vals["lyapunov"],
+            {"long_name": "largest Lyapunov exponent per impact, between resets (second half)"},
+        ),  # fmt: skip
+        "n_impacts": (d, ints["n_impacts"], {"long_name": "impacts over the window"}),
+        "orbit_phases": (
+            ("start", "orbit_slot"),
+            orbit,
+            {
+                "long_name": "sorted impact phases of one cycle (periodic regimes; NaN otherwise)",
+                "units": "rad",
+            },
+        ),  # fmt: skip
+    }
+    for v in data.values():
+        v[2].setdefault("units", "1")
+    coords = {"start": ("start", np.asarray(index, np.int64), {"long_name": "start index"})}
+    return xr.Dataset(data, coords=coords)
+
+
+def _attrs(scene: Scene, grid: StartGrid, start: float, run: str) -> dict:
+    """Global attributes: provenance, the scene, the starts' grid and window."""
+    discard, duration = check_scene(scene)
+    attrs = base_attrs(f"bouncedisk basins of scene '{scene.name}'")
+    attrs.update(scene_attrs(scene))
+    attrs.update(
+        {
+            "n_starts": grid.size,
+            "phases": grid.phases,
+            "speeds": grid.speeds,
+            "heights": grid.heights,
+            "start_order": "phase fastest, then speed, then height",
+            "window": [discard, duration],
+            "window_comment": "each start averages over [t0 + window[0], t0 + window[1]], "
+            "t0 = phase / omega_s its switch-on",
+            "noise_streams": "start i uses the stream (ensemble_seed, i)",
+            "run_id": new_run_id(f"{scene.name}-{run}", scene.sha256),
+            "wall_time_s": round(time.perf_counter() - start, 6),
+            "status": "completed",
+        }
+    )
+    return attrs
+
+
+def join_shards(shards: Sequence[xr.Dataset]) -> xr.Dataset:
+    """The shards' starts in start order, checked: every start of the grid appears once.
+
+    Raises
+    ------
+    ValueError
+        A start missing or repeated, or shards of different computations.
+    """
+    n = int(shards[0].attrs["n_starts"])
+    if any(int(s.attrs["n_starts"]) != n for s in shards) or any(
+        s.attrs.get("scene_sha256") != shards[0].attrs.get("scene_sha256") for s in shards
+    ):
+        raise ValueError("the shards are of different basin computations")
+    index = np.concatenate([s["start"].values for s in shards])
+    counts = np.bincount(index, minlength=n) if index.size else np.zeros(n, int)
+    if len(counts) != n or np.any(counts != 1):
+        missing = np.nonzero(counts[:n] == 0)[0][:5].tolist()
+        repeated = np.nonzero(counts > 1)[0][:5].tolist()
+        raise ValueError(f"every start must appear once: missing {missing}, repeated {repeated}")
+    ds = xr.concat(list(shards), dim="start", combine_attrs="drop_conflicts").sortby("start")
+    for k in ("shard",):
+        ds.attrs.pop(k, None)
+    ds.attrs["wall_time_s"] = float(sum(float(s.attrs.get("wall_time_s", 0.0)) for s in shards))
+    ds.attrs["n_impacts"] = int(ds["n_impacts"].sum())
+    ds.attrs["shard_run_ids"] = ",".join(str(s.attrs.get("run_id")) for s in shards)
+    first = shards[0].attrs
+    ds.attrs["run_id"] = new_run_id(
+        f"{first.get('scene_name', 'scene')}-basins", str(first.get("scene_sha256", "0" * 8))
+    )
+    return ds
+
+
+def wilson(k: int, n: int, z: float = Z95) -> tuple[float, float]:
+    """Wilson's score interval of a proportion ``k / n`` (95 % with the default ``z``):
+    ``(k + z²/2)/(n + z²) ± z/(n + z²) sqrt(k (n − k)/n + z²/4)``, inside ``[0, 1]``."""
+    if n <= 0:
+        return math.nan, math.nan
+    centre = (k + 0.5 * z * z) / (n + z * z)
+    half = z / (n + z * z) * math.sqrt(k * (n - k) / n + 0.25 * z * z)
+    low = 0.0 if k == 0 else max(0.0, centre - half)
+    high = 1.0 if k == n else min(1.0, centre + half)
+    return low, high
+
+
+def _class_of(regime: int, p: int, q: int) -> tuple | None:
+    """A start's class (rule 1), ``None`` for ``unresolved``."""
+    name = ob.REGIMES[int(regime)]
+    if name == "unresolved":
+        return None
+    if name in ("chaotic", "chaotic-reinjection"):
+        return ("chaotic", 0, 0)
+    if name == "rest":
+        return ("rest", 0, 0)
+    return (name, int(p), int(q))
+
+
+def _same_cycle(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two cycles' sorted impact phases agree within :data:`PHASE_TOL` (rule 3)."""
+    fa, fb = np.isfinite(a), np.isfinite(b)
+    if not np.array_equal(fa, fb):
+        return False
+    return bool(np.all(ob.circular_distance(a[fa], b[fb]) <= PHASE_TOL))
+
+
+def labels(ds: xr.Dataset, settle: float = SETTLE) -> tuple[np.ndarray, float]:
+    """Every start's attractor label by the module's rule (:data:`RULE`), ``-1`` when it has not
+    settled, and the speed scale; attractors numbered by decreasing mean speed."""
+    mean = ds["mean_omega"].values
+    d_half = np.abs(ds["mean_omega_second_half"].values - ds["mean_omega_first_half"].values)
+    finite = mean[np.isfinite(mean)]
+    scale = max(1.0, float(np.max(np.abs(finite)))) if finite.size else 1.0
+    groups: dict[tuple, list[list[int]]] = {}  # class -> cycles -> starts
+    for i in range(len(mean)):
+        cls = _class_of(ds["regime"].values[i], ds["period_p"].values[i], ds["period_q"].values[i])
+        if cls is None or not math.isfinite(mean[i]):
+            continue
+        tol = settle * scale * (CHAOTIC_FACTOR if cls[0] == "chaotic" else 1.0)
+        if not d_half[i] <= tol:
+            continue
+        cycles = groups.setdefault(cls, [])
+        orbit = ds["orbit_phases"].values[i]
+        home = next(
+            (c for c in cycles if _same_cycle(ds["orbit_phases"].values[c[0]], orbit)), None
+        )
+        if home is None:
+            cycles.append([i])
+        else:
+            home.append(i)
+    found: list[list[int]] = []
+    for cls, cycles in groups.items():
+        tol = settle * scale * (CHAOTIC_FACTOR if cls[0] == "chaotic" else 1.0)
+        for members in cycles:
+            order = sorted(members, key=lambda i: (mean[i], i))
+            chain = [order[0]]
+            for a, b in zip(order, order[1:], strict=False):
+                if mean[b] - mean[a] > tol:
+                    found.append(chain)
+                    chain = []
+                chain.append(b)
+            found.append(chain)
+    found.sort(key=lambda c: (-float(np.mean(mean[c])), min(c)))
+    out = np.full(len(mean), -1, np.int64)
+    for k, chain in enumerate(found):
+        out[chain] = k
+    return out, scale
+
+
+def group(ds: xr.Dataset, settle: float = SETTLE) -> xr.Dataset:
+    """The starts of a complete computation with their labels and the attractors: per attractor
+    its mean speed (mean over its starts, Student interval across them), regime and period,
+    basin fraction with its Wilson interval (docs/formats.md "Basins file")."""
+    if not settle > 0.0 or not math.isfinite(settle):
+        raise InputError("<arguments>", "--settle", f"must be a number > 0, got {settle!r}")
+    lab, scale = labels(ds, settle)
+    n = len(lab)
+    mean = ds["mean_omega"].values
+    rows = []
+    for k in range(int(lab.max(initial=-1)) + 1):
+        idx = np.nonzero(lab == k)[0]
+        m, lo, hi = confidence_interval(mean[idx])
+        regimes = Counter(int(r) for r in ds["regime"].values[idx])
+        code = max(regimes, key=lambda c: (regimes[c], -c))
+        first = idx[0]
+        p = int(ds["period_p"].values[first]) if code in (1, 2) else 0
+        q = int(ds["period_q"].values[first]) if code in (1, 2) else 0
+        rows.append((m, lo, hi, code, p, q, len(idx), *_fraction(len(idx), n)))
+    arr = np.array(rows, float).reshape(-1, 10)
+    a = ("attractor",)
+    out = ds.copy()
+    out["label"] = ("start", lab, {"long_name": "attractor reached (-1: not settled within the window)", "units": "1"})  # fmt: skip
+    out = out.assign_coords(attractor=("attractor", np.arange(len(rows), dtype=np.int64), {"long_name": "attractor label (0: the fastest)"}))  # fmt: skip
+    spec = (
+        ("attractor_mean_speed", 0, "mean rotor angular velocity of the attractor's starts"),
+        ("attractor_mean_speed_ci95_low", 1, "lower end of the 95% Student interval of the attractor's mean speed"),
+        ("attractor_mean_speed_ci95_high", 2, "upper end of the 95% Student interval of the attractor's mean speed"),
+        ("attractor_fraction", 7, "basin fraction: starts reaching the attractor over all starts"),
+        ("attractor_fraction_ci95_low", 8, "lower end of the 95% Wilson interval of the basin fraction"),
+        ("attractor_fraction_ci95_high", 9, "upper end of the 95% Wilson interval of the basin fraction"),
+    )  # fmt: skip
+    for name, j, long_name in spec:
+        out[name] = (a, arr[:, j], {"long_name": long_name, "units": "1"})
+    for name, j, long_name in (
+        ("attractor_regime", 3, "dynamical regime of the attractor (most common among its starts)"),
+        ("attractor_period_p", 4, "impacts per cycle (periodic regimes; 0 otherwise)"),
+        ("attractor_period_q", 5, "stator periods per cycle (periodic regimes; 0 otherwise)"),
+        ("attractor_starts", 6, "starts reaching the attractor"),
+    ):
+        out[name] = (a, arr[:, j].astype(np.int64), {"long_name": long_name, "units": "1"})
+    out["attractor_regime"].attrs.update(ob.regime_flags(np.int64))
+    unsettled = int(np.sum(lab < 0))
+    frac, low, high = _fraction(unsettled, n)
+    out.attrs.update(
+        {
+            "rule": RULE,
+            "settle": settle,
+            "speed_scale": scale,
+            "n_attractors": len(rows),
+            "unsettled_starts": unsettled,
+            "unsettled_fraction": frac,
+            "unsettled_fraction_ci95": [low, high],
+            "confidence_level": 0.95,
+            "fraction_interval": "Wilson score",
+        }
+    )
+    out.attrs.pop("n_shards", None)
+    return out
+
+
+def _fraction(k: int, n: int) -> tuple[float, float, float]:
+    """``k / n`` and its Wilson interval."""
+    return (k / n if n else math.nan, *wilson(k, n))
+
+
+def basins(
+    scene: Scene,
+    grid: StartGrid,
+    cores: int = 1,
+    settle: float = SETTLE,
+    progress: Callable[[int, int], None] | None = None,
+) -> xr.Dataset:
+    """Every start of ``grid`` run and grouped (:func:`run_starts`, :func:`group`)."""
+    return group(run_starts(scene, grid, cores=cores, progress=progress), settle)
+
+
+def _num(x: float) -> float | None:
+    return float(x) if math.isfinite(x) else None
+
+
+def summary(ds: xr.Dataset) -> dict:
+    """The JSON object of ``bouncedisk basins --json`` (docs/formats.md "Basins file")."""
+    attractors = []
+    for k in ds["attractor"].values:
+        a = ds.sel(attractor=k)
+        p, q = int(a["attractor_period_p"]), int(a["attractor_period_q"])
+        attractors.append(
+            {
+                "label": int(k),
+                "mean_speed": _num(float(a["attractor_mean_speed"])),
+                "mean_speed_ci95": [
+                    _num(float(a["attractor_mean_speed_ci95_low"])),
+                    _num(float(a["attractor_mean_speed_ci95_high"])),
+                ],  # fmt: skip
+                "regime": ob.REGIMES[int(a["attractor_regime"])],
+                "period": [p, q] if p > 0 else None,
+                "starts": int(a["attractor_starts"]),
+                "fraction": float(a["attractor_fraction"]),
+                "fraction_ci95": [
+                    float(a["attractor_fraction_ci95_low"]),
+                    float(a["attractor_fraction_ci95_high"]),
+                ],  # fmt: skip
+            }
+        )
+    at = ds.attrs
+    return {
+        "starts": int(ds.sizes["start"]),
+        "window": [float(x) for x in np.ravel(at["window"])],
+        "rule": at["rule"],
+        "settle": float(at["settle"]),
+        "speed_scale": float(at["speed_scale"]),
+        "attractors": attractors,
+        "unsettled": {
+            "starts": int(at["unsettled_starts"]),
+            "fraction": float(at["unsettled_fraction"]),
+            "fraction_ci95": [float(x) for x in np.ravel(at["unsettled_fraction_ci95"])],
+        },
+        "per_start": {
+            "phase": ds["phase"].values.tolist(),
+            "speed": ds["speed"].values.tolist(),
+            "height": ds["height"].values.tolist(),
+            "label": ds["label"].values.tolist(),
+            "mean_speed": [_num(x) for x in ds["mean_omega"].values.tolist()],
+            "regime": [ob.REGIMES[int(r)] for r in ds["regime"].values],
+        },
+    }
+
+
+def startup(
+    scene: Scene,
+    loads: Sequence[float],
+    grid: StartGrid,
+    fast_above: float,
+    cores: int = 1,
+    settle: float = SETTLE,
+) -> xr.Dataset:
+    """Start-up under load: at each load torque, the starts of ``grid`` (from rest: speed 0)
+    grouped (:func:`basins`), and the fraction that settles on the fast branch, an attractor
+    whose mean speed is ``fast_above`` or more, with its Wilson interval; starts that have not
+    settled within the window count as not reaching it (docs/formats.md "Basins file")."""
+    start = time.perf_counter()
+    rows, label, mean = [], [], []
+    impacts = 0
+    for load in loads:
+        ds = basins(with_params(scene, load_torque=float(load)), grid, cores, settle)
+        fast_labels = ds["attractor"].values[ds["attractor_mean_speed"].values >= fast_above]
+        k = int(np.isin(ds["label"].values, fast_labels).sum())
+        n = int(ds.sizes["start"])
+        u = int(ds.attrs["unsettled_starts"])
+        rows.append((*_fraction(k, n), *_fraction(u, n), int(ds.attrs["n_attractors"])))
+        label.append(ds["label"].values)
+        impacts += int(ds.attrs["n_impacts"])
+        mean.append(ds["mean_omega"].values)
+    arr = np.array(rows, float)
+    d = ("load_torque",)
+    names = (
+        ("fast_fraction", "fraction of starts settled on the fast branch"),
+        ("fast_fraction_ci95_low", "lower end of the 95% Wilson interval of fast_fraction"),
+        ("fast_fraction_ci95_high", "upper end of the 95% Wilson interval of fast_fraction"),
+        ("unsettled_fraction", "fraction of starts not settled within the window"),
+        ("unsettled_fraction_ci95_low", "lower end of the 95% Wilson interval of unsettled_fraction"),
+        ("unsettled_fraction_ci95_high", "upper end of the 95% Wilson interval of unsettled_fraction"),
+    )  # fmt: skip
+    data = {n: (d, arr[:, j], {"long_name": ln, "units": "1"}) for j, (n, ln) in enumerate(names)}
+    data["n_attractors"] = (d, arr[:, 6].astype(np.int64), {"long_name": "attractors found", "units": "1"})  # fmt: skip
+    data["label"] = (d + ("start",), np.array(label), {"long_name": "attractor reached (-1: not settled; 0: the fastest)", "units": "1"})  # fmt: skip
+    data["mean_omega"] = (d + ("start",), np.array(mean), {"long_name": "time-averaged rotor angular velocity over the window", "units": "1"})  # fmt: skip
+    phase, speed, height = grid.flat()
+    coords = {
+        "load_torque": (
+            "load_torque",
+            np.asarray(loads, float),
+            {"long_name": "load torque tau_L (units of mu m_r g_eff r_eff)", "units": "1"},
+        ),  # fmt: skip
+        "start": ("start", np.arange(grid.size, dtype=np.int64), {"long_name": "start index"}),
+        "phase": ("start", phase, {"long_name": "stator phase at switch-on", "units": "rad"}),
+        "height": (
+            "start",
+            height,
+            {"long_name": "initial height above the stator (0: in contact)", "units": "1"},
+        ),  # fmt: skip
+        "speed": ("start", speed, {"long_name": "initial rotor angular velocity", "units": "1"}),
+    }
+    ds = xr.Dataset(data, coords=coords)
+    ds.attrs.update(_attrs(scene, grid, start, "startup"))
+    ds.attrs["title"] = f"bouncedisk start-up under load of scene '{scene.name}'"
+    ds.attrs.update(
+        {
+            "fast_above": float(fast_above),
+            "n_impacts": impacts,
+            "rule": RULE,
+            "settle": settle,
+            "confidence_level": 0.95,
+            "fraction_interval": "Wilson score",
+        }
+    )
+    ds.attrs.pop("load_torque", None)
+    return ds

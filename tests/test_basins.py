@@ -1,0 +1,175 @@
+"""Coexisting motions and their basins (``bouncedisk basins``, bouncedisk.studies.basins)."""
+
+import dataclasses
+import json
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from bouncedisk.analysis.ensembles import run_member
+from bouncedisk.analysis.observables import REGIME_CODES, REGIMES
+from bouncedisk.cli import main
+from bouncedisk.io.provenance import REQUIRED_ATTRS
+from bouncedisk.model.engine_config import engine_config
+from bouncedisk.model.scene import load_scene
+from bouncedisk.studies import basins as B
+
+# the paper's Fig. 3 motor (e = 0.3, omega_s = 1.5) with torsion: run up by t = 4000
+FIG3 = """
+name: fig3_basins
+parameters: {e: 0.3, omega_s: 1.5, r_phi: 0.01, psi: 0.0, load_torque: 0.0}
+effects: [impacts, contact, torsion, load]
+stop: {time: 8000.0}
+stats: {discard: 4000.0}
+"""
+# e = 0.22: a period-1 orbit beside a locked chattering cycle (docs/model.md "Regimes")
+TWO = """
+name: two_attractors
+parameters: {e: 0.22, omega_s: 1.5, r_phi: 0.01, psi: 0.0}
+effects: [impacts, contact, torsion]
+stop: {time: 600.0}
+stats: {discard: 300.0}
+"""
+
+
+def test_wilson_interval_closed_forms():
+    z = B.Z95
+    n = 40
+    assert B.wilson(n, n) == (pytest.approx(n / (n + z * z), rel=1e-14), 1.0)
+    assert B.wilson(0, n) == (0.0, pytest.approx(z * z / (n + z * z), rel=1e-14))
+    lo, hi = B.wilson(10, 40)
+    # the score interval solves |p - 0.25| = z sqrt(p (1 - p) / n) at both ends
+    for p in (lo, hi):
+        assert abs(p - 0.25) == pytest.approx(z * math.sqrt(p * (1 - p) / n), rel=1e-12)
+
+
+def test_every_start_from_rest_without_load_reaches_the_one_period_2_orbit(scene_file):
+    scene = load_scene(scene_file(FIG3))
+    grid = B.start_grid(8, [0.0], [0.0, 0.5])
+    ds = B.basins(scene, grid, cores=2)
+    out = B.summary(ds)
+    assert len(out["attractors"]) == 1 and out["unsettled"]["starts"] == 0
+    a = out["attractors"][0]
+    assert a["regime"] == "periodic" and a["period"] == [2, 2]
+    assert a["fraction"] == 1.0 and a["starts"] == 16
+    assert a["fraction_ci95"] == [pytest.approx(16 / (16 + B.Z95**2)), 1.0]
+    assert set(ds["label"].values) == {0}
+    # the period-2 orbit's two impact phases, the same cycle from every start
+    phases = ds["orbit_phases"].values[:, :2]
+    assert np.ptp(phases, axis=0).max() < B.PHASE_TOL
+    assert np.ptp(np.sort(phases[0])) > 0.5
+
+
+def _independent(scene, grid):
+    """One run over the whole window per start: (class, mean speed) by run_member directly."""
+    cfg = engine_config(scene)
+    discard, duration = B.check_scene(scene)
+    out = []
+    for ph, sp, h in zip(*grid.flat(), strict=True):
+        init = B.start_state(scene, float(ph), float(sp), float(h))
+        run = dataclasses.replace(cfg, t_end=init.t + duration)
+        st, _, _ = run_member(run, init, 0, init.t + discard)
+        out.append(((REGIMES[st.regime], st.period_p, st.period_q), st.mean_omega))
+    return out
+
+
+def test_two_attractors_fractions_match_an_independent_run_per_start(scene_file):
+    scene = load_scene(scene_file(TWO))
+    grid = B.start_grid(12, [0.0], [0.0, 0.5, 1.0, 2.0])
+    ds = B.basins(scene, grid, cores=2)
+    assert ds.sizes["attractor"] == 2 and ds.attrs["unsettled_starts"] == 0
+    runs = _independent(scene, grid)
+    for k in range(2):
+        a = ds.sel(attractor=k)
+        key = (REGIMES[int(a["attractor_regime"])], int(a["attractor_period_p"]),
+               int(a["attractor_period_q"]))  # fmt: skip
+        mine = [i for i, (cls, _) in enumerate(runs) if cls == key]
+        assert float(a["attractor_fraction"]) == len(mine) / grid.size
+        assert 0 < len(mine) < grid.size
+        assert np.array_equal(np.nonzero(ds["label"].values == k)[0], mine)
+        speeds = np.array([runs[i][1] for i in mine])
+        assert np.allclose(speeds, float(a["attractor_mean_speed"]), rtol=1e-3)
+    # the two attractors: a period-1 orbit and a locked chattering cycle, the faster first
+    assert {int(r) for r in ds["attractor_regime"].values} == {
+        REGIME_CODES["periodic"],
+        REGIME_CODES["chattering-periodic"],
+    }
+    assert ds["attractor_mean_speed"].values[0] > ds["attractor_mean_speed"].values[1]
+
+
+def test_labels_are_bit_identical_across_shards_and_cores(scene_file):
+    scene = load_scene(
+        scene_file(TWO), ["effects=impacts,contact,torsion,restitution_noise",
+                          "parameters.e_sigma=1e-9"]
+    )  # fmt: skip
+    grid = B.start_grid(6, [0.0, 20.0], [0.0, 1.0])
+    whole = B.group(B.run_starts(scene, grid, cores=2))
+    parts = [B.run_starts(scene, grid, shard=s, n_shards=3, cores=1) for s in range(3)]
+    joined = B.group(B.join_shards(parts[::-1]))
+    for name in ("label", "mean_omega", "mean_omega_first_half", "regime", "orbit_phases"):
+        assert whole[name].values.tobytes() == joined[name].values.tobytes(), name
+    with pytest.raises(ValueError, match="every start must appear once"):
+        B.join_shards(parts[:2])
+    with pytest.raises(ValueError, match="every start must appear once"):
+        B.join_shards([parts[0], parts[0], parts[1], parts[2]])
+
+
+def test_a_drifting_start_is_labelled_unsettled_not_grouped():
+    # by hand: two settled starts of one periodic class at 100, one drifting (halves 80 and 90),
+    # one unresolved, and a chaotic cloud spread by its finite-time means (not split)
+    n = 8
+    half1 = np.array([100.0, 100.0, 80.0, 50.0, 60.0, 61.0, 62.5, 63.0])
+    half2 = np.array([100.0, 100.0, 90.0, 50.0, 62.0, 60.0, 61.5, 64.5])
+    ds = xr.Dataset(
+        {
+            "mean_omega": ("start", 0.5 * (half1 + half2)),
+            "mean_omega_first_half": ("start", half1),
+            "mean_omega_second_half": ("start", half2),
+            "regime": ("start", np.array([1, 1, 1, 0, 4, 3, 4, 4])),
+            "period_p": ("start", np.array([2, 2, 2, 0, 0, 0, 0, 0])),
+            "period_q": ("start", np.array([2, 2, 2, 0, 0, 0, 0, 0])),
+            "orbit_phases": (("start", "orbit_slot"), np.full((n, B.ORBIT_SLOTS), np.nan)),
+        }
+    )
+    ds["orbit_phases"][:3, :2] = [0.5, 2.0]
+    labels, scale = B.labels(ds, settle=0.01)
+    assert scale == 100.0
+    assert labels.tolist() == [0, 0, -1, -1, 1, 1, 1, 1]
+
+
+@pytest.mark.parametrize(
+    ("args", "field"),
+    [
+        (["--phases", "0"], "--phases"),
+        (["--phases", "4", "--heights=-1"], "--heights"),
+        (["--phases", "4", "--speeds", "0,fast"], "--speeds"),
+        (["--phases", "4", "--set", "stats.discard=598"], "stats.discard"),
+        (["--phases", "4", "--settle", "0"], "--settle"),
+    ],
+)
+def test_bad_input_is_one_line_exit_2_and_no_file(scene_file, tmp_path, capsys, args, field):
+    out = tmp_path / "b.nc"
+    assert main(["basins", str(scene_file(TWO)), *args, "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("bouncedisk: error: ") and field in err[0]
+    assert not out.exists()
+
+
+def test_command_writes_the_file_and_the_json(scene_file, tmp_path, capsys):
+    out = tmp_path / "b.nc"
+    args = ["basins", str(scene_file(TWO)), "--phases", "4", "--heights", "0,2"]
+    assert main([*args, "-o", str(out), "--json"]) == 0
+    js = json.loads(capsys.readouterr().out)
+    ds = xr.open_dataset(out)
+    assert js["starts"] == 8 == ds.sizes["start"]
+    assert sum(a["fraction"] for a in js["attractors"]) + js["unsettled"]["fraction"] == 1.0
+    for a in js["attractors"]:
+        assert a["fraction_ci95"][0] <= a["fraction"] <= a["fraction_ci95"][1]
+        assert {"mean_speed", "regime", "fraction", "fraction_ci95"} <= set(a)
+    assert js["per_start"]["label"] == ds["label"].values.tolist()
+    assert set(js["per_start"]) >= {"label", "mean_speed", "regime"}
+    assert all(k in ds.attrs for k in REQUIRED_ATTRS)
+    assert ds.attrs["history"].startswith(ds.attrs["created"])  # the command line that made it
+    assert ds["regime"].attrs["flag_meanings"].split()[1] == "periodic"
