@@ -16,6 +16,7 @@ import sys
 
 from .. import __version__
 from ..model.errors import InputError
+from .basins import _add_basins
 from .check import _add_check
 from .common import EXIT_FAIL, EXIT_INTERRUPT, EXIT_USER, flush_stdout
 from .fit import _add_fit
@@ -52,6 +53,7 @@ def build_parser() -> argparse.ArgumentParser:
     for add in (_add_simulate, _add_stats, _add_info, _add_runs, _add_check, _add_fit):
         add(sub)
     _add_torque_speed(sub)
+    _add_basins(sub)
     return parser
 
 

@@ -14,6 +14,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from ..io.netcdf import open_checked, open_simulation
+from .basins import fig_basin_map, fig_startup  # noqa: F401 (looked up by name)
 from .cost import (
     fig_scaling,  # noqa: F401 (looked up by name)
     fig_stats_cost,  # noqa: F401 (looked up by name)
@@ -109,6 +110,8 @@ OPENERS: dict[str, Opener] = {
     "sensitivity_points": _netcdf("x", "regime", what="sensitivity study"),
     "design_maps": _netcdf("x", "map_e", what="design maps"),
     "load_curve": _netcdf("mean_omega", "power_out", what="load curve"),
+    "basins": _netcdf("label", "attractor_fraction", what="basins"),
+    "startup": _netcdf("fast_fraction", "label", what="start-up under load"),
 }
 
 

@@ -60,4 +60,6 @@ FIGURES: dict[str, FigureDecl] = {
     "sensitivity_scatter": FigureDecl("fig_sensitivity_scatter", {"points": "sensitivity_points"}),
     "design_maps": FigureDecl("fig_design_maps", {"maps": "design_maps"}),
     "torque_speed": FigureDecl("fig_torque_speed", {"curve": "load_curve"}),
+    "basin_map": FigureDecl("fig_basin_map", {"basins": "basins"}),
+    "startup": FigureDecl("fig_startup", {"startup": "startup"}),
 }

@@ -1,0 +1,93 @@
+"""Figures of coexisting motions (``bouncedisk basins``; docs/formats.md "Basins file"): the basin
+map over the starts, and the start-up under load with its 95 % Wilson band."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+from matplotlib.colors import BoundaryNorm, ListedColormap
+from matplotlib.figure import Figure
+
+#: Colour of the starts that have not settled within the window (label -1).
+UNSETTLED = "0.75"
+
+
+def _axis(ds: xr.Dataset) -> tuple[str, str]:
+    """The map's vertical axis: the initial speed, or the height when one speed is given."""
+    if np.asarray(ds.attrs.get("speeds", [0.0])).size > 1:
+        return "speed", r"initial rotor speed $\Omega_0$"
+    return "height", "initial height above the stator"
+
+
+def fig_basin_map(ds: xr.Dataset) -> Figure:
+    """The basin map: every start over (stator phase at switch-on, initial speed or height),
+    coloured by the attractor it reaches (grey: not settled), the first height (or speed) only;
+    the legend gives each attractor's mean speed, regime and basin fraction with its interval."""
+    from ..analysis.observables import REGIMES
+
+    name, ylabel = _axis(ds)
+    other = "height" if name == "speed" else "speed"
+    sel = ds["start"].values[ds[other].values == ds[other].values.min()]
+    sub = ds.sel(start=sel)
+    n_att = int(ds.sizes.get("attractor", 0))
+    colors = [UNSETTLED] + [f"C{k % 10}" for k in range(n_att)]
+    cmap = ListedColormap(colors)
+    norm = BoundaryNorm(np.arange(-1.5, n_att + 0.5), cmap.N)
+    fig = Figure(figsize=(7.5, 4.6), layout="constrained")
+    ax = fig.subplots()
+    x = sub["phase"].values
+    y = sub[name].values
+    ax.scatter(x, y, c=sub["label"].values, cmap=cmap, norm=norm, s=40, marker="s")
+    for k in range(n_att):
+        a = ds.sel(attractor=k)
+        lo, hi = float(a["attractor_fraction_ci95_low"]), float(a["attractor_fraction_ci95_high"])
+        reg = REGIMES[int(a["attractor_regime"])]
+        p, q = int(a["attractor_period_p"]), int(a["attractor_period_q"])
+        reg += f" {p}/{q}" if p else ""
+        ax.scatter([], [], color=colors[k + 1], marker="s", label=(
+            f"{k}: speed {float(a['attractor_mean_speed']):.4g}, {reg}, "
+            f"{float(a['attractor_fraction']):.2f} [{lo:.2f}, {hi:.2f}]"
+        ))  # fmt: skip
+    u = ds.attrs.get("unsettled_fraction", np.nan)
+    ulo, uhi = np.ravel(ds.attrs.get("unsettled_fraction_ci95", [np.nan, np.nan]))
+    ax.scatter([], [], color=UNSETTLED, marker="s",
+               label=f"not settled: {u:.2f} [{ulo:.2f}, {uhi:.2f}]")  # fmt: skip
+    ax.set_xlabel("stator phase at switch-on [rad]")
+    ax.set_ylabel(ylabel)
+    ax.set_xlim(-0.2, 2 * np.pi)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.15), ncol=1)
+    window = np.ravel(ds.attrs.get("window", [np.nan, np.nan]))
+    ax.set_title(
+        f"Basins: e = {ds.attrs.get('e', np.nan):.3g}, load "
+        f"{ds.attrs.get('load_torque', 0.0):.3g}, {ds.sizes['start']} starts, window "
+        f"[{window[0]:g}, {window[1]:g}] (fractions with 95% Wilson intervals)",
+        fontsize=9,
+    )
+    return fig
+
+
+def fig_startup(ds: xr.Dataset) -> Figure:
+    """Start-up under load: the fraction of starts from rest that settle on the fast branch
+    against the load torque, with its 95 % Wilson band, and the fraction not settled."""
+    fig = Figure(figsize=(7.0, 4.2), layout="constrained")
+    ax = fig.subplots()
+    load = ds["load_torque"].values
+    for name, color, label in (
+        ("fast_fraction", "C0", f"settled on the fast branch (mean speed >= {ds.attrs.get('fast_above', np.nan):g})"),
+        ("unsettled_fraction", "0.5", "not settled within the window"),
+    ):  # fmt: skip
+        ax.fill_between(load, ds[f"{name}_ci95_low"], ds[f"{name}_ci95_high"], color=color,
+                        alpha=0.25, lw=0)  # fmt: skip
+        ax.plot(load, ds[name], "o-", ms=3, lw=1.0, color=color, label=label)
+    ax.set_ylim(-0.02, 1.02)
+    ax.set_xlabel(r"load torque $\tau_L$")
+    ax.set_ylabel("fraction of starts from rest")
+    ax.legend(fontsize=8)
+    window = np.ravel(ds.attrs.get("window", [np.nan, np.nan]))
+    ax.set_title(
+        f"Start-up under load: e = {ds.attrs.get('e', np.nan):.3g}, "
+        f"$\\omega_s$ = {ds.attrs.get('omega_s', np.nan):.4g}, {ds.sizes['start']} starts per "
+        f"load, window [{window[0]:g}, {window[1]:g}] (95% Wilson bands)",
+        fontsize=9,
+    )
+    return fig
