@@ -179,6 +179,8 @@ FIGURE_NAMES = {
     "fit_profiles",
     "fit_load",
     "fit_identifiability",
+    "basin_map",
+    "startup_under_load",
 }
 
 

@@ -9,6 +9,7 @@ rule reproduction_checks:
         stats=expand(f"{RES}/stats/{{s}}.nc", s=CHECKED_STATS),
         band=f"{RES}/bands/fig5.nc",
         fit=f"{RES}/fit/prototype.nc",
+        basins=[f"{RES}/basins/startup.nc"] if "basins" in config else [],
     output:
         report(f"{RES}/reproduction.md", caption="../report/reproduction.rst",
                category="Reproduction"),

@@ -35,6 +35,8 @@ def _check_config():
     wanted.update({f"bands.scenes[{i}]": s for i, s in enumerate(config["bands"]["scenes"])})
     wanted["continuation.scene"] = config["continuation"]["scene"]
     wanted["stats_cost.scene"] = config["stats_cost"]["scene"]
+    if "basins" in config:
+        wanted["basins.scene"] = config["basins"]["scene"]
     wanted.update({f"load_curves.{k}.scene": v["scene"] for k, v in config["load_curves"].items()})
     for key, name in wanted.items():
         if not Path(scene_path(name)).is_file():
