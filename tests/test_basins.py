@@ -11,6 +11,7 @@ import xarray as xr
 from bouncedisk.analysis.ensembles import run_member
 from bouncedisk.analysis.observables import REGIME_CODES, REGIMES
 from bouncedisk.cli import main
+from bouncedisk.io.netcdf import write_dataset
 from bouncedisk.io.provenance import REQUIRED_ATTRS
 from bouncedisk.model.engine_config import engine_config
 from bouncedisk.model.scene import load_scene
@@ -173,3 +174,18 @@ def test_command_writes_the_file_and_the_json(scene_file, tmp_path, capsys):
     assert all(k in ds.attrs for k in REQUIRED_ATTRS)
     assert ds.attrs["history"].startswith(ds.attrs["created"])  # the command line that made it
     assert ds["regime"].attrs["flag_meanings"].split()[1] == "periodic"
+
+
+def test_the_reproduction_check_reads_the_start_up_file_and_can_fail(scene_file, tmp_path):
+    scene = load_scene(scene_file(FIG3))
+    ds = B.startup(scene, [0.0, 0.1], B.start_grid(4, [0.0], [0.0, 0.5]), 110.0, cores=2)
+    assert ds["fast_fraction"].values.tolist() == [1.0, 0.0]  # fast (144) without load, 78 at 0.1
+    assert ds["n_attractors"].values.tolist() == [1, 1]
+    path = tmp_path / B.STARTUP_FILE
+    path.parent.mkdir()
+    write_dataset(ds, path)
+    claim, measured, _, passed, source = B.closed_case(tmp_path, lambda: scene)
+    assert passed and source == str(path) and "8 of 8 starts on period-2" in measured
+    ds["label"][0, 3] = -1  # one start that has not settled
+    write_dataset(ds, path)
+    assert not B.closed_case(tmp_path, lambda: scene)[3]

@@ -564,6 +564,7 @@ def startup(
     settled within the window count as not reaching it (docs/formats.md "Basins file")."""
     start = time.perf_counter()
     rows, label, mean = [], [], []
+    per_start: dict[str, list] = {"regime": [], "period_p": [], "period_q": []}
     impacts = 0
     for load in loads:
         ds = basins(with_params(scene, load_torque=float(load)), grid, cores, settle)
@@ -575,6 +576,8 @@ def startup(
         label.append(ds["label"].values)
         impacts += int(ds.attrs["n_impacts"])
         mean.append(ds["mean_omega"].values)
+        for name, values in per_start.items():
+            values.append(ds[name].values)
     arr = np.array(rows, float)
     d = ("load_torque",)
     names = (
@@ -589,6 +592,8 @@ def startup(
     data["n_attractors"] = (d, arr[:, 6].astype(np.int64), {"long_name": "attractors found", "units": "1"})  # fmt: skip
     data["label"] = (d + ("start",), np.array(label), {"long_name": "attractor reached (-1: not settled; 0: the fastest)", "units": "1"})  # fmt: skip
     data["mean_omega"] = (d + ("start",), np.array(mean), {"long_name": "time-averaged rotor angular velocity over the window", "units": "1"})  # fmt: skip
+    for name, values in per_start.items():
+        data[name] = (d + ("start",), np.array(values), dict(ds[name].attrs))
     phase, speed, height = grid.flat()
     coords = {
         "load_torque": (
@@ -620,3 +625,41 @@ def startup(
     )
     ds.attrs.pop("load_torque", None)
     return ds
+
+
+#: The pipeline's start-up file (in the results folder) the reproduction check reads.
+STARTUP_FILE = "basins/startup.nc"
+
+
+def closed_case(results, scene: Callable[[], Scene]) -> tuple[str, str, str, bool, str]:
+    """The reproduction check of the closed case: at e = 0.3 without load every start from rest
+    reaches the one period-2 orbit (docs/model.md "Classic results"). Reads the pipeline's
+    start-up file at load 0 (``results/basins/startup.nc``), else runs 16 starts of ``scene()``
+    at load 0. Returns ``(claim, measured, expected, passed, source)``."""
+    from ..io.netcdf import open_checked
+
+    path = None if results is None else results / STARTUP_FILE
+    ds = None
+    if path is not None and path.is_file():
+        ds = open_checked(path, required=("label", "regime"), what="start-up under load")
+        source = str(path)
+        if 0.0 not in ds["load_torque"].values:  # the pipeline's loads do not start at 0
+            ds = None
+    if ds is None:
+        grid = start_grid(8, [0.0], [0.0, 0.5])
+        ds = startup(scene(), [0.0], grid, math.inf, cores=2)
+        source = f"simulated ({ds.attrs['scene_name']}.yaml, load 0, {grid.size} starts)"
+    at = ds.sel(load_torque=0.0)
+    n = int(at.sizes["start"])
+    periodic = at["regime"].values == ob.REGIME_CODES["periodic"]
+    p2 = periodic & (at["period_p"].values == 2) & (at["period_q"].values == 2)
+    one = bool(np.all(at["label"].values == 0)) and int(at["n_attractors"]) == 1
+    low, _ = wilson(int(p2.sum()), n)
+    return (
+        "e = 0.3 without load: every start from rest reaches the one period-2 orbit (basins)",
+        f"{int(at['n_attractors'])} attractor(s); {int(p2.sum())} of {n} starts on period-2 "
+        f"(95% Wilson lower bound {low:.3f}), {int(np.sum(at['label'].values < 0))} not settled",
+        "one attractor, periodic 2/2, every start",
+        one and bool(np.all(p2)),
+        source,
+    )
