@@ -174,7 +174,7 @@ def test_check_command_passes_and_writes_markdown(tmp_path, capsys):
     assert main(["check", "-o", str(md)]) == 0
     text = md.read_text()
     assert "period-2" in text and "**FAIL**" not in text
-    assert "13 passed, 0 failed" in capsys.readouterr().out  # 7 of the paper, 6 under load
+    assert "14 passed, 0 failed" in capsys.readouterr().out  # 7 of the paper, 6 under load, basins
 
 
 def test_every_figure_function_returns_a_figure(sim_file, tmp_path):

@@ -468,6 +468,13 @@ def _fit_checks(src: _Source) -> list[CheckResult]:
     ]  # fmt: skip
 
 
+def _basins_check(src: _Source) -> CheckResult:
+    """The closed case of the basins (:func:`bouncedisk.studies.basins.closed_case`)."""
+    from .basins import closed_case
+
+    return CheckResult(*closed_case(src.results, lambda: workflow_scene("basins_fig3")))
+
+
 CHECKS: list[Callable[[_Source], CheckResult | list[CheckResult]]] = [
     _period_check,
     _chaos_check,
@@ -475,6 +482,7 @@ CHECKS: list[Callable[[_Source], CheckResult | list[CheckResult]]] = [
     _threshold_checks,
     _rise_check,
     _load_checks,
+    _basins_check,
     _fit_checks,
 ]
 
