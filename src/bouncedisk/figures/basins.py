@@ -56,13 +56,9 @@ def fig_basin_map(ds: xr.Dataset) -> Figure:
     ax.set_ylabel(ylabel)
     ax.set_xlim(-0.2, 2 * np.pi)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.15), ncol=1)
-    window = np.ravel(ds.attrs.get("window", [np.nan, np.nan]))
-    ax.set_title(
-        f"Basins: e = {ds.attrs.get('e', np.nan):.3g}, load "
-        f"{ds.attrs.get('load_torque', 0.0):.3g}, {ds.sizes['start']} starts, window "
-        f"[{window[0]:g}, {window[1]:g}] (fractions with 95% Wilson intervals)",
-        fontsize=9,
-    )
+    load = ds.attrs.get("load_torque", 0.0)
+    _title(ax, ds, f"Basins: e = {ds.attrs.get('e', np.nan):.3g}, load {load:.3g}",
+           "starts", "fractions with 95% Wilson intervals")  # fmt: skip
     return fig
 
 
@@ -83,11 +79,18 @@ def fig_startup(ds: xr.Dataset) -> Figure:
     ax.set_xlabel(r"load torque $\tau_L$")
     ax.set_ylabel("fraction of starts from rest")
     ax.legend(fontsize=8)
+    head = (
+        f"Start-up under load: e = {ds.attrs.get('e', np.nan):.3g}, "
+        f"$\\omega_s$ = {ds.attrs.get('omega_s', np.nan):.4g}"
+    )
+    _title(ax, ds, head, "starts per load", "95% Wilson bands")
+    return fig
+
+
+def _title(ax, ds: xr.Dataset, head: str, starts: str, bands: str) -> None:
+    """``head, N <starts>, window [a, b] (<bands>)`` over ``ax``."""
     window = np.ravel(ds.attrs.get("window", [np.nan, np.nan]))
     ax.set_title(
-        f"Start-up under load: e = {ds.attrs.get('e', np.nan):.3g}, "
-        f"$\\omega_s$ = {ds.attrs.get('omega_s', np.nan):.4g}, {ds.sizes['start']} starts per "
-        f"load, window [{window[0]:g}, {window[1]:g}] (95% Wilson bands)",
+        f"{head}, {ds.sizes['start']} {starts}, window [{window[0]:g}, {window[1]:g}] ({bands})",
         fontsize=9,
     )
-    return fig
