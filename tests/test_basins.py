@@ -14,6 +14,7 @@ from bouncedisk.cli import main
 from bouncedisk.io.netcdf import write_dataset
 from bouncedisk.io.provenance import REQUIRED_ATTRS
 from bouncedisk.model.engine_config import engine_config
+from bouncedisk.model.errors import InputError
 from bouncedisk.model.scene import load_scene
 from bouncedisk.studies import basins as B
 
@@ -189,3 +190,20 @@ def test_the_reproduction_check_reads_the_start_up_file_and_can_fail(scene_file,
     ds["label"][0, 3] = -1  # one start that has not settled
     write_dataset(ds, path)
     assert not B.closed_case(tmp_path, lambda: scene)[3]
+
+
+def test_figures_draw_the_attractors_and_the_start_up_band(scene_file):
+    from bouncedisk.figures.basins import fig_basin_map, fig_startup
+
+    scene = load_scene(scene_file(TWO))
+    ds = B.basins(scene, B.start_grid(6, [0.0, 40.0], [0.0]), cores=2)
+    ax = fig_basin_map(ds).axes[0]
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert len(labels) == ds.sizes["attractor"] + 1 and labels[-1].startswith("not settled")
+    assert ax.get_ylabel().startswith("initial rotor speed")
+    with pytest.raises(InputError, match="'load' effect"):
+        B.startup(scene, [0.0, 0.05], B.start_grid(3, [0.0], [0.0]), 120.0)
+    loaded = load_scene(scene_file(FIG3))
+    up = B.startup(loaded, [0.0, 0.1], B.start_grid(3, [0.0], [0.0]), 120.0)
+    ax = fig_startup(up).axes[0]
+    assert len(ax.collections) == 2 and len(ax.lines) == 2  # two bands, two curves

@@ -562,6 +562,8 @@ def startup(
     grouped (:func:`basins`), and the fraction that settles on the fast branch, an attractor
     whose mean speed is ``fast_above`` or more, with its Wilson interval; starts that have not
     settled within the window count as not reaching it (docs/formats.md "Basins file")."""
+    if "load" not in scene.effects:
+        raise InputError(scene.source, "effects", "start-up under load needs the 'load' effect")
     start = time.perf_counter()
     rows, label, mean = [], [], []
     per_start: dict[str, list] = {"regime": [], "period_p": [], "period_q": []}
