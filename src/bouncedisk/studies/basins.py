@@ -75,12 +75,21 @@ RULE = (
     "(regime + period + cycle phases; chaotic and chaotic-reinjection one class) form one "
     "attractor when chained by mean-speed steps <= that tolerance; unresolved or unsettled: -1"
 )
-#: Per-start variables of a shard (docs/formats.md "Basins file").
-START_VARS = (
-    "phase", "speed", "height", "mean_omega", "mean_omega_first_half",
-    "mean_omega_second_half", "regime", "period_p", "period_q", "lyapunov", "n_impacts",
-    "orbit_phases",
-)  # fmt: skip
+#: Per-start variables of a shard: name -> (long name, units) (docs/formats.md "Basins file").
+START_VARS = {
+    "phase": ("stator phase at switch-on", "rad"),
+    "speed": ("initial rotor angular velocity", "1"),
+    "height": ("initial height above the stator (0: in contact)", "1"),
+    "mean_omega": ("time-averaged rotor angular velocity over the window", "1"),
+    "mean_omega_first_half": ("mean rotor angular velocity over the window's first half", "1"),
+    "mean_omega_second_half": ("mean rotor angular velocity over the window's second half", "1"),
+    "regime": ("dynamical regime at the window's end", "1"),
+    "period_p": ("impacts per cycle (periodic regimes; 0 otherwise)", "1"),
+    "period_q": ("stator periods per cycle (periodic regimes; 0 otherwise)", "1"),
+    "lyapunov": ("largest Lyapunov exponent per impact, between resets (second half)", "1"),
+    "n_impacts": ("impacts over the window", "1"),
+    "orbit_phases": ("sorted impact phases of one cycle (periodic regimes; NaN otherwise)", "rad"),
+}
 
 
 @dataclass(frozen=True)
@@ -204,7 +213,8 @@ def run_starts(
     check_scene(scene)
     index = np.arange(grid.size)[shard_slice(grid.size, shard, n_shards)]
     n = len(index)
-    vals = {k: np.full(n, np.nan) for k in START_VARS[3:6] + ("lyapunov",)}
+    speeds = ("mean_omega", "mean_omega_first_half", "mean_omega_second_half", "lyapunov")
+    vals = {k: np.full(n, np.nan) for k in speeds}
     ints = {k: np.zeros(n, np.int64) for k in ("regime", "period_p", "period_q", "n_impacts")}
     orbit = np.full((n, ORBIT_SLOTS), np.nan)
     pool = ThreadPoolExecutor(max_workers=max(1, cores))
@@ -233,59 +243,17 @@ def run_starts(
 
 
 def _start_dataset(index, phase, speed, height, vals, ints, orbit) -> xr.Dataset:
-    """The per-start variables (docs/formats.md "Basins file")."""
-    d = ("start",)
-    data = {
-        "phase": (d, phase, {"long_name": "stator phase at switch-on", "units": "rad"}),
-        "speed": (d, speed, {"long_name": "initial rotor angular velocity"}),
-        "height": (d, height, {"long_name": "initial height above the stator (0: in contact)"}),
-        "mean_omega": (
-            d,
-            vals["mean_omega"],
-            {"long_name": "time-averaged rotor angular velocity over the window"},
-        ),  # fmt: skip
-        "mean_omega_first_half": (
-            d,
-            vals["mean_omega_first_half"],
-            {"long_name": "mean rotor angular velocity over the window's first half"},
-        ),  # fmt: skip
-        "mean_omega_second_half": (
-            d,
-            vals["mean_omega_second_half"],
-            {"long_name": "mean rotor angular velocity over the window's second half"},
-        ),  # fmt: skip
-        "regime": (
-            d,
-            ints["regime"],
-            {"long_name": "dynamical regime at the window's end", **ob.regime_flags(np.int64)},
-        ),  # fmt: skip
-        "period_p": (
-            d,
-            ints["period_p"],
-            {"long_name": "impacts per cycle (periodic regimes; 0 otherwise)"},
-        ),  # fmt: skip
-        "period_q": (
-            d,
-            ints["period_q"],
-            {"long_name": "stator periods per cycle (periodic regimes; 0 otherwise)"},
-        ),  # fmt: skip
-        "lyapunov": (
-            d,
-            vals["lyapunov"],
-            {"long_name": "largest Lyapunov exponent per impact, between resets (second half)"},
-        ),  # fmt: skip
-        "n_impacts": (d, ints["n_impacts"], {"long_name": "impacts over the window"}),
-        "orbit_phases": (
-            ("start", "orbit_slot"),
-            orbit,
-            {
-                "long_name": "sorted impact phases of one cycle (periodic regimes; NaN otherwise)",
-                "units": "rad",
-            },
-        ),  # fmt: skip
-    }
-    for v in data.values():
-        v[2].setdefault("units", "1")
+    """The per-start variables of :data:`START_VARS` (docs/formats.md "Basins file")."""
+    arrays = {"phase": phase, "speed": speed, "height": height, **vals, **ints}
+    data = {}
+    for name, (long_name, units) in START_VARS.items():
+        attrs = {"long_name": long_name, "units": units}
+        if name == "regime":
+            attrs.update(ob.regime_flags(np.int64))
+        if name == "orbit_phases":
+            data[name] = (("start", "orbit_slot"), orbit, attrs)
+        else:
+            data[name] = (("start",), arrays[name], attrs)
     coords = {"start": ("start", np.asarray(index, np.int64), {"long_name": "start index"})}
     return xr.Dataset(data, coords=coords)
 
@@ -371,11 +339,16 @@ def _class_of(regime: int, p: int, q: int) -> tuple | None:
 
 
 def _same_cycle(a: np.ndarray, b: np.ndarray) -> bool:
-    """Whether two cycles' sorted impact phases agree within :data:`PHASE_TOL` (rule 3)."""
-    fa, fb = np.isfinite(a), np.isfinite(b)
-    if not np.array_equal(fa, fb):
+    """Whether two cycles' impact phases agree within :data:`PHASE_TOL` (rule 3): as many, and
+    each of either within the tolerance of one of the other's (on the circle, so a phase near 0
+    matches one near 2 pi)."""
+    a, b = a[np.isfinite(a)], b[np.isfinite(b)]
+    if len(a) != len(b):
         return False
-    return bool(np.all(ob.circular_distance(a[fa], b[fb]) <= PHASE_TOL))
+    if len(a) == 0:  # neither periodic: the class alone decides
+        return True
+    d = ob.circular_distance(a[:, None], b[None, :])
+    return bool(np.all(d.min(axis=1) <= PHASE_TOL) and np.all(d.min(axis=0) <= PHASE_TOL))
 
 
 def labels(ds: xr.Dataset, settle: float = SETTLE) -> tuple[np.ndarray, float]:
@@ -421,6 +394,22 @@ def labels(ds: xr.Dataset, settle: float = SETTLE) -> tuple[np.ndarray, float]:
     return out, scale
 
 
+#: Per-attractor variables: name -> (long name, whole number), in the order :func:`group` fills.
+ATTRACTOR_VARS = {
+    "attractor_mean_speed": ("mean rotor angular velocity of the attractor's starts", False),
+    "attractor_mean_speed_ci95_low": ("lower end of the 95% Student interval of it", False),
+    "attractor_mean_speed_ci95_high": ("upper end of the 95% Student interval of it", False),
+    "attractor_regime": ("dynamical regime (most common among the attractor's starts)", True),
+    "attractor_period_p": ("impacts per cycle (periodic regimes; 0 otherwise)", True),
+    "attractor_period_q": ("stator periods per cycle (periodic regimes; 0 otherwise)", True),
+    "attractor_starts": ("starts reaching the attractor", True),
+    "attractor_fraction": ("basin fraction: starts reaching the attractor over all starts", False),
+    "attractor_fraction_ci95_low": ("lower end of the 95% Wilson interval of it", False),
+    "attractor_fraction_ci95_high": ("upper end of the 95% Wilson interval of it", False),
+}
+LABEL_LONG_NAME = "attractor reached (-1: not settled within the window; 0: the fastest)"
+
+
 def group(ds: xr.Dataset, settle: float = SETTLE) -> xr.Dataset:
     """The starts of a complete computation with their labels and the attractors: per attractor
     its mean speed (mean over its starts, Student interval across them), regime and period,
@@ -437,31 +426,20 @@ def group(ds: xr.Dataset, settle: float = SETTLE) -> xr.Dataset:
         regimes = Counter(int(r) for r in ds["regime"].values[idx])
         code = max(regimes, key=lambda c: (regimes[c], -c))
         first = idx[0]
-        p = int(ds["period_p"].values[first]) if code in (1, 2) else 0
-        q = int(ds["period_q"].values[first]) if code in (1, 2) else 0
+        periodic = ob.REGIMES[code] in ("periodic", "chattering-periodic")
+        p = int(ds["period_p"].values[first]) if periodic else 0
+        q = int(ds["period_q"].values[first]) if periodic else 0
         rows.append((m, lo, hi, code, p, q, len(idx), *_fraction(len(idx), n)))
-    arr = np.array(rows, float).reshape(-1, 10)
-    a = ("attractor",)
+    arr = np.array(rows, float).reshape(-1, len(ATTRACTOR_VARS))
     out = ds.copy()
-    out["label"] = ("start", lab, {"long_name": "attractor reached (-1: not settled within the window)", "units": "1"})  # fmt: skip
-    out = out.assign_coords(attractor=("attractor", np.arange(len(rows), dtype=np.int64), {"long_name": "attractor label (0: the fastest)"}))  # fmt: skip
-    spec = (
-        ("attractor_mean_speed", 0, "mean rotor angular velocity of the attractor's starts"),
-        ("attractor_mean_speed_ci95_low", 1, "lower end of the 95% Student interval of the attractor's mean speed"),
-        ("attractor_mean_speed_ci95_high", 2, "upper end of the 95% Student interval of the attractor's mean speed"),
-        ("attractor_fraction", 7, "basin fraction: starts reaching the attractor over all starts"),
-        ("attractor_fraction_ci95_low", 8, "lower end of the 95% Wilson interval of the basin fraction"),
-        ("attractor_fraction_ci95_high", 9, "upper end of the 95% Wilson interval of the basin fraction"),
+    out["label"] = ("start", lab, {"long_name": LABEL_LONG_NAME, "units": "1"})
+    out = out.assign_coords(
+        attractor=("attractor", np.arange(len(rows), dtype=np.int64),
+                   {"long_name": "attractor label (0: the fastest)"})
     )  # fmt: skip
-    for name, j, long_name in spec:
-        out[name] = (a, arr[:, j], {"long_name": long_name, "units": "1"})
-    for name, j, long_name in (
-        ("attractor_regime", 3, "dynamical regime of the attractor (most common among its starts)"),
-        ("attractor_period_p", 4, "impacts per cycle (periodic regimes; 0 otherwise)"),
-        ("attractor_period_q", 5, "stator periods per cycle (periodic regimes; 0 otherwise)"),
-        ("attractor_starts", 6, "starts reaching the attractor"),
-    ):
-        out[name] = (a, arr[:, j].astype(np.int64), {"long_name": long_name, "units": "1"})
+    for j, (name, (long_name, whole)) in enumerate(ATTRACTOR_VARS.items()):
+        values = arr[:, j].astype(np.int64) if whole else arr[:, j]
+        out[name] = (("attractor",), values, {"long_name": long_name, "units": "1"})
     out["attractor_regime"].attrs.update(ob.regime_flags(np.int64))
     unsettled = int(np.sum(lab < 0))
     frac, low, high = _fraction(unsettled, n)
@@ -515,7 +493,7 @@ def summary(ds: xr.Dataset) -> dict:
                 "mean_speed_ci95": [
                     _num(float(a["attractor_mean_speed_ci95_low"])),
                     _num(float(a["attractor_mean_speed_ci95_high"])),
-                ],  # fmt: skip
+                ],
                 "regime": ob.REGIMES[int(a["attractor_regime"])],
                 "period": [p, q] if p > 0 else None,
                 "starts": int(a["attractor_starts"]),
@@ -523,7 +501,7 @@ def summary(ds: xr.Dataset) -> dict:
                 "fraction_ci95": [
                     float(a["attractor_fraction_ci95_low"]),
                     float(a["attractor_fraction_ci95_high"]),
-                ],  # fmt: skip
+                ],
             }
         )
     at = ds.attrs
@@ -550,6 +528,19 @@ def summary(ds: xr.Dataset) -> dict:
     }
 
 
+#: Per-load fractions of the start-up file: name -> long name, in the order :func:`startup` fills.
+STARTUP_FRACTIONS = {
+    "fast_fraction": "fraction of starts settled on the fast branch",
+    "fast_fraction_ci95_low": "lower end of the 95% Wilson interval of fast_fraction",
+    "fast_fraction_ci95_high": "upper end of the 95% Wilson interval of fast_fraction",
+    "unsettled_fraction": "fraction of starts not settled within the window",
+    "unsettled_fraction_ci95_low": "lower end of the 95% Wilson interval of unsettled_fraction",
+    "unsettled_fraction_ci95_high": "upper end of the 95% Wilson interval of unsettled_fraction",
+}
+#: Per-load, per-start variables of the start-up file (those of :func:`group`'s file).
+STARTUP_PER_START = ("label", "mean_omega", "regime", "period_p", "period_q")
+
+
 def startup(
     scene: Scene,
     loads: Sequence[float],
@@ -565,58 +556,42 @@ def startup(
     if "load" not in scene.effects:
         raise InputError(scene.source, "effects", "start-up under load needs the 'load' effect")
     start = time.perf_counter()
-    rows, label, mean = [], [], []
-    per_start: dict[str, list] = {"regime": [], "period_p": [], "period_q": []}
-    impacts = 0
+    rows, impacts = [], 0
+    per_start: dict[str, list] = {k: [] for k in STARTUP_PER_START}
     for load in loads:
         ds = basins(with_params(scene, load_torque=float(load)), grid, cores, settle)
         fast_labels = ds["attractor"].values[ds["attractor_mean_speed"].values >= fast_above]
         k = int(np.isin(ds["label"].values, fast_labels).sum())
         n = int(ds.sizes["start"])
-        u = int(ds.attrs["unsettled_starts"])
-        rows.append((*_fraction(k, n), *_fraction(u, n), int(ds.attrs["n_attractors"])))
-        label.append(ds["label"].values)
+        rows.append((*_fraction(k, n), *_fraction(int(ds.attrs["unsettled_starts"]), n)))
         impacts += int(ds.attrs["n_impacts"])
-        mean.append(ds["mean_omega"].values)
         for name, values in per_start.items():
-            values.append(ds[name].values)
+            values.append(ds[name])
     arr = np.array(rows, float)
     d = ("load_torque",)
-    names = (
-        ("fast_fraction", "fraction of starts settled on the fast branch"),
-        ("fast_fraction_ci95_low", "lower end of the 95% Wilson interval of fast_fraction"),
-        ("fast_fraction_ci95_high", "upper end of the 95% Wilson interval of fast_fraction"),
-        ("unsettled_fraction", "fraction of starts not settled within the window"),
-        ("unsettled_fraction_ci95_low", "lower end of the 95% Wilson interval of unsettled_fraction"),
-        ("unsettled_fraction_ci95_high", "upper end of the 95% Wilson interval of unsettled_fraction"),
-    )  # fmt: skip
-    data = {n: (d, arr[:, j], {"long_name": ln, "units": "1"}) for j, (n, ln) in enumerate(names)}
-    data["n_attractors"] = (d, arr[:, 6].astype(np.int64), {"long_name": "attractors found", "units": "1"})  # fmt: skip
-    data["label"] = (d + ("start",), np.array(label), {"long_name": "attractor reached (-1: not settled; 0: the fastest)", "units": "1"})  # fmt: skip
-    data["mean_omega"] = (d + ("start",), np.array(mean), {"long_name": "time-averaged rotor angular velocity over the window", "units": "1"})  # fmt: skip
+    data = {
+        name: (d, arr[:, j], {"long_name": long_name, "units": "1"})
+        for j, (name, long_name) in enumerate(STARTUP_FRACTIONS.items())
+    }
+    n_att = [int(np.max(v.values, initial=-1)) + 1 for v in per_start["label"]]
+    data["n_attractors"] = (d, np.array(n_att, np.int64), {"long_name": "attractors found"})
     for name, values in per_start.items():
-        data[name] = (d + ("start",), np.array(values), dict(ds[name].attrs))
+        data[name] = (d + ("start",), np.stack([v.values for v in values]), dict(values[0].attrs))
     phase, speed, height = grid.flat()
     coords = {
-        "load_torque": (
-            "load_torque",
-            np.asarray(loads, float),
-            {"long_name": "load torque tau_L (units of mu m_r g_eff r_eff)", "units": "1"},
-        ),  # fmt: skip
-        "start": ("start", np.arange(grid.size, dtype=np.int64), {"long_name": "start index"}),
-        "phase": ("start", phase, {"long_name": "stator phase at switch-on", "units": "rad"}),
-        "height": (
-            "start",
-            height,
-            {"long_name": "initial height above the stator (0: in contact)", "units": "1"},
-        ),  # fmt: skip
-        "speed": ("start", speed, {"long_name": "initial rotor angular velocity", "units": "1"}),
+        "start": ("start", np.arange(grid.size, dtype=np.int64), {"long_name": "start index"})
     }
-    ds = xr.Dataset(data, coords=coords)
-    ds.attrs.update(_attrs(scene, grid, start, "startup"))
-    ds.attrs["title"] = f"bouncedisk start-up under load of scene '{scene.name}'"
-    ds.attrs.update(
+    for name, values in (("phase", phase), ("speed", speed), ("height", height)):
+        long_name, units = START_VARS[name]
+        coords[name] = ("start", values, {"long_name": long_name, "units": units})
+    coords["load_torque"] = ("load_torque", np.asarray(loads, float), {
+        "long_name": "load torque tau_L (units of mu m_r g_eff r_eff)", "units": "1"})  # fmt: skip
+    out = xr.Dataset(data, coords=coords)
+    out.attrs.update(_attrs(scene, grid, start, "startup"))
+    out.attrs.pop("load_torque", None)
+    out.attrs.update(
         {
+            "title": f"bouncedisk start-up under load of scene '{scene.name}'",
             "fast_above": float(fast_above),
             "n_impacts": impacts,
             "rule": RULE,
@@ -625,8 +600,7 @@ def startup(
             "fraction_interval": "Wilson score",
         }
     )
-    ds.attrs.pop("load_torque", None)
-    return ds
+    return out
 
 
 #: The pipeline's start-up file (in the results folder) the reproduction check reads.
