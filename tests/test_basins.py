@@ -136,6 +136,9 @@ def test_a_drifting_start_is_labelled_unsettled_not_grouped():
         }
     )
     ds["orbit_phases"][:3, :2] = [0.5, 2.0]
+    # the same cycle from two starts: one of its phases just after 0, the other just before 2 pi
+    ds["orbit_phases"][1, :2] = [2.0, 2 * np.pi - 1e-6]
+    ds["orbit_phases"][0, :2] = [1e-6, 2.0]
     labels, scale = B.labels(ds, settle=0.01)
     assert scale == 100.0
     assert labels.tolist() == [0, 0, -1, -1, 1, 1, 1, 1]
