@@ -49,9 +49,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"bouncedisk {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for add in (_add_simulate, _add_stats, _add_info, _add_runs, _add_check, _add_fit):
+    adders = (
+        _add_simulate,
+        _add_stats,
+        _add_info,
+        _add_runs,
+        _add_check,
+        _add_fit,
+        _add_torque_speed,
+    )
+    for add in adders:
         add(sub)
-    _add_torque_speed(sub)
     return parser
 
 

@@ -113,7 +113,6 @@ def stats_command(args: argparse.Namespace) -> dict:
 
 
 def _cmd_stats(args: argparse.Namespace) -> int:
-    pass
     from ..tracking.extraction import numeric_leaves
 
     store = _tracking_store(args)
