@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 import xarray as xr
+from numba import njit
 
 from bouncedisk.analysis.ensembles import MemberStats, run_ensemble
 from bouncedisk.analysis.observables import REGIME_CODES
@@ -18,7 +19,7 @@ from bouncedisk.analysis.statistics import EnsembleStats, confidence_interval, r
 from bouncedisk.cli import main
 from bouncedisk.cli.stats import format_summary
 from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
-from bouncedisk.engine.noise import noisy_restitution, normals
+from bouncedisk.engine.noise import member_key, noisy_restitution, normal
 from bouncedisk.io.records import TrajColumn as C
 from bouncedisk.model.scene import load_scene
 
@@ -48,6 +49,16 @@ def _json_stats(capsys, path, *sets: str) -> dict:
 
 
 # ------------------------------------------------------------------------------------ the noise
+@njit
+def normals(seed, member, k0, n):
+    """``n`` consecutive deviates ``ξ_{k0}, …, ξ_{k0+n−1}`` of member ``member``'s stream."""
+    key = member_key(seed, member)
+    out = np.empty(n)
+    for i in range(n):
+        out[i] = normal(key, k0 + i)
+    return out
+
+
 def test_noise_stream_is_standard_normal_and_counter_based():
     x = normals(1, 0, 0, 200_000)
     assert abs(x.mean()) < 0.01 and abs(x.std() - 1.0) < 0.01
