@@ -204,6 +204,21 @@ def test_confidence_interval_is_bit_identical_to_scipy_stats_t(k, level):
     assert (mean, low, high) == (mean, mean - half, mean + half)
 
 
+def test_t_half_width_is_per_column_and_matches_scipy_stats_t():
+    """The one Student half-width: per time column of a (member, time) band, bit for bit the
+    ``scipy.stats.t.ppf`` formula the band used; two members ``[0, 2]`` give ``t_{0.975,1} = 12.706``."""
+    from scipy import stats as sps
+
+    from bouncedisk.analysis.statistics import t_half_width, t_quantile
+
+    assert t_quantile(1) == pytest.approx(12.7062047, rel=1e-8)
+    assert t_half_width(np.array([0.0, 2.0])) == pytest.approx(12.7062047, rel=1e-8)
+    om = np.random.default_rng(3).normal(1.0, 0.1, (7, 5))
+    ref = sps.t.ppf(0.975, 6) * om.std(axis=0, ddof=1) / np.sqrt(7)
+    assert np.array_equal(t_half_width(om, axis=0), ref)
+    assert np.array_equal(t_half_width(om.T, axis=1), ref)
+
+
 def test_run_stats_needs_a_time_stop(scene_file):
     f = scene_file(CHAOTIC.replace("stop: {time: 53000.0}", "stop: {impacts: 100}"))
     from bouncedisk.model.errors import InputError

@@ -15,7 +15,6 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import xarray as xr
-from scipy import stats as _sps
 
 from ..engine import simulate_arrays
 from ..io.provenance import base_attrs, new_run_id
@@ -25,6 +24,7 @@ from ..model.errors import InputError
 from ..model.scene import Scene
 from ..run.runner import scene_attrs
 from . import observables as ob
+from .statistics import LEVEL, t_half_width
 
 #: Restitution noise of the band's members when the scene has none (docs/model.md: enough to
 #: sample the natural measure, physically meaningless).
@@ -59,7 +59,7 @@ def _band_dataset(t: np.ndarray, om: np.ndarray) -> xr.Dataset:
     interval, 2.5/97.5 percentiles, and each member's first-order trend."""
     members = len(om)
     mean = om.mean(axis=0)
-    half = _sps.t.ppf(0.975, members - 1) * om.std(axis=0, ddof=1) / np.sqrt(members)
+    half = t_half_width(om, LEVEL, axis=0)
     lo, hi = np.percentile(om, [2.5, 97.5], axis=0)
     trends = [ob.first_order_trend(t, row) for row in om]
 
