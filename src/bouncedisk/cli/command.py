@@ -84,7 +84,9 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the console script."""
     _install_signal_handlers()
     parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
     args, extra = parser.parse_known_args(argv)
+    args.argv = argv
     if extra and args.command == "runs":  # run ids after options: `runs diff A --json B`
         bad = [x for x in extra if x.startswith("-")]
         if bad:
