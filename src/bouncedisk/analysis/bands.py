@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import xarray as xr
@@ -22,6 +21,7 @@ from ..io.records import TrajColumn
 from ..model.engine_config import engine_config
 from ..model.errors import InputError
 from ..model.scene import Scene
+from ..run.cores import map_on_threads
 from ..run.runner import scene_attrs
 from . import observables as ob
 from .statistics import LEVEL, t_half_width
@@ -48,8 +48,7 @@ def member_speeds(
     Returns ``(t, om)``: the times every member reached and the speeds, shape (member, time).
     Members use the scene's restitution noise, or ``e_sigma`` when it has none.
     """
-    with ThreadPoolExecutor(max_workers=max(1, cores)) as pool:
-        runs = list(pool.map(lambda m: _member_omega(scene, m, e_sigma, seed), range(members)))
+    runs = map_on_threads(lambda m: _member_omega(scene, m, e_sigma, seed), range(members), cores)
     n = min(len(r) for r in runs)
     return runs[0][:n, 0], np.stack([r[:n, 1] for r in runs])
 

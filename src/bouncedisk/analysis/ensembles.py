@@ -14,7 +14,6 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from math import cos, isfinite, log, sin, sqrt
 
@@ -25,6 +24,7 @@ from ..engine import KIND_CHATTER, KIND_IMPACT, EngineConfig, InitialState
 from ..engine.driver import audit_balances, iterate_views
 from ..engine.kernel import EV_PHASE, EV_T, EV_V_REL
 from ..model import stator
+from ..run.cores import map_on_threads
 from . import observables as ob
 
 #: Events kept from the end of each member's run to classify its regime.
@@ -383,11 +383,4 @@ def run_ensemble(
     def one(m: int) -> MemberStats:
         return run_member(cfg, init, m, t_from, should_stop)[0]
 
-    results: list[MemberStats] = []
-    with ThreadPoolExecutor(max_workers=max(1, cores)) as pool:
-        # map keeps member order, whatever order the threads finish in
-        for st in pool.map(one, range(members)):
-            results.append(st)
-            if on_member:
-                on_member(len(results), members)
-    return results
+    return map_on_threads(one, range(members), cores, on_member)
