@@ -11,7 +11,7 @@ from bouncedisk.run.cores import map_on_threads
 
 def test_results_keep_the_items_order_when_threads_end_out_of_order():
     def slow_first(k: int) -> int:
-        time.sleep(0.02 * (4 - k))  # item 0 ends last
+        time.sleep(0.02 * (4 - k))  # the first one ends last
         return k * k
 
     done = []
