@@ -137,8 +137,9 @@ def _per_load(stats: list[EnsembleStats]) -> dict:
 
 
 def first_zero(loads: np.ndarray, speed: np.ndarray) -> float:
-    """The first load at which ``speed`` reaches 0, linearly interpolated (docs/model.md "stall
-    torque": the smallest ``τ_L`` with ``Ω̄ <= 0``); ``nan`` when it stays positive."""
+    """The first load at which ``speed`` reaches 0, linearly interpolated (the stall torque of
+    docs/model.md "The motor under load": the smallest ``τ_L`` with ``Ω̄ <= 0``); ``nan`` when it
+    stays positive."""
     if speed[0] <= 0.0:
         return float(loads[0])
     for k in range(1, len(loads)):
