@@ -11,6 +11,7 @@ import time
 from pathlib import Path
 
 import pytest
+from cli_checks import FIG3, SMALL, no_files, one_line, read_only_folder
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
@@ -19,60 +20,22 @@ from bouncedisk.model.errors import InputError
 from bouncedisk.model.scene import load_scene, scene_from_mapping
 from bouncedisk.run.memory_probe import vm_hwm_mb
 
-ROOT = Path(__file__).resolve().parents[1]
-SCENES = ROOT / "workflow" / "config" / "scenes"
-FIG3 = str(SCENES / "fig3.yaml")
-
-SMALL = """
-name: small
-parameters: {e: 0.3, omega_s: 1.5, r_phi: 0.01}
-effects: [impacts, contact, torsion]
-stop: {impacts: 50}
-outputs: {events: true, trajectory: {dt: 0.05}}
-"""
-
-
-def _one_line(capsys) -> str:
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1, err
-    assert "Traceback" not in err[0]
-    return err[0]
-
-
-def _no_files(folder: Path, stem: str = "out.nc") -> None:
-    assert not (folder / stem).exists()
-    assert not [p for p in folder.iterdir() if p.name.startswith(f".{stem}.")]
-
-
-def _read_only_folder(tmp_path: Path) -> Path:
-    """A folder where no file can be created (a chmod-ed one, or /sys when running as root)."""
-    ro = tmp_path / "ro"
-    ro.mkdir()
-    ro.chmod(0o555)
-    for cand in (ro, Path("/sys")):
-        try:
-            (cand / ".probe").touch()
-        except OSError:
-            return cand
-        (cand / ".probe").unlink()
-    pytest.skip("no read-only folder available")
-
 
 # ----------------------------------------------------------------------------------- tracebacks
 def test_output_in_a_read_only_folder(tmp_path, capsys):
-    ro = _read_only_folder(tmp_path)
+    ro = read_only_folder(tmp_path)
     assert main(["simulate", FIG3, "-o", str(ro / "x.nc"), "-q"]) == 2
-    assert "-o" in _one_line(capsys)
+    assert "-o" in one_line(capsys)
     assert main(["check", "-o", str(ro / "x.md")]) == 2
-    assert "-o" in _one_line(capsys)
+    assert "-o" in one_line(capsys)
     assert not (ro / "x.nc").exists() and not (ro / "x.md").exists()
 
 
 def test_output_an_existing_folder(tmp_path, capsys):
     assert main(["check", "-o", str(tmp_path)]) == 2
-    assert "is a directory" in _one_line(capsys)
+    assert "is a directory" in one_line(capsys)
     assert main(["simulate", FIG3, "-o", str(tmp_path), "-q"]) == 2
-    assert "is a directory" in _one_line(capsys)
+    assert "is a directory" in one_line(capsys)
 
 
 def test_memory_error_anywhere_is_one_line(tmp_path, capsys, monkeypatch):
@@ -83,8 +46,8 @@ def test_memory_error_anywhere_is_one_line(tmp_path, capsys, monkeypatch):
 
     monkeypatch.setattr(bouncedisk.run.runner, "run_scene", boom)
     assert main(["simulate", FIG3, "-o", str(tmp_path / "out.nc"), "-q"]) == 2
-    assert "out of memory" in _one_line(capsys)
-    _no_files(tmp_path)
+    assert "out of memory" in one_line(capsys)
+    no_files(tmp_path)
 
 
 # ------------------------------------------------------------------------------ check --results
@@ -101,7 +64,7 @@ def test_check_results_missing_empty_or_a_file(tmp_path, capsys):
         (tmp_path / "partial", "stats/stats_e06.nc"),
     ):
         assert main(["check", "--results", str(folder)]) == 2
-        line = _one_line(capsys)
+        line = one_line(capsys)
         assert words in line and "--results" in line
 
 
@@ -137,7 +100,7 @@ def test_output_equal_to_the_scene_is_refused(tmp_path, capsys):
     scene = tmp_path / "s.yaml"
     scene.write_text(SMALL)
     assert main(["simulate", str(scene), "-o", str(scene), "-q"]) == 2
-    assert "overwrite" in _one_line(capsys)
+    assert "overwrite" in one_line(capsys)
     assert scene.read_text() == SMALL
     link = tmp_path / "link.yaml"
     link.symlink_to(scene)
@@ -151,7 +114,7 @@ def test_duplicate_keys_are_named(tmp_path, capsys):
         "name: d\nparameters:\n  e: 0.3\n  omega_s: 1.5\n  e: 0.5\nstop: {impacts: 3}\n"
     )
     assert main(["simulate", str(scene), "-o", str(tmp_path / "out.nc"), "-q"]) == 2
-    line = _one_line(capsys)
+    line = one_line(capsys)
     assert "parameters.e" in line and "duplicate" in line
     with pytest.raises(InputError, match="stop.impacts: duplicate"):
         load_scene(FIG3, ["stop={impacts: 3, impacts: 4}"])
@@ -160,7 +123,7 @@ def test_duplicate_keys_are_named(tmp_path, capsys):
 def test_impacts_above_the_cap_are_refused(tmp_path, capsys):
     out = tmp_path / "out.nc"
     assert main(["simulate", FIG3, "-o", str(out), "-q", "--set", "stop.impacts=1e20"]) == 2
-    line = _one_line(capsys)
+    line = one_line(capsys)
     assert "stop.impacts" in line and "max_events" in line
     s = load_scene(FIG3, ["stop={impacts: 500, max_events: 500}"])
     assert s.stop.impacts == 500

@@ -7,39 +7,15 @@ import math
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
 import xarray as xr
+from cli_checks import FIG3, SMALL, no_files, one_line
 
 from bouncedisk.cli import main
 from bouncedisk.engine import EngineConfig, InitialState, iterate, simulate_arrays
 from bouncedisk.io.records import EventKind
-
-ROOT = Path(__file__).resolve().parents[1]
-SCENES = ROOT / "workflow" / "config" / "scenes"
-FIG3 = str(SCENES / "fig3.yaml")
-
-SMALL = """
-name: small
-parameters: {e: 0.3, omega_s: 1.5, r_phi: 0.01}
-effects: [impacts, contact, torsion]
-stop: {impacts: 50}
-outputs: {events: true, trajectory: {dt: 0.05}}
-"""
-
-
-def _one_line(capsys) -> str:
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1, err
-    assert "Traceback" not in err[0]
-    return err[0]
-
-
-def _no_files(folder: Path, stem: str = "out.nc") -> None:
-    assert not (folder / stem).exists()
-    assert not [p for p in folder.iterdir() if p.name.startswith(f".{stem}.")]
 
 
 # -------------------------------------------------------------------------- bounded memory/disk
@@ -75,9 +51,9 @@ def test_output_over_the_disk_limit_is_refused_before_running(tmp_path, capsys, 
     start = time.process_time()
     assert main(argv) == 2
     assert time.process_time() - start < 10.0  # CPU seconds, not wall-clock
-    line = _one_line(capsys)
+    line = one_line(capsys)
     assert "over the limit" in line and "--max-output" in line
-    _no_files(tmp_path)
+    no_files(tmp_path)
 
 
 def test_limit_is_configurable_and_enforced_while_streaming(tmp_path, capsys, monkeypatch):
@@ -88,17 +64,17 @@ def test_limit_is_configurable_and_enforced_while_streaming(tmp_path, capsys, mo
     assert main(["simulate", str(scene), "-o", str(out), "-q"]) == 0
     out.unlink()
     assert main(["simulate", str(scene), "-o", str(out), "-q", "--max-output", "2K"]) == 2
-    assert "over the limit of 2 KiB" in _one_line(capsys)
-    _no_files(tmp_path)
+    assert "over the limit of 2 KiB" in one_line(capsys)
+    no_files(tmp_path)
     # a time stop's event count is unknown in advance: the writer stops the run
     monkeypatch.setenv("BOUNCEDISK_MAX_OUTPUT", "100K")
     argv = ["simulate", str(scene), "-o", str(out), "-q", "--set", "stop={time: 1.0e+5}"]
     argv += ["--set", "outputs={events: true}"]
     assert main(argv) == 2
-    assert "over the limit" in _one_line(capsys)
-    _no_files(tmp_path)
+    assert "over the limit" in one_line(capsys)
+    no_files(tmp_path)
     assert main(["simulate", str(scene), "-o", str(out), "--max-output", "lots"]) == 2
-    assert "--max-output" in _one_line(capsys)
+    assert "--max-output" in one_line(capsys)
 
 
 # -------------------------------------------------------------------------------- pipeline peak

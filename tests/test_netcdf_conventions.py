@@ -9,26 +9,9 @@ from pathlib import Path
 import netCDF4
 import numpy as np
 import pytest
+from cli_checks import ENV, QUICK_STATS, ROOT, S6, SCENES, SMALL
 
-import bouncedisk
 from bouncedisk.cli import main
-
-ROOT = Path(__file__).resolve().parents[1]
-SCENES = ROOT / "workflow" / "config" / "scenes"
-S6 = str(SCENES / "stats_e06.yaml")
-#: Subprocesses run the package these tests import.
-ENV = {**os.environ, "PYTHONPATH": str(Path(bouncedisk.__file__).resolve().parents[1])}
-
-SMALL = """
-name: small
-parameters: {e: 0.3, omega_s: 1.5, r_phi: 0.01}
-effects: [impacts, contact, torsion]
-stop: {impacts: 50}
-outputs: {events: true, trajectory: {dt: 0.05}}
-"""
-#: A short chaotic ensemble (seconds).
-QUICK_STATS = ["--set", "stop.time=300", "--set", "stats.discard=50", "--set", "ensemble.members=4"]
-
 
 # ---------------------------------------------------------------------------------- CF and ACDD
 #: The one CF-1.10 result compliance-checker 6.1 still reports, and why it stays (docs,

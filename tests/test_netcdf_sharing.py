@@ -4,17 +4,10 @@ physical scene, joined sweep shards.
 
 import numpy as np
 import xarray as xr
+from cli_checks import SMALL
 
 from bouncedisk.cli import main
 from bouncedisk.model.scene import scene_from_mapping
-
-SMALL = """
-name: small
-parameters: {e: 0.3, omega_s: 1.5, r_phi: 0.01}
-effects: [impacts, contact, torsion]
-stop: {impacts: 50}
-outputs: {events: true, trajectory: {dt: 0.05}}
-"""
 
 
 # --------------------------------------------------------------------------- netCDF for sharing

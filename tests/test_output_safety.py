@@ -11,36 +11,10 @@ from pathlib import Path
 
 import netCDF4
 import pytest
+from cli_checks import ENV, QUICK_STATS, S6, SMALL, leftovers, write_scene
 
-import bouncedisk
 from bouncedisk.cli import main
 from bouncedisk.io import atomic
-
-ROOT = Path(__file__).resolve().parents[1]
-SCENES = ROOT / "workflow" / "config" / "scenes"
-S6 = str(SCENES / "stats_e06.yaml")
-#: Subprocesses run the package these tests import.
-ENV = {**os.environ, "PYTHONPATH": str(Path(bouncedisk.__file__).resolve().parents[1])}
-
-SMALL = """
-name: small
-parameters: {e: 0.3, omega_s: 1.5, r_phi: 0.01}
-effects: [impacts, contact, torsion]
-stop: {impacts: 50}
-outputs: {events: true, trajectory: {dt: 0.05}}
-"""
-#: A short chaotic ensemble (seconds).
-QUICK_STATS = ["--set", "stop.time=300", "--set", "stats.discard=50", "--set", "ensemble.members=4"]
-
-
-def _leftovers(folder: Path, stem: str) -> list[Path]:
-    return [p for p in folder.iterdir() if p.name == stem or p.name.startswith(f".{stem}.")]
-
-
-def _scene(tmp_path: Path, text: str = SMALL) -> str:
-    f = tmp_path / "s.yaml"
-    f.write_text(text)
-    return str(f)
 
 
 # ------------------------------------------------------------------------------ interrupts stop
@@ -65,7 +39,7 @@ def test_interrupt_while_writing_stats_leaves_no_output(tmp_path, capsys, monkey
     cap = capsys.readouterr()
     assert cap.out == ""  # no JSON
     assert "interrupted; no output written" in cap.err
-    assert not _leftovers(tmp_path, "s.nc")
+    assert not leftovers(tmp_path, "s.nc")
 
 
 def test_interrupt_after_the_members_leaves_no_output(tmp_path, capsys, monkeypatch):
@@ -75,7 +49,7 @@ def test_interrupt_after_the_members_leaves_no_output(tmp_path, capsys, monkeypa
     _kill_self_during(monkeypatch, stats, "to_dataset")  # the members are done
     assert main(["stats", S6, *QUICK_STATS, "--json", "-q", "-o", str(out)]) == 130
     assert capsys.readouterr().out == ""
-    assert not _leftovers(tmp_path, "s.nc")
+    assert not leftovers(tmp_path, "s.nc")
 
 
 def test_interrupt_while_printing_removes_the_output(tmp_path, capsys, monkeypatch):
@@ -84,7 +58,7 @@ def test_interrupt_while_printing_removes_the_output(tmp_path, capsys, monkeypat
     out = tmp_path / "s.nc"
     _kill_self_during(monkeypatch, stats.EnsembleStats, "summary")  # after the rename
     assert main(["stats", S6, *QUICK_STATS, "--json", "-q", "-o", str(out)]) == 130
-    assert not _leftovers(tmp_path, "s.nc")
+    assert not leftovers(tmp_path, "s.nc")
 
 
 def test_interrupt_while_simulating_leaves_no_output(tmp_path, capsys, monkeypatch):
@@ -92,8 +66,8 @@ def test_interrupt_while_simulating_leaves_no_output(tmp_path, capsys, monkeypat
 
     out = tmp_path / "out.nc"
     _kill_self_during(monkeypatch, datasets.SimulationWriter, "set_attrs", signal.SIGTERM)
-    assert main(["simulate", _scene(tmp_path), "-o", str(out), "-q"]) == 130
-    assert not _leftovers(tmp_path, "out.nc")
+    assert main(["simulate", write_scene(tmp_path), "-o", str(out), "-q"]) == 130
+    assert not leftovers(tmp_path, "out.nc")
 
 
 # ----------------------------------------------------------------------------------- full disks
@@ -123,7 +97,7 @@ def test_disk_full_is_one_line_naming_the_file(full_folder, tmp_path, command):
     folder, mounted = full_folder
     out = folder / ("x.md" if command == "check" else "x.nc")
     if command == "simulate":
-        argv = ["simulate", _scene(tmp_path, BIG), "-o", str(out), "-q"]
+        argv = ["simulate", write_scene(tmp_path, BIG), "-o", str(out), "-q"]
     elif command == "stats":
         argv = ["stats", S6, *QUICK_STATS, "-o", str(out), "-q"]
     if mounted:  # fill the disk first for the small writes
@@ -158,7 +132,7 @@ def test_disk_full_is_one_line_naming_the_file(full_folder, tmp_path, command):
     assert err[0].startswith(f"bouncedisk: error: {out}: cannot write: ")
     if mounted:
         assert err[0].endswith("No space left on device")
-    assert not _leftovers(folder, out.name)
+    assert not leftovers(folder, out.name)
 
 
 def test_write_error_names_the_output(tmp_path):
@@ -174,7 +148,7 @@ def test_stdout_on_a_full_disk_leaves_no_output(tmp_path, command):
     if command == "stats":
         argv = ["stats", S6, *QUICK_STATS, "--json", "-q", "-o", str(out)]
     else:
-        argv = ["simulate", _scene(tmp_path), "-o", str(out)]
+        argv = ["simulate", write_scene(tmp_path), "-o", str(out)]
     with open("/dev/full", "w") as full:
         r = subprocess.run(
             [sys.executable, "-m", "bouncedisk.cli", *argv],
@@ -186,12 +160,12 @@ def test_stdout_on_a_full_disk_leaves_no_output(tmp_path, command):
         )
     assert r.returncode == 2
     assert r.stderr.strip() == "bouncedisk: error: <stdout>: No space left on device"
-    assert not _leftovers(tmp_path, "x.nc")
+    assert not leftovers(tmp_path, "x.nc")
 
 
 # ------------------------------------------------------------------------------- symbolic links
 def test_symlink_output_is_written_through(tmp_path, capsys):
-    scene = _scene(tmp_path)
+    scene = write_scene(tmp_path)
     (tmp_path / "real").mkdir()
     target = tmp_path / "real" / "t.nc"
     target.write_text("old")
@@ -213,7 +187,7 @@ def test_device_or_process_file_is_refused(tmp_path, capsys, name):
         name = str(tmp_path / "l.nc")
         Path(name).symlink_to("/proc/self/fd/1")
     stdout = tmp_path / "stdout.txt"
-    code = f"import sys; from bouncedisk.cli import main; sys.exit(main(['simulate', {_scene(tmp_path)!r}, '-o', {name!r}, '-q']))"
+    code = f"import sys; from bouncedisk.cli import main; sys.exit(main(['simulate', {write_scene(tmp_path)!r}, '-o', {name!r}, '-q']))"
     with open(stdout, "w") as fh:  # stdout a regular file: /proc/self/fd/1 leads to it
         r = subprocess.run(
             [sys.executable, "-c", code], stdout=fh, stderr=subprocess.PIPE, text=True, env=ENV
@@ -228,7 +202,7 @@ def test_device_or_process_file_is_refused(tmp_path, capsys, name):
 def test_temporary_of_a_killed_run_is_removed_by_the_next(tmp_path):
     out = tmp_path / "big.nc"
     long = SMALL.replace("{impacts: 50}", "{impacts: 5000000}")
-    scene = _scene(tmp_path, long.replace(", trajectory: {dt: 0.05}", ""))
+    scene = write_scene(tmp_path, long.replace(", trajectory: {dt: 0.05}", ""))
     p = subprocess.Popen(
         [sys.executable, "-m", "bouncedisk.cli", "simulate", scene, "-o", str(out), "-q"],
         env=ENV,
@@ -247,7 +221,7 @@ def test_temporary_of_a_killed_run_is_removed_by_the_next(tmp_path):
     other = tmp_path / f".big.nc.otherhost-{p.pid}.abcd.tmp.nc"
     live.touch()
     other.touch()
-    assert main(["simulate", _scene(tmp_path), "-o", str(out), "-q"]) == 0
+    assert main(["simulate", write_scene(tmp_path), "-o", str(out), "-q"]) == 0
     assert out.is_file()
     assert not any(t.exists() for t in tmps)
     assert live.exists() and other.exists()

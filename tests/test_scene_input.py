@@ -4,29 +4,11 @@ averaging window shorter than a stator period, YAML alias bombs.
 
 import math
 import time
-from pathlib import Path
 
 import pytest
+from cli_checks import QUICK_STATS, S6, leftovers, one_line
 
 from bouncedisk.cli import main
-
-ROOT = Path(__file__).resolve().parents[1]
-SCENES = ROOT / "workflow" / "config" / "scenes"
-S6 = str(SCENES / "stats_e06.yaml")
-
-#: A short chaotic ensemble (seconds).
-QUICK_STATS = ["--set", "stop.time=300", "--set", "stats.discard=50", "--set", "ensemble.members=4"]
-
-
-def _one_line(capsys) -> str:
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1, err
-    assert "Traceback" not in err[0]
-    return err[0]
-
-
-def _leftovers(folder: Path, stem: str) -> list[Path]:
-    return [p for p in folder.iterdir() if p.name == stem or p.name.startswith(f".{stem}.")]
 
 
 # --------------------------------------------------------------------------- noise below an ulp
@@ -35,9 +17,9 @@ def test_noise_that_cannot_perturb_e_is_refused(tmp_path, capsys, sigma):
     out = tmp_path / "s.nc"
     argv = ["stats", S6, *QUICK_STATS, "--set", f"parameters.e_sigma={sigma}", "-o", str(out)]
     assert main([*argv, "--json"]) == 2
-    line = _one_line(capsys)
+    line = one_line(capsys)
     assert "parameters.e_sigma" in line and "ulp of e" in line
-    assert not _leftovers(tmp_path, "s.nc")
+    assert not leftovers(tmp_path, "s.nc")
     # 4 ulp of e = 0.6 is the least noise accepted; it does make members differ
     least = 4 * math.ulp(0.6)
     assert f"{least:.3g}" in line
@@ -58,7 +40,7 @@ def test_least_accepted_noise_gives_distinct_members(capsys):
 def test_window_shorter_than_a_stator_period_is_an_error(capsys, discard):
     argv = ["stats", S6, "--set", "stop.time=2000", "--set", "ensemble.members=4"]
     assert main([*argv, "--set", f"stats.discard={discard}", "--json"]) == 2
-    line = _one_line(capsys)
+    line = one_line(capsys)
     assert "stats.discard" in line and "stator period (4.189)" in line
     assert capsys.readouterr().out == ""
 
@@ -80,7 +62,7 @@ def test_nested_aliases_are_refused_quickly(tmp_path, capsys):
     start = time.process_time()
     assert main(["simulate", str(f), "-o", str(tmp_path / "o.nc")]) == 2
     assert time.process_time() - start < 10.0  # CPU seconds (it ran for minutes before)
-    assert "aliases (*name) expand to more than 100,000 values" in _one_line(capsys)
+    assert "aliases (*name) expand to more than 100,000 values" in one_line(capsys)
 
 
 def test_ordinary_aliases_still_load():

@@ -9,36 +9,11 @@ import subprocess
 import sys
 import threading
 import time
-from pathlib import Path
 
 import pytest
+from cli_checks import ENV, SMALL, one_line, write_scene
 
-import bouncedisk
 from bouncedisk.cli import main
-
-#: Subprocesses run the package these tests import.
-ENV = {**os.environ, "PYTHONPATH": str(Path(bouncedisk.__file__).resolve().parents[1])}
-
-SMALL = """
-name: small
-parameters: {e: 0.3, omega_s: 1.5, r_phi: 0.01}
-effects: [impacts, contact, torsion]
-stop: {impacts: 50}
-outputs: {events: true, trajectory: {dt: 0.05}}
-"""
-
-
-def _one_line(capsys) -> str:
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1, err
-    assert "Traceback" not in err[0]
-    return err[0]
-
-
-def _scene(tmp_path: Path, text: str = SMALL) -> str:
-    f = tmp_path / "s.yaml"
-    f.write_text(text)
-    return str(f)
 
 
 # ------------------------------------------------------------------------------ stalled servers
@@ -123,7 +98,7 @@ def test_runs_on_a_stalled_server_times_out_in_one_line(stalling_server):
 @pytest.mark.slow  # waits out the store's time-outs
 def test_simulate_track_on_a_stalled_server_keeps_and_names_the_output(stalling_server, tmp_path):
     out = tmp_path / "x.nc"
-    argv = ["simulate", _scene(tmp_path), "-o", str(out), "-q", "--track"]
+    argv = ["simulate", write_scene(tmp_path), "-o", str(out), "-q", "--track"]
     env = {**ENV, "MLFLOW_HTTP_REQUEST_TIMEOUT": "2"}
     r = subprocess.run(
         [sys.executable, "-m", "bouncedisk.cli", *argv, "--tracking-uri", stalling_server.url],
@@ -141,7 +116,7 @@ def test_simulate_track_on_a_stalled_server_keeps_and_names_the_output(stalling_
 @pytest.mark.slow  # waits out the store's time-outs
 def test_interrupt_while_recording_says_the_output_was_kept(stalling_server, tmp_path):
     out = tmp_path / "x.nc"
-    argv = ["simulate", _scene(tmp_path), "-o", str(out), "-q", "--track"]
+    argv = ["simulate", write_scene(tmp_path), "-o", str(out), "-q", "--track"]
     env = {**ENV, "MLFLOW_HTTP_REQUEST_TIMEOUT": "60"}
     p = subprocess.Popen(
         [sys.executable, "-m", "bouncedisk.cli", *argv, "--tracking-uri", stalling_server.url],
@@ -185,14 +160,14 @@ def test_reading_never_touches_a_foreign_or_empty_sqlite_file(tmp_path, capsys):
     empty = tmp_path / "empty.db"
     empty.touch()
     assert main(["runs", "--tracking-uri", str(foreign)]) == 2
-    assert "not an MLflow tracking store" in _one_line(capsys)
+    assert "not an MLflow tracking store" in one_line(capsys)
     assert main(["runs", "--tracking-uri", f"sqlite:///{empty}"]) == 2
-    assert "is empty, not an MLflow tracking store" in _one_line(capsys)
+    assert "is empty, not an MLflow tracking store" in one_line(capsys)
     assert foreign.read_bytes() == before and empty.stat().st_size == 0
     # writing into a foreign database is refused too
-    argv = ["simulate", _scene(tmp_path), "-o", str(tmp_path / "o.nc"), "-q", "--track"]
+    argv = ["simulate", write_scene(tmp_path), "-o", str(tmp_path / "o.nc"), "-q", "--track"]
     assert main([*argv, "--tracking-uri", str(foreign)]) == 2
-    assert "not an MLflow tracking store" in _one_line(capsys)
+    assert "not an MLflow tracking store" in one_line(capsys)
     assert foreign.read_bytes() == before and not (tmp_path / "o.nc").exists()
 
 
@@ -200,17 +175,17 @@ def test_reading_never_touches_a_foreign_or_empty_sqlite_file(tmp_path, capsys):
 def test_unknown_schemes_are_refused(tmp_path, capsys, monkeypatch, uri):
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("MLFLOW_TRACKING_URI", uri)
-    argv = ["simulate", _scene(tmp_path), "-o", "o.nc", "-q", "--track"]
+    argv = ["simulate", write_scene(tmp_path), "-o", "o.nc", "-q", "--track"]
     assert main(argv) == 2
-    assert _one_line(capsys).startswith(f"bouncedisk: error: tracking store {uri}: ")
+    assert one_line(capsys).startswith(f"bouncedisk: error: tracking store {uri}: ")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.yaml"]
 
 
 def test_missing_parent_folders_are_refused(tmp_path, capsys):
     root = tmp_path / "no"
-    argv = ["simulate", _scene(tmp_path), "-o", str(tmp_path / "o.nc"), "-q", "--track"]
+    argv = ["simulate", write_scene(tmp_path), "-o", str(tmp_path / "o.nc"), "-q", "--track"]
     assert main([*argv, "--tracking-uri", f"sqlite:///{root}/such/dir/x.db"]) == 2
-    assert f"folder '{root}/such' does not exist" in _one_line(capsys)
+    assert f"folder '{root}/such' does not exist" in one_line(capsys)
     assert not root.exists()
 
 
@@ -252,7 +227,7 @@ def test_damaged_store_is_one_line(tracked_store, tmp_path, damage, command):
     con.close()
     argv = ["runs"]
     if command == "simulate":
-        argv = ["simulate", _scene(tmp_path), "-o", str(tmp_path / "o.nc"), "-q", "--track"]
+        argv = ["simulate", write_scene(tmp_path), "-o", str(tmp_path / "o.nc"), "-q", "--track"]
     r = subprocess.run(
         [sys.executable, "-m", "bouncedisk.cli", *argv, "--tracking-uri", str(db)],
         capture_output=True,
