@@ -79,16 +79,17 @@ def stalling_server():
     srv.close()
 
 
+def _stalled(server, *argv: str) -> subprocess.CompletedProcess:
+    """``bouncedisk ARGV --tracking-uri SERVER`` in a subprocess whose store requests time out
+    after 2 s."""
+    env = {**ENV, "MLFLOW_HTTP_REQUEST_TIMEOUT": "2"}
+    command = [sys.executable, "-m", "bouncedisk.cli", *argv, "--tracking-uri", server.url]
+    return subprocess.run(command, capture_output=True, text=True, env=env, timeout=80)
+
+
 @pytest.mark.slow  # waits out the store's time-outs
 def test_runs_on_a_stalled_server_times_out_in_one_line(stalling_server):
-    env = {**ENV, "MLFLOW_HTTP_REQUEST_TIMEOUT": "2"}
-    r = subprocess.run(
-        [sys.executable, "-m", "bouncedisk.cli", "runs", "--tracking-uri", stalling_server.url],
-        capture_output=True,
-        text=True,
-        env=env,
-        timeout=80,
-    )
+    r = _stalled(stalling_server, "runs")
     assert r.returncode == 2
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and f"tracking store {stalling_server.url}: cannot be read" in lines[0]
@@ -98,14 +99,8 @@ def test_runs_on_a_stalled_server_times_out_in_one_line(stalling_server):
 @pytest.mark.slow  # waits out the store's time-outs
 def test_simulate_track_on_a_stalled_server_keeps_and_names_the_output(stalling_server, tmp_path):
     out = tmp_path / "x.nc"
-    argv = ["simulate", write_scene(tmp_path), "-o", str(out), "-q", "--track"]
-    env = {**ENV, "MLFLOW_HTTP_REQUEST_TIMEOUT": "2"}
-    r = subprocess.run(
-        [sys.executable, "-m", "bouncedisk.cli", *argv, "--tracking-uri", stalling_server.url],
-        capture_output=True,
-        text=True,
-        env=env,
-        timeout=80,
+    r = _stalled(
+        stalling_server, "simulate", write_scene(tmp_path), "-o", str(out), "-q", "--track"
     )
     assert r.returncode == 2
     lines = r.stderr.strip().splitlines()
