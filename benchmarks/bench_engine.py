@@ -2,8 +2,8 @@
 
 Run:  python benchmarks/bench_engine.py [--events N] [--repeat R]
 
-Targets (issue 23 "Fast feedback"): >= 3e6 impacts/s per core axial-only at omega_s = 1.5 and
->= 2e6 with torsion and load; (issue: exact simulator) cost per impact at omega_s = 100 at most
+Targets (docs/user_guide/performance.md): >= 3e6 impacts/s per core axial-only at omega_s = 1.5
+and >= 2e6 with torsion and load; cost per impact at omega_s = 100 at most
 3x that at 1.5. Rates are per CPU second of this process (``time.process_time``: on a shared
 machine wall time measures the neighbours too). All numbers come from this one run, so the
 ratios compare like with like. The first call compiles (or loads the numba cache) and is not

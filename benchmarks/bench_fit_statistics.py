@@ -1,4 +1,4 @@
-"""What the fit's statistics cost per ensemble (issue 23): the members' statistics reduced one
+"""What the fit's statistics cost per ensemble: the members' statistics reduced one
 record at a time on the member threads (as before) against all records at once
 (:func:`bouncedisk.fitting.statistics.records_stats`, one Welch call for every member), at the
 shipped motor's generating point on its run-up's grid. Both give the same bits (checked here).

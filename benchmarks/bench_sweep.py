@@ -2,7 +2,7 @@
 
 Run:  python benchmarks/bench_sweep.py [--e N] [--omega N] [--repeat R]
 
-Target (issue 23 "Fast feedback"): ensembles and sweeps >= 1.85x on 2 cores against 1. A sweep
+Target (docs/user_guide/performance.md): ensembles and sweeps >= 1.85x on 2 cores against 1. A sweep
 runs its grid points in turn; its parallelism is its shards (``run_sweep(..., shard, n_shards)``,
 the pipeline's ``sweep_shard`` jobs). Measured here on the regime map's base scene
 (``workflow/config/scenes/regime_map.yaml``) over a small ``(e, omega_s)`` grid:

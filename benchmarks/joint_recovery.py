@@ -1,4 +1,4 @@
-"""Recovery of the joint fit (issue 20) on model-generated data at the three parameter sets of
+"""Recovery of the joint fit on model-generated data at the three parameter sets of
 ``tests/test_fitting.py`` (periodic, near the period doubling, chaotic with chatter reinjection):
 for each, a synthetic run-up and load curve (``tests/test_joint_fit.py``'s ``make_data``), the
 joint fit, and its identifiability table against the generating values.
@@ -19,7 +19,7 @@ estimate's metric (run-ups 36.7): its intervals hold the truth through the widen
 consistent candidate, not the profiles; 90 s. The periodic and chaotic cases' chi2, chi2 at the
 generating point and interval widths are those measured before the refinement (which the periodic
 case runs, the chaotic one does not). At scan 64 the periodic case lands in a valley of chi2 76
-(see the closing notes of issue 20; not re-run).
+(measured once, not re-run).
 """
 
 from __future__ import annotations

@@ -40,7 +40,7 @@ extensions = [
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
-exclude_patterns = ["_build", "README_short.md", "examples/GALLERY_HEADER.rst", "examples/data"]
+exclude_patterns = ["_build", "examples/GALLERY_HEADER.rst", "examples/data"]
 templates_path = ["_templates"]
 myst_enable_extensions = ["deflist", "colon_fence"]
 myst_heading_anchors = 3

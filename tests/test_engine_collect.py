@@ -57,3 +57,20 @@ def test_on_chunk_sees_every_chunk():
     seen = []
     res = simulate_arrays(CASES["events stop"], on_chunk=seen.append)
     assert sum(len(c.t) for c in seen) == len(res.events["t"]) == 40_000
+
+
+def test_returning_keeps_a_generators_return_value_after_the_loop():
+    from bouncedisk.engine.driver import Returning
+
+    def gen():
+        yield 1
+        yield 2
+        return "done"
+
+    g = Returning(gen())
+    assert g.value is None
+    assert list(g) == [1, 2] and g.value == "done"
+    early = Returning(gen())
+    for _ in early:
+        break
+    assert early.value is None  # not run to its end: no return value

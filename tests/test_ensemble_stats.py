@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 import xarray as xr
+from numba import njit
 
 from bouncedisk.analysis.ensembles import MemberStats, run_ensemble
 from bouncedisk.analysis.observables import REGIME_CODES
@@ -18,7 +19,7 @@ from bouncedisk.analysis.statistics import EnsembleStats, confidence_interval, r
 from bouncedisk.cli import main
 from bouncedisk.cli.stats import format_summary
 from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
-from bouncedisk.engine.noise import noisy_restitution, normals
+from bouncedisk.engine.noise import member_key, noisy_restitution, normal
 from bouncedisk.io.records import TrajColumn as C
 from bouncedisk.model.scene import load_scene
 
@@ -48,6 +49,16 @@ def _json_stats(capsys, path, *sets: str) -> dict:
 
 
 # ------------------------------------------------------------------------------------ the noise
+@njit
+def normals(seed, member, k0, n):
+    """``n`` consecutive deviates ``ξ_{k0}, …, ξ_{k0+n−1}`` of member ``member``'s stream."""
+    key = member_key(seed, member)
+    out = np.empty(n)
+    for i in range(n):
+        out[i] = normal(key, k0 + i)
+    return out
+
+
 def test_noise_stream_is_standard_normal_and_counter_based():
     x = normals(1, 0, 0, 200_000)
     assert abs(x.mean()) < 0.01 and abs(x.std() - 1.0) < 0.01
@@ -191,6 +202,21 @@ def test_confidence_interval_is_bit_identical_to_scipy_stats_t(k, level):
     mean, low, high = confidence_interval(x, level)
     half = float(sps.t.ppf(0.5 + level / 2.0, k - 1) * np.std(x, ddof=1) / math.sqrt(k))
     assert (mean, low, high) == (mean, mean - half, mean + half)
+
+
+def test_t_half_width_is_per_column_and_matches_scipy_stats_t():
+    """The one Student half-width: per time column of a (member, time) band, bit for bit the
+    ``scipy.stats.t.ppf`` formula the band used; two members ``[0, 2]`` give ``t_{0.975,1} = 12.706``."""
+    from scipy import stats as sps
+
+    from bouncedisk.analysis.statistics import t_half_width, t_quantile
+
+    assert t_quantile(1) == pytest.approx(12.7062047, rel=1e-8)
+    assert t_half_width(np.array([0.0, 2.0])) == pytest.approx(12.7062047, rel=1e-8)
+    om = np.random.default_rng(3).normal(1.0, 0.1, (7, 5))
+    ref = sps.t.ppf(0.975, 6) * om.std(axis=0, ddof=1) / np.sqrt(7)
+    assert np.array_equal(t_half_width(om, axis=0), ref)
+    assert np.array_equal(t_half_width(om.T, axis=1), ref)
 
 
 def test_run_stats_needs_a_time_stop(scene_file):

@@ -1,4 +1,4 @@
-"""The fit's data at the edges (issue 21, items 3, 4, 12, 13): time origin, too-short data and a
+"""The fit's data at the edges: time origin, too-short data and a
 too-small bootstrap, extreme sidecar values, data the fit used to accept wrongly."""
 
 from __future__ import annotations
@@ -49,7 +49,7 @@ def _fails(capsys, args, field, path=None):
     return err[0]
 
 
-# ---------------------------------------------------------------- item 3: the time origin
+# ---------------------------------------------------------------- the time origin
 
 
 def test_statistics_do_not_depend_on_the_time_origin(tmp_path, frame):
@@ -71,7 +71,7 @@ def test_statistics_do_not_depend_on_the_time_origin(tmp_path, frame):
     np.testing.assert_allclose(sb, sa, rtol=2 * bound, atol=1e-9, err_msg=str(STATS))
 
 
-# ---------------------------------------------------------------- item 4: too short, too small
+# ---------------------------------------------------------------- too short, too small
 
 
 def test_data_too_short_for_the_statistics(tmp_path, capsys, frame):
@@ -86,7 +86,7 @@ def test_bootstrap_too_small_for_a_95_interval(tmp_path, capsys, frame, n):
     _fails(capsys, [str(p), "-o", str(tmp_path / "f.nc"), "--bootstrap", n], "--bootstrap")
 
 
-# ---------------------------------------------------------------- item 12: extreme sidecar values
+# ---------------------------------------------------------------- extreme sidecar values
 
 
 @pytest.mark.parametrize(
@@ -105,7 +105,7 @@ def test_extreme_sidecar_values_one_line(tmp_path, capsys, frame, side, field):
     _fails(capsys, [str(p), "-o", str(tmp_path / "f.nc")], field, p.with_suffix(".yaml"))
 
 
-# ---------------------------------------------------------------- item 13: wrongly accepted
+# ---------------------------------------------------------------- wrongly accepted
 
 
 @pytest.mark.parametrize(

@@ -232,6 +232,8 @@ def test_fit_file_has_the_interface(tiny_fit):
     for name in ("e", "r_phi", "psi", "omega_s"):
         a = ds[name].attrs
         assert a["ci_low"] <= float(ds[name]) <= a["ci_high"], (name, a)
+        # the curve's generating value lies in the interval (tiny search: e is not identified)
+        assert a["ci_low"] <= CASES["periodic"][name] <= a["ci_high"], (name, a)
         assert f"profile_chi2_{name}" in ds
     assert ds["stat_steady_speed"].attrs["units"] == "rad/s"
     assert ds["stat_rise_mean_1"].attrs["units"] == "rad/s"

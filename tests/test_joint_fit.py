@@ -1,4 +1,4 @@
-"""The joint fit of run-ups and load curves (issue 20): the load part of the likelihood, the
+"""The joint fit of run-ups and load curves: the load part of the likelihood, the
 command's checks, the fit file and its figures, and recovery at three parameter sets."""
 
 from __future__ import annotations
@@ -348,7 +348,7 @@ NEAR_SCAN = (
 @pytest.mark.cost(45)
 def test_the_joint_stage_finds_the_valley_near_the_period_doubling(tmp_path):
     """Near the period doubling the joint valley is a thin tube in ``(e, ψ, omega_s)`` between
-    the scan's points (issue 20): from these scan points the joint candidates
+    the scan's points: from these scan points the joint candidates
     (:func:`search.joint_candidates`) must reach it — the best of them, on the fit's 12 members,
     reproduces both data sets (``χ²`` adequate) near the generating point. Without the joint
     refinement the best candidate's ``χ²`` was in the hundreds."""
@@ -391,7 +391,7 @@ def test_the_joint_stage_finds_the_valley_near_the_period_doubling(tmp_path):
 @pytest.mark.slow
 @pytest.mark.cost(100)
 def test_joint_recovery_of_the_chaotic_case_holds_the_truth_in_every_interval(tmp_path):
-    """The whole joint fit of model-generated data (issue 20: the chaotic case with chatter
+    """The whole joint fit of model-generated data (the chaotic case with chatter
     reinjection, the shortest of ``benchmarks/joint_recovery.py``'s three, at its settings):
     adequate, every joint 95 % interval two-sided inside the search range and holding the
     generating value, and narrower with the load curve than from the run-up alone in every

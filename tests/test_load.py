@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from scipy.integrate import quad, solve_ivp
 
 from bouncedisk.cli import main
-from bouncedisk.engine import EngineConfig, InitialState, simulate_arrays
+from bouncedisk.engine import EngineConfig, simulate_arrays
 from bouncedisk.engine import laws as L
 from bouncedisk.engine.driver import audit_balances
 from bouncedisk.io.load_curves import read_load_curve
@@ -270,7 +270,10 @@ def test_torque_speed_curve_falls_with_load_and_does_not_depend_on_cores():
     assert 0.0 < one["stall_torque"] < 1.0  # the momentum bound
     lo, hi = one["stall_torque_ci95"]
     assert lo <= one["stall_torque"] <= hi
-    assert one["max_power"] == pytest.approx(max(one["power_out"]), rel=0.2)
+    # the maximum power is the largest sampled mean power, at its load (no interpolation)
+    k = int(np.argmax(one["power_out"]))
+    assert one["max_power"] == pytest.approx(one["power_out"][k], rel=1e-14)
+    assert one["max_power_load"] == loads[k] and 0.0 < loads[k] < loads[-1]
     assert max(one["audit_residual_torsion"]) <= 1e-9
     assert max(one["audit_residual_axial"]) <= 1e-9
     # output power is τ_L Ω̄ exactly, per load
@@ -352,21 +355,43 @@ def test_bad_loads_option(loads, scene_file, tmp_path, capsys):
 
 
 def test_torque_speed_command_writes_a_curve_file(scene_file, tmp_path, capsys):
-    """The command adds the load effect itself, writes the file and prints JSON."""
+    """The command adds the load effect itself, writes the file and prints JSON: the members in
+    the file are those of the curve run directly on the scene with the load effect, the file's
+    means and intervals are the members' Student statistics, and power is ``τ_L Ω̄``."""
+    from scipy import stats as sps
+
+    from bouncedisk.model.scene import load_scene
+
     f = scene_file(SCENE.format(extra="", effects="impacts, contact, torsion, restitution_noise"))
     out = tmp_path / "c.nc"
+    loads = [0.0, 0.3, 0.9]
     args = ["torque-speed", str(f), "--loads", "0,0.3,0.9", "-o", str(out), "--json", "-q"]
     assert main(args) == 0
     summary = json.loads(capsys.readouterr().out)
-    assert summary["loads"] == [0.0, 0.3, 0.9]
+    on = [
+        "effects=[impacts, contact, torsion, restitution_noise, load]",
+        "parameters.load_torque=0",
+    ]
+    direct = torque_speed(load_scene(f, on), loads, cores=1)
+    assert summary == json.loads(json.dumps(direct.summary()))
     ds = open_checked(out)  # the labels "branch" are a CF label on "branch_index" in the file
-    assert ds.mean_omega.dims == ("branch", "load_torque")
-    assert list(ds.branch.values) == ["up", "down"]
-    assert np.allclose(ds.mean_omega.sel(branch="up").values, summary["mean_omega"])
-    assert ds.attrs["no_load_speed"] == pytest.approx(summary["no_load_speed"])
+    assert list(ds.branch.values) == ["up", "down"] and list(ds.load_torque.values) == loads
+    for branch in ("up", "down"):
+        om = direct.matrix(branch, "mean_omega")  # (member, load)
+        assert om.shape == (2, 3) and np.ptp(om[:, 0]) > 0  # two members that differ
+        got = ds.sel(branch=branch)
+        assert np.array_equal(got.mean_omega_member.values, om.T)
+        power = got.power_out_member.values
+        assert np.allclose(power, np.array(loads)[:, None] * om.T, rtol=1e-12, atol=1e-15)
+        half = sps.t.ppf(0.975, 1) * om.std(axis=0, ddof=1) / np.sqrt(2)
+        mean = om.mean(axis=0)
+        assert np.allclose(got.mean_omega.values, mean, rtol=1e-15, atol=0)
+        assert np.allclose(got.mean_omega_ci95_low.values, mean - half, rtol=1e-13, atol=0)
+        assert np.allclose(got.mean_omega_ci95_high.values, mean + half, rtol=1e-13, atol=0)
+    assert ds.attrs["no_load_speed"] == summary["no_load_speed"]
+    assert list(ds.attrs["no_load_speed_ci95"]) == summary["no_load_speed_ci95"]
     for name in ds.variables:
         assert "units" in ds[name].attrs or name == "branch"
-    assert dataclasses.is_dataclass(EngineConfig) and InitialState().t == 0.0
 
 
 def test_clipped_model_takes_the_load():

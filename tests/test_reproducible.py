@@ -1,4 +1,4 @@
-"""The same answer on every machine (issue 26): reductions without kernel-dependent bits, and a
+"""The same answer on every machine: reductions without kernel-dependent bits, and a
 fit whose estimate round-off cannot move (README, "Reproducible")."""
 
 from __future__ import annotations

@@ -249,3 +249,19 @@ def test_info_rejects_foreign_netcdf(tmp_path, capsys):
 
 def test_input_error_line_format():
     assert InputError("f.yaml", "parameters.e", "bad").line() == "f.yaml: parameters.e: bad"
+
+
+def test_history_is_the_command_line_main_was_given(scene_file, tmp_path):
+    """``history`` records the words ``main`` parsed (not the interpreter's own argv), quoted."""
+    f, out = scene_file(GOOD), tmp_path / "with space.nc"
+    stats = tmp_path / "stats.nc"
+    assert main(["simulate", str(f), "-o", str(out), "--set", "stop.impacts=5", "-q"]) == 0
+    with xr.open_dataset(out) as ds:
+        history = ds.attrs["history"]
+    assert history.endswith(f"bouncedisk simulate {f} -o '{out}' --set stop.impacts=5 -q")
+    sets = ["--set", "stop={time: 50.0}", "--set", "stats.discard=0"]
+    assert main(["stats", str(f), "-o", str(stats), *sets, "-q"]) == 0
+    with xr.open_dataset(stats) as ds:
+        assert ds.attrs["history"] == f"{ds.attrs['created']}: bouncedisk stats {f} -o {stats} " + (
+            "--set 'stop={time: 50.0}' --set stats.discard=0 -q"
+        )

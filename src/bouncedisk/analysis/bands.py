@@ -11,11 +11,9 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import xarray as xr
-from scipy import stats as _sps
 
 from ..engine import simulate_arrays
 from ..io.provenance import base_attrs, new_run_id
@@ -23,8 +21,10 @@ from ..io.records import TrajColumn
 from ..model.engine_config import engine_config
 from ..model.errors import InputError
 from ..model.scene import Scene
+from ..run.cores import map_on_threads
 from ..run.runner import scene_attrs
 from . import observables as ob
+from .statistics import LEVEL, t_half_width
 
 #: Restitution noise of the band's members when the scene has none (docs/model.md: enough to
 #: sample the natural measure, physically meaningless).
@@ -48,8 +48,7 @@ def member_speeds(
     Returns ``(t, om)``: the times every member reached and the speeds, shape (member, time).
     Members use the scene's restitution noise, or ``e_sigma`` when it has none.
     """
-    with ThreadPoolExecutor(max_workers=max(1, cores)) as pool:
-        runs = list(pool.map(lambda m: _member_omega(scene, m, e_sigma, seed), range(members)))
+    runs = map_on_threads(lambda m: _member_omega(scene, m, e_sigma, seed), range(members), cores)
     n = min(len(r) for r in runs)
     return runs[0][:n, 0], np.stack([r[:n, 1] for r in runs])
 
@@ -59,7 +58,7 @@ def _band_dataset(t: np.ndarray, om: np.ndarray) -> xr.Dataset:
     interval, 2.5/97.5 percentiles, and each member's first-order trend."""
     members = len(om)
     mean = om.mean(axis=0)
-    half = _sps.t.ppf(0.975, members - 1) * om.std(axis=0, ddof=1) / np.sqrt(members)
+    half = t_half_width(om, LEVEL, axis=0)
     lo, hi = np.percentile(om, [2.5, 97.5], axis=0)
     trends = [ob.first_order_trend(t, row) for row in om]
 

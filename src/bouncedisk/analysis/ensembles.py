@@ -14,7 +14,6 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from math import cos, isfinite, log, sin, sqrt
 
@@ -25,6 +24,7 @@ from ..engine import KIND_CHATTER, KIND_IMPACT, EngineConfig, InitialState
 from ..engine.driver import audit_balances, iterate_views
 from ..engine.kernel import EV_PHASE, EV_T, EV_V_REL
 from ..model import stator
+from ..run.cores import map_on_threads
 from . import observables as ob
 
 #: Events kept from the end of each member's run to classify its regime.
@@ -72,108 +72,59 @@ _I_IMPACTS, _I_CHATTER, _I_PREV, _I_OFFSET, _I_SKIP, _I_COUNT, _I_TAIL = range(7
 _N_INTS = 7
 _F_FIRST, _F_LAST, _F_TOTAL, _F_SIN, _F_COS = range(5)
 _N_FLOATS = 5
+#: Where Benettin's vector restarts: ``(1, 1)/√2``.
+_RESET = 1.0 / sqrt(2.0)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _pair_jacobian(p_t, p_vr, p_s, p_c, tj, s_j, vr_j, e, w):
+    """The impact map's Jacobian of two successive impacts, if they are one free flight apart.
+
+    The previous impact at ``p_t`` (``sin φ, cos φ = p_s, p_c``, relative velocity ``p_vr``) and
+    this one at ``tj`` (``s_j = sin φ``, ``vr_j``). The pair is valid when the flight from the
+    first lands on the second (``|landing − s_j| < 1e-7 (1 + Δt²)``) with ``vr_j > 0``; returns
+    ``(valid, a, b, j10, j11)``, the formulas and the order of operations of
+    :func:`~bouncedisk.analysis.observables.impact_jacobians` (docs/model.md "Impact map
+    Jacobian").
+    """
+    vs = w * p_c
+    v_post = vs + e * p_vr
+    dt = tj - p_t
+    landing = p_s + v_post * dt - 0.5 * (dt * dt)
+    if not (abs(landing - s_j) < 1e-7 * (1.0 + dt * dt) and vr_j > 0.0):
+        return False, 0.0, 0.0, 0.0, 0.0
+    a = (vs - v_post + dt) / vr_j
+    b = dt / vr_j
+    c = e - (1.0 + e) * w * w * s_j
+    return True, a, b, c * a - e, c * b - e
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _benettin_step(vec, a, b, j10, j11):
+    """One step of Benettin's method on the unit vector ``vec`` (updated in place).
+
+    Returns the norm of the Jacobian times ``vec`` (``log`` of it is the step's stretch), or 0
+    when it is zero or not finite, and ``vec`` restarts at ``(1, 1)/√2``
+    (:func:`~bouncedisk.analysis.observables.benettin`).
+    """
+    x = a * vec[0] + b * vec[1]
+    y = j10 * vec[0] + j11 * vec[1]
+    norm = sqrt(x * x + y * y)
+    if norm == 0.0 or not isfinite(norm):
+        vec[0] = _RESET
+        vec[1] = _RESET
+        return 0.0
+    vec[0] = x / norm
+    vec[1] = y / norm
+    return norm
 
 
 @njit(cache=True, nogil=True)
-def _reduce_chunk(t, phase, v_rel, kind, t_from, e, w, vec, ints, fl, tail_f, tail_k):
-    """One chunk of :meth:`_Reducer.add`, compiled (releases the GIL); returns the rows kept.
-
-    The events with ``t >= t_from``, preceded by the tail's last row, are walked pair by pair:
-    the impact map's Jacobian of each valid pair (the formulas and the order of operations of
-    :func:`~bouncedisk.analysis.observables.impact_jacobians`) goes straight into Benettin's
-    step (:func:`~bouncedisk.analysis.observables.benettin`); the chunk's sum of logs and its
-    count go to ``fl[_F_TOTAL]``, ``ints[_I_COUNT]``. The tail becomes the last ``TAIL_EVENTS``
-    of those rows. The stator's ``sin φ``, ``cos φ`` come from libm, as in the engine: the same
-    bits as numpy's on the reference machine (``model/stator.py``; 2e8 phases compared), and
-    ``tests/test_ensemble_reducer.py`` holds the whole reduction to the numpy one.
+def _keep_tail(t, phase, v_rel, kind, t_from, kept, tail_f, tail_k, n_tail):
+    """The tail becomes the last ``TAIL_EVENTS`` rows: the previous one's last row (if
+    ``n_tail > 0``) in front of the chunk's ``kept`` rows with ``t >= t_from``; returns its length.
     """
-    n_tail = ints[_I_TAIL]
-    have = n_tail > 0  # the previous row of the first pair
-    start = ints[_I_OFFSET] - (1 if have else 0)
-    skip = ints[_I_SKIP]
-    prev = ints[_I_PREV]
-    n_imp = ints[_I_IMPACTS]
-    n_chat = ints[_I_CHATTER]
-    first = fl[_F_FIRST]
-    last = fl[_F_LAST]
-    p_t = 0.0
-    p_vr = 0.0
-    p_k = 0
-    p_s = 0.0
-    p_c = 0.0
-    if have:
-        p_t = tail_f[n_tail - 1, 0]
-        p_vr = tail_f[n_tail - 1, 2]
-        p_k = tail_k[n_tail - 1]
-        p_s = fl[_F_SIN]
-        p_c = fl[_F_COS]
-    reset = 1.0 / sqrt(2.0)
-    k_coef = (1.0 + e) * w * w
-    total = 0.0
-    count = 0
-    j_pair = 0  # index of the pair among this chunk's valid pairs
-    li = 1 if have else 0  # index of the row in the chunk's rows with the previous one in front
-    kept = 0
-    for j in range(len(t)):
-        tj = t[j]
-        if not tj >= t_from:
-            continue
-        kj = kind[j]
-        if kj == KIND_IMPACT:
-            n_imp += 1
-        elif kj == KIND_CHATTER:
-            if n_chat == 0:
-                first = tj
-            last = tj
-            n_chat += 1
-        ph_j = phase[j]
-        s_j = sin(ph_j)
-        vr_j = v_rel[j]
-        if li > 0:
-            vs = w * p_c
-            v_post = vs + e * p_vr
-            dt = tj - p_t
-            landing = p_s + v_post * dt - 0.5 * (dt * dt)
-            if (
-                p_k == KIND_IMPACT
-                and kj == KIND_IMPACT
-                and abs(landing - s_j) < 1e-7 * (1.0 + dt * dt)
-                and vr_j > 0.0
-            ):
-                a = (vs - v_post + dt) / vr_j
-                b = dt / vr_j
-                c = e - k_coef * s_j
-                j10 = c * a - e
-                j11 = c * b - e
-                k = li - 1 + start
-                if k != prev + 1:
-                    vec[0] = reset
-                    vec[1] = reset
-                prev = k
-                x = a * vec[0] + b * vec[1]
-                y = j10 * vec[0] + j11 * vec[1]
-                norm = sqrt(x * x + y * y)
-                if norm == 0.0 or not isfinite(norm):
-                    vec[0] = reset
-                    vec[1] = reset
-                else:
-                    vec[0] = x / norm
-                    vec[1] = y / norm
-                    if j_pair >= skip:
-                        total += log(norm)
-                        count += 1
-                j_pair += 1
-        p_t = tj
-        p_vr = vr_j
-        p_k = kj
-        p_s = s_j
-        p_c = cos(ph_j)
-        li += 1
-        kept += 1
-    if kept == 0:
-        return 0
-    # the tail: the last TAIL_EVENTS rows, the previous chunk's last one in front
-    rows = kept + (1 if have else 0)
+    rows = kept + (1 if n_tail > 0 else 0)
     n_new = min(rows, TAIL_EVENTS)
     if kept < n_new:  # the previous last row stays, first
         tail_f[0, 0] = tail_f[n_tail - 1, 0]
@@ -191,16 +142,72 @@ def _reduce_chunk(t, phase, v_rel, kind, t_from, e, w, vec, ints, fl, tail_f, ta
         tail_f[i, 2] = v_rel[j]
         tail_k[i] = kind[j]
         i -= 1
-    ints[_I_TAIL] = n_new
-    ints[_I_IMPACTS] = n_imp
-    ints[_I_CHATTER] = n_chat
-    ints[_I_PREV] = prev
-    ints[_I_COUNT] = count
-    fl[_F_FIRST] = first
-    fl[_F_LAST] = last
-    fl[_F_TOTAL] = total
-    fl[_F_SIN] = p_s
-    fl[_F_COS] = p_c
+    return n_new
+
+
+@njit(cache=True, nogil=True)
+def _reduce_chunk(t, phase, v_rel, kind, t_from, e, w, vec, ints, fl, tail_f, tail_k):
+    """One chunk of :meth:`_Reducer.add`, compiled (releases the GIL); returns the rows kept.
+
+    The events with ``t >= t_from``, preceded by the tail's last row, are counted and walked
+    pair by pair: the impact map's Jacobian of each valid pair (:func:`_pair_jacobian`) goes
+    straight into Benettin's step (:func:`_benettin_step`); the chunk's sum of logs and its
+    count go to ``fl[_F_TOTAL]``, ``ints[_I_COUNT]``; the tail is renewed (:func:`_keep_tail`).
+    The state arrays ``ints``, ``fl`` (slots ``_I_*``, ``_F_*``) carry the counts from chunk to
+    chunk. The stator's ``sin φ``, ``cos φ`` come from libm, as in the engine: the same bits as
+    numpy's on the reference machine (``model/stator.py``; 2e8 phases compared), and
+    ``tests/test_ensemble_reducer.py`` holds the whole reduction to the numpy one.
+    """
+    n_tail = ints[_I_TAIL]
+    have = n_tail > 0  # the previous row of the first pair
+    start = ints[_I_OFFSET] - (1 if have else 0)
+    skip, prev = ints[_I_SKIP], ints[_I_PREV]
+    n_imp, n_chat = ints[_I_IMPACTS], ints[_I_CHATTER]
+    first, last = fl[_F_FIRST], fl[_F_LAST]
+    p_t, p_vr, p_k, p_s, p_c = 0.0, 0.0, 0, 0.0, 0.0
+    if have:
+        p_t, p_vr, p_k = tail_f[n_tail - 1, 0], tail_f[n_tail - 1, 2], tail_k[n_tail - 1]
+        p_s, p_c = fl[_F_SIN], fl[_F_COS]
+    total = 0.0
+    count = 0
+    j_pair = 0  # index of the pair among this chunk's valid pairs
+    li = 1 if have else 0  # index of the row in the chunk's rows with the previous one in front
+    for j in range(len(t)):
+        tj = t[j]
+        if not tj >= t_from:
+            continue
+        kj = kind[j]
+        if kj == KIND_IMPACT:
+            n_imp += 1
+        elif kj == KIND_CHATTER:
+            if n_chat == 0:
+                first = tj
+            last = tj
+            n_chat += 1
+        ph_j = phase[j]
+        s_j = sin(ph_j)
+        vr_j = v_rel[j]
+        if li > 0 and p_k == KIND_IMPACT and kj == KIND_IMPACT:
+            valid, a, b, j10, j11 = _pair_jacobian(p_t, p_vr, p_s, p_c, tj, s_j, vr_j, e, w)
+            if valid:
+                k = li - 1 + start
+                if k != prev + 1:
+                    vec[0] = _RESET
+                    vec[1] = _RESET
+                prev = k
+                norm = _benettin_step(vec, a, b, j10, j11)
+                if norm > 0.0 and j_pair >= skip:
+                    total += log(norm)
+                    count += 1
+                j_pair += 1
+        p_t, p_vr, p_k, p_s, p_c = tj, vr_j, kj, s_j, cos(ph_j)
+        li += 1
+    kept = li - (1 if have else 0)
+    if kept == 0:
+        return 0
+    ints[_I_TAIL] = _keep_tail(t, phase, v_rel, kind, t_from, kept, tail_f, tail_k, n_tail)
+    ints[_I_IMPACTS], ints[_I_CHATTER], ints[_I_PREV], ints[_I_COUNT] = n_imp, n_chat, prev, count
+    fl[_F_FIRST], fl[_F_LAST], fl[_F_TOTAL], fl[_F_SIN], fl[_F_COS] = first, last, total, p_s, p_c
     return kept
 
 
@@ -383,11 +390,4 @@ def run_ensemble(
     def one(m: int) -> MemberStats:
         return run_member(cfg, init, m, t_from, should_stop)[0]
 
-    results: list[MemberStats] = []
-    with ThreadPoolExecutor(max_workers=max(1, cores)) as pool:
-        # map keeps member order, whatever order the threads finish in
-        for st in pool.map(one, range(members)):
-            results.append(st)
-            if on_member:
-                on_member(len(results), members)
-    return results
+    return map_on_threads(one, range(members), cores, on_member)

@@ -134,23 +134,6 @@ def _first_period(ph, vr, kd, max_period, tol):
     return 0
 
 
-@dataclass(frozen=True)
-class ImpactJacobian:
-    """Jacobian of the impact map ``(t_k, v_k) → (t_{k+1}, v_{k+1})`` for one free flight."""
-
-    matrix: np.ndarray
-
-    @property
-    def trace(self) -> float:
-        """Trace of the Jacobian."""
-        return float(np.trace(self.matrix))
-
-    @property
-    def det(self) -> float:
-        """Determinant of the Jacobian (``e²`` for any free flight between impacts)."""
-        return float(np.linalg.det(self.matrix))
-
-
 def impact_jacobians(
     t: np.ndarray, phase: np.ndarray, v_rel: np.ndarray, kind: np.ndarray, e: float, omega_s: float
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -281,19 +264,6 @@ def lyapunov_exponent(
         return math.nan, math.nan
     elapsed = float(np.sum(t[idx[skip:] + 1] - t[idx[skip:]]))
     return total / count, total / elapsed
-
-
-def mean_rotor_speed(t: np.ndarray, omega_after: np.ndarray, t_from: float = 0.0) -> float:
-    """Time average of the rotor angular velocity from the events, ``Σ Ω_k Δt_k / Σ Δt_k``.
-
-    ``Ω`` is constant in flight (docs/model.md "Flight"), so this is exact for runs without contact
-    and a first-order approximation of the contact segments otherwise.
-    """
-    sel = t[:-1] >= t_from
-    dt = np.diff(t)[sel]
-    if dt.sum() <= 0:
-        return math.nan
-    return float(np.sum(omega_after[:-1][sel] * dt) / dt.sum())
 
 
 @dataclass(frozen=True)

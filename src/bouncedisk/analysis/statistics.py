@@ -75,10 +75,28 @@ def confidence_interval(
     mean = float(np.mean(x))
     if len(x) < 2:
         return mean, math.nan, math.nan
-    # the t quantile t_{(1+level)/2, K-1}: scipy.stats.t.ppf's own formula, without importing
-    # scipy.stats (about half a second of every pipeline job that reads an ensemble)
-    half = float(stdtrit(len(x) - 1, 0.5 + level / 2.0) * np.std(x, ddof=1) / math.sqrt(len(x)))
+    half = float(t_half_width(x, level))
     return mean, mean - half, mean + half
+
+
+def t_quantile(dof: int, level: float = LEVEL) -> float:
+    """Student's quantile ``t_{(1+level)/2, dof}`` of a two-sided ``level`` interval.
+
+    docs/model.md "Long-run statistics of chaotic motion". This is ``scipy.stats.t.ppf``'s own
+    formula, bit for bit, without importing ``scipy.stats`` (about half a second of every
+    pipeline job that reads an ensemble).
+    """
+    return float(stdtrit(dof, 0.5 + level / 2.0))
+
+
+def t_half_width(values: np.ndarray, level: float = LEVEL, axis: int = 0) -> float | np.ndarray:
+    """Half-width ``t_{(1+level)/2, K−1} s/√K`` of the Student interval of the mean along ``axis``.
+
+    ``K`` is the length of ``values`` along ``axis`` (at least 2) and ``s`` the sample standard
+    deviation (docs/model.md "Long-run statistics of chaotic motion").
+    """
+    k = np.shape(values)[axis]
+    return t_quantile(k - 1, level) * np.std(values, axis=axis, ddof=1) / math.sqrt(k)
 
 
 @dataclass(frozen=True)

@@ -50,10 +50,18 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"bouncedisk {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for add in (_add_simulate, _add_stats, _add_info, _add_runs, _add_check, _add_fit):
+    adders = (
+        _add_simulate,
+        _add_stats,
+        _add_info,
+        _add_runs,
+        _add_check,
+        _add_fit,
+        _add_torque_speed,
+        _add_basins,
+    )
+    for add in adders:
         add(sub)
-    _add_torque_speed(sub)
-    _add_basins(sub)
     return parser
 
 
@@ -78,7 +86,9 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the console script."""
     _install_signal_handlers()
     parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
     args, extra = parser.parse_known_args(argv)
+    args.argv = argv
     if extra and args.command == "runs":  # run ids after options: `runs diff A --json B`
         bad = [x for x in extra if x.startswith("-")]
         if bad:

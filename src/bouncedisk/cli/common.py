@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 
 EXIT_USER = 2
@@ -18,6 +19,12 @@ def _add_set_option(p: argparse.ArgumentParser, example: str) -> None:
         metavar="KEY=VALUE",
         help=f"override a scene field, e.g. --set {example} (repeatable)",
     )
+
+
+def command_line(args: argparse.Namespace) -> str:
+    """The command line that ran: ``bouncedisk`` and the words :func:`~.command.main` parsed,
+    quoted for a shell (a file's ``history``, a tracked run's command)."""
+    return "bouncedisk " + shlex.join(args.argv)
 
 
 def flush_stdout() -> None:

@@ -3,10 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import shlex
-import sys
 
-from .common import _add_set_option
+from .common import _add_set_option, command_line
 from .tracking_options import _add_track_options, _track, _tracking_store
 
 
@@ -19,9 +17,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     limit = parse_size(args.max_output) if args.max_output else default_max_output()
     scene = load_scene(args.scene, args.set or [])
     store = _tracking_store(args)
-    command = "bouncedisk " + " ".join(shlex.quote(a) for a in sys.argv[1:])
     summary = run_scene(
-        scene, out, progress=not args.quiet, command=command, max_output_bytes=limit
+        scene, out, progress=not args.quiet, command=command_line(args), max_output_bytes=limit
     )
     if not args.quiet:
         print(

@@ -10,7 +10,7 @@ import time
 from ..io.history import write_with_history
 from ..model.errors import InputError
 from ..run.cores import available_cores
-from .common import _add_set_option
+from .common import _add_set_option, command_line
 from .tracking_options import _add_track_options, _track, _tracking_store
 
 
@@ -101,7 +101,7 @@ def stats_command(args: argparse.Namespace) -> dict:
         )
         wall = time.perf_counter() - start
         if args.output:
-            write_with_history(to_dataset(scene, result, wall), args.output)
+            write_with_history(to_dataset(scene, result, wall), args.output, command_line(args))
     summary = result.summary()
     if args.json:
         print(json.dumps(summary))
@@ -113,7 +113,6 @@ def stats_command(args: argparse.Namespace) -> dict:
 
 
 def _cmd_stats(args: argparse.Namespace) -> int:
-    pass
     from ..tracking.extraction import numeric_leaves
 
     store = _tracking_store(args)

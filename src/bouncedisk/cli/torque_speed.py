@@ -9,7 +9,7 @@ import time
 from ..io.history import write_with_history
 from ..model.errors import InputError
 from ..run.cores import available_cores
-from .common import _add_set_option
+from .common import _add_set_option, command_line
 from .stats import _progress
 from .tracking_options import _add_track_options, _track, _tracking_store
 
@@ -73,7 +73,7 @@ def torque_speed_command(args: argparse.Namespace) -> dict:
         )
         wall = time.perf_counter() - start
         if args.output:
-            write_with_history(to_dataset(scene, curve, wall), args.output)
+            write_with_history(to_dataset(scene, curve, wall), args.output, command_line(args))
     summary = curve.summary()
     if args.json:
         print(json.dumps(summary))
@@ -98,7 +98,7 @@ def _with_load(scene_file: str, overrides: list[str]) -> list[str]:
     return overrides
 
 
-def add_torque_speed(sub, add_set, add_track) -> None:
+def _add_torque_speed(sub) -> None:
     """``bouncedisk torque-speed SCENE [--loads ...] [-o CURVE.nc] [--json]`` (docs/formats.md)."""
     p = sub.add_parser(
         "torque-speed",
@@ -113,18 +113,17 @@ def add_torque_speed(sub, add_set, add_track) -> None:
         help=f"load torques (nondimensional tau_L; N*m for a physical scene; default {DEFAULT_LOADS})",
     )
     p.add_argument("-o", "--output", help="write the curve (per branch, load and member) here")
-    add_set(p, "ensemble.members=32")
+    _add_set_option(p, "ensemble.members=32")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.add_argument(
         "--cores", type=int, default=None, help="members run on this many cores (default: all)"
     )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress")
-    add_track(p)
+    _add_track_options(p)
+    p.set_defaults(func=_cmd_torque_speed)
 
 
 def _cmd_torque_speed(args: argparse.Namespace) -> int:
-    pass
-
     store = _tracking_store(args)
     summary = torque_speed_command(args)
     params = {"scene_file": args.scene, "set": args.set or [], "loads": args.loads or ""}
@@ -132,11 +131,3 @@ def _cmd_torque_speed(args: argparse.Namespace) -> int:
     metrics = {k: summary[k] for k in scalars if summary[k] is not None}
     _track(args, store, "torque-speed", [args.output] if args.output else [], params, metrics)
     return 0
-
-
-def _add_torque_speed(sub) -> None:
-    """``bouncedisk torque-speed`` (:mod:`bouncedisk.cli.torque_speed`)."""
-    pass
-
-    add_torque_speed(sub, _add_set_option, _add_track_options)
-    sub.choices["torque-speed"].set_defaults(func=_cmd_torque_speed)

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import shlex
 import sys
 
-from .common import flush_stdout
+from .common import command_line, flush_stdout
 
 
 def _add_track_options(p: argparse.ArgumentParser) -> None:
@@ -48,7 +47,7 @@ def _track(args, store, kind: str, outputs=(), params=None, metrics=None) -> Non
     from ..tracking import store as tracking_store
     from ..tracking import writing
 
-    command = "bouncedisk " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    command = command_line(args)
     flush_stdout()  # the command's own output is complete before its outputs become final
     kept = keep_outputs()
     try:

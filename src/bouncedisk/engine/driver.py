@@ -8,13 +8,17 @@ chunks; :func:`simulate_arrays` collects a whole run in memory.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Generator, Iterator
 from dataclasses import dataclass, field
+from typing import Generic, TypeVar
 
 import numpy as np
 
 from . import kernel as K
 from .layout import OK_STATUSES, STATUS_TEXT
+
+Y = TypeVar("Y")
+V = TypeVar("V")
 
 
 @dataclass(frozen=True)
@@ -224,6 +228,22 @@ class ChunkView:
     t_now: float
 
 
+class Returning(Generic[Y, V]):
+    """A generator to iterate with a ``for`` loop, keeping its return value.
+
+    ``for c in (gen := Returning(iterate(cfg))): ...`` then ``gen.value``: the generator's
+    return value (``StopIteration.value``, here ``(status_code, final_state)``) once the loop has
+    run to the end; ``None`` before.
+    """
+
+    def __init__(self, gen: Generator[Y, object, V]):
+        self._gen = gen
+        self.value: V | None = None
+
+    def __iter__(self) -> Iterator[Y]:
+        self.value = yield from self._gen
+
+
 def _kernel_calls(
     cfg: EngineConfig,
     init: InitialState,
@@ -296,13 +316,10 @@ def iterate_views(
     # the kernel's event columns are the rows of one block; a view shows them as columns
     block = np.empty((K.EV_COLS, chunk_events))
     buffers = (tuple(block), np.empty(chunk_events, dtype=np.int8))
-    calls = _kernel_calls(cfg, init or InitialState(), lambda: buffers, chunk_samples)
-    while True:
-        try:
-            n_ev, traj, strobe, total, t_now = next(calls)
-        except StopIteration as stop:
-            return stop.value
+    calls = Returning(_kernel_calls(cfg, init or InitialState(), lambda: buffers, chunk_samples))
+    for n_ev, traj, strobe, total, t_now in calls:
         yield ChunkView(block[:, :n_ev].T, buffers[1][:n_ev], traj, strobe, total, t_now)
+    return calls.value
 
 
 def iterate(
@@ -320,12 +337,8 @@ def iterate(
     EngineError
         When the dynamics need an effect the configuration left out, or an event search fails.
     """
-    raw = iterate_views(cfg, init, chunk_events, chunk_samples)
-    while True:
-        try:
-            c = next(raw)
-        except StopIteration as stop:
-            return stop.value
+    raw = Returning(iterate_views(cfg, init, chunk_events, chunk_samples))
+    for c in raw:
         ev = c.ev
         yield Chunk(
             t=ev[:, K.EV_T].copy(),
@@ -340,6 +353,7 @@ def iterate(
             n_events_total=c.n_events_total,
             t_now=c.t_now,
         )
+    return raw.value
 
 
 def _audit_terms(cfg: EngineConfig, st: np.ndarray, ist: np.ndarray, in_contact: bool) -> dict:
@@ -467,17 +481,13 @@ def simulate_arrays(
         m = min(_COLLECT_CHUNK, cfg.max_events - kind.n)
         return tuple(f.window(m) for f in out), kind.window(m)
 
-    calls = _kernel_calls(cfg, init or InitialState(), event_buffers, _COLLECT_CHUNK)
-    while True:
-        try:
-            n_ev, c_traj, c_strobe, _total, _t_now = next(calls)
-        except StopIteration as stop:
-            status, final = stop.value
-            break
+    calls = Returning(_kernel_calls(cfg, init or InitialState(), event_buffers, _COLLECT_CHUNK))
+    for n_ev, c_traj, c_strobe, _total, _t_now in calls:
         for f in (*out, kind):
             f.take(n_ev)
         traj.add(c_traj)
         strobe.add(c_strobe)
+    status, final = calls.value
     events = {name: out[j].done() for name, j in _EVENT_COLUMNS.items()}
     events["kind"] = kind.done()
     return RunResult(events, traj.done(), strobe.done(), STATUS_TEXT[status], status, final)
@@ -488,15 +498,11 @@ def _collect_chunks(
 ) -> RunResult:
     """:func:`simulate_arrays` handing every chunk to ``on_chunk`` as it comes."""
     chunks: list[Chunk] = []
-    gen = iterate(cfg, init)
-    while True:
-        try:
-            c = next(gen)
-        except StopIteration as stop:
-            status, final = stop.value
-            break
+    gen = Returning(iterate(cfg, init))
+    for c in gen:
         chunks.append(c)
         on_chunk(c)
+    status, final = gen.value
 
     def cat(name: str, dtype=float) -> np.ndarray:
         parts = [getattr(c, name) for c in chunks]

@@ -10,7 +10,7 @@ easy to get wrong").
 One compiled function per mode of motion (docs/model.md "Phases of motion", "Events"):
 
 - flight → impact: :func:`_flight_step`, i.e. :func:`flight_next_impact` (first root of the
-  gap, eq. 20) and :func:`_impact` (restitution and angular impulse, eqs. 4, 8, 19; flight,
+  gap, eq. 20) and :func:`_impact_sc` (restitution and angular impulse, eqs. 4, 8, 19; flight,
   contact or chatter after it), the row written by :func:`_record_event`;
 - chattering: :func:`_enter_contact` (the jump to the accumulation point) and
   :func:`_chatter_tail` (its event);
@@ -497,13 +497,14 @@ def _flight_output(prm, flg, st, ist, traj, strobe, info, n, th, t_now, t_hit, t
 
 
 @njit(cache=True)
-def _impact(e_k, e, w, r, psi, phase, v_minus, omega, torsion, cap, inertia, tol):
+def _impact_sc(e_k, e, w, r, psi, phase, sph, cph, v_minus, omega, torsion, cap, inertia, tol):
     """An impact and what follows it: flight, contact, or a chattering sequence.
 
     The impact law (docs/model.md "Events"; paper eqs. 4, 8, 19, or 11 with ``stator_inertia``) with
-    this impact's restitution ``e_k``; then, if ``N >= 0``, contact when the rebound is below
-    the grazing gap, or the accumulation time of a complete chattering sequence
-    (docs/model.md "Chattering", :func:`~bouncedisk.engine.laws.chatter_time`, with the mean ``e``).
+    this impact's restitution ``e_k``, with ``sph, cph = sin φ, cos φ`` of the impact phase given;
+    then, if ``N >= 0``, contact when the rebound is below the grazing gap, or the accumulation
+    time of a complete chattering sequence (docs/model.md "Chattering",
+    :func:`~bouncedisk.engine.laws.chatter_time`, with the mean ``e``).
 
     Returns
     -------
@@ -511,14 +512,6 @@ def _impact(e_k, e, w, r, psi, phase, v_minus, omega, torsion, cap, inertia, tol
         Relative impact velocity, rotor velocities after the impact, whether the rotor enters
         contact, and the time from the impact to the accumulation point (-1: none).
     """
-    return _impact_sc(
-        e_k, e, w, r, psi, phase, sin(phase), cos(phase), v_minus, omega, torsion, cap, inertia, tol
-    )
-
-
-@njit(cache=True)
-def _impact_sc(e_k, e, w, r, psi, phase, sph, cph, v_minus, omega, torsion, cap, inertia, tol):
-    """:func:`_impact` with ``sph, cph = sin φ, cos φ`` of the impact phase given."""
     v_rel, v_plus, omega_plus = impact_law_sc(
         e_k, w, r, psi, phase, cph, v_minus, omega, torsion, cap, inertia
     )
@@ -832,7 +825,7 @@ def _flight_land(prm, flg, st, ist, ev, evk, traj, strobe, info, n, th, t_now, h
     """The rest of a flight once its impact ``hit = (tau, dk, phase, v_minus, e_k)`` is known.
 
     The flight's outputs (:func:`_flight_output`, which ends the run if its end comes first);
-    the impact law with the restitution ``e_k`` and what follows (:func:`_impact`); its event
+    the impact law with the restitution ``e_k`` and what follows (:func:`_impact_sc`); its event
     row; then a new flight, contact or a chattering sequence (:func:`_enter_contact`). Nothing
     here feeds back into the axial motion through ``Ω``, so runs that differ only in the load
     share ``hit`` (:mod:`bouncedisk.engine.loads`). Returns ``ST_CONTINUE`` or the status that
@@ -933,7 +926,7 @@ def run_chunk(
 ) -> None:
     """Advance the simulation; see the module docstring.
 
-    The event loop: a flight ends at its impact (:func:`flight_next_impact`, :func:`_impact`,
+    The event loop: a flight ends at its impact (:func:`flight_next_impact`, :func:`_impact_sc`,
     one event row, :func:`_record_event`), which leads to a flight, contact or a chattering
     sequence (:func:`_enter_contact`); contact goes on segment by segment
     (:func:`_contact_step`, or :func:`_clipped_ride` in the clipped model).

@@ -78,7 +78,7 @@ def impact_law_sc(e, w, r, psi, phase, cos_phase, v_minus, omega, torsion, cap, 
 
 
 #: Gap below which a separation is grazing: a flight that stays below it is not taken, the rotor
-#: stays in contact (docs/model.md "w <= 1"; the limit w → 1⁺).
+#: stays in contact (docs/model.md "w ≤ 1"; the limit w → 1⁺).
 GRAZE_GAP = 64.0 * 2.220446049250313e-16
 #: The rounding of a position near the top of the stator's stroke (one ulp of 1.0): a chattering
 #: sequence whose bounces all stay below it cannot be resolved bounce by bounce.
@@ -102,7 +102,7 @@ def chatter_time(e, w, phase, w_rel, tol):
     Near ``w = 1⁺`` (``w < 1 + NEAR_ONE``) the rotor lands just after the short separation
     window, at a load ``N0 ~ 1e-6``, and that test fails until the bounces are far below the
     rounding of a position (``v_rel ~ 1e-14``, 4e-8 apart): the sequence then ended in contact
-    with no chatter event, while at ``w = 1 + 1e-5`` it was accumulated (issue 11, item 8). There
+    with no chatter event, while at ``w = 1 + 1e-5`` it was accumulated. There
     the jump is also taken once every bounce stays below the rounding of a position: the first
     (highest) one rises ``W² / (2 N_min) <= ROUND_GAP``, ``N_min`` the least load over ``T``.
     So as ``w → 1⁺`` every cycle is separate, land, accumulate, ride; and below the grazing

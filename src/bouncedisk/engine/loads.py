@@ -30,6 +30,7 @@ from .driver import (
     EngineConfig,
     EngineError,
     InitialState,
+    Returning,
     _pack,
     initial_state,
     iterate,
@@ -209,9 +210,7 @@ def omega_integrals(
 
 def _one_load(cfg: EngineConfig, load: float, init: InitialState) -> float:
     """``∫Ω dt`` of one run under ``load`` (:func:`~.driver.iterate`)."""
-    gen = iterate(replace(cfg, load_torque=float(load)), init)
-    while True:
-        try:
-            next(gen)
-        except StopIteration as stop:
-            return stop.value[1]["omega_integral"]
+    gen = Returning(iterate(replace(cfg, load_torque=float(load)), init))
+    for _ in gen:
+        pass
+    return gen.value[1]["omega_integral"]

@@ -61,13 +61,3 @@ def noisy_restitution(e, e_sigma, key, k):
     if ek > 1.0:
         return 1.0
     return ek
-
-
-@njit(cache=True)
-def normals(seed, member, k0, n):
-    """``n`` consecutive deviates ``ξ_{k0}, …, ξ_{k0+n−1}`` of member ``member``'s stream."""
-    key = member_key(seed, member)
-    out = np.empty(n)
-    for i in range(n):
-        out[i] = normal(key, k0 + i)
-    return out

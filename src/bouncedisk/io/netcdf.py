@@ -349,19 +349,6 @@ def open_simulation(path: str | Path, lazy: bool = False) -> xr.Dataset:
     return ds
 
 
-def events_of(ds: xr.Dataset) -> dict[str, np.ndarray]:
-    """The event table of a simulation Dataset as numpy arrays."""
-    out = {
-        "t": ds["t_impact"].values,
-        "phase": ds["phase"].values,
-        "v_rel": ds["v_rel"].values,
-        "kind": ds["kind"].values.astype(np.int8),
-    }
-    if "omega_after" in ds:
-        out["omega_after"] = ds["omega_after"].values
-    return out
-
-
 def coverage_content_type(name: str, is_coordinate: bool) -> str:
     """ACDD-1.3 ``coverage_content_type`` of a variable: coordinates, measured data (names
     with ``measured``), else model results."""

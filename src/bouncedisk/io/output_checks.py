@@ -198,6 +198,7 @@ def check_output_size(scene, path: str | Path, limit: int) -> float:
         One line with the estimate, the limit and how to change either.
     """
     from ..engine import EngineConfig, iterate
+    from ..engine.driver import Returning
     from ..model.engine_config import engine_config
 
     ev_b, tr_b, sb_b = row_bytes(scene)
@@ -235,18 +236,16 @@ def check_output_size(scene, path: str | Path, limit: int) -> float:
     cfg = engine_config(scene)
     cfg = EngineConfig(**{**cfg.__dict__, "traj_dt": 0.0, "stroboscopic": False})
     t_now = t0
-    gen = iterate(cfg, scene.initial)
-    while True:
-        try:
-            chunk = next(gen)
-        except StopIteration as stop:
-            t_now = float(stop.value[1]["t"])
-            break
-        except Exception:  # the real run reports engine failures with their context
-            return size
-        t_now = chunk.t_now
-        if size + sampled(t_now) > limit:
-            break
+    chunks = Returning(iterate(cfg, scene.initial))
+    try:
+        for chunk in chunks:
+            t_now = chunk.t_now
+            if size + sampled(t_now) > limit:
+                break
+        else:
+            t_now = float(chunks.value[1]["t"])
+    except Exception:  # the real run reports engine failures with their context
+        return size
     total = size + sampled(t_now)
     if total > limit:
         raise too_large(path, total, limit, "the trajectory and stroboscopic samples")

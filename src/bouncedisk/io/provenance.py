@@ -14,7 +14,8 @@ from pathlib import Path
 from .. import __version__
 
 REFERENCES = (
-    "Bouncing disk on a vibrating pretwisted beam (seed paper, shared/seed/bouncing-disk-paper.md); "
+    "Nonlinear dynamics of a bouncing disk on the tip of a vibrating pretwisted beam (the model's "
+    "source; its corrected statement: docs/model.md in the bouncedisk repository); "
     "Nordmark & Piiroinen, Nonlinear Dyn. 58 (2009) for chattering; "
     "Luck & Mehta, Phys. Rev. E 48, 3988 (1993) for the bouncing ball."
 )

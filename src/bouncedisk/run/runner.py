@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..engine import EngineError, RunResult, iterate, simulate_arrays
-from ..engine.driver import Chunk, audit_balances
+from ..engine.driver import Chunk, Returning, audit_balances
 from ..io.atomic import stop_checks
 from ..io.netcdf import SimulationWriter
 from ..io.provenance import base_attrs, new_run_id
@@ -287,18 +287,17 @@ def _stream(
 
     A stop request (SIGINT, SIGTERM) is honoured between chunks, never inside a write.
     """
-    while True:
-        stop_request.check()
-        try:
-            c = next(gen)
-        except StopIteration as stop:
-            return stop.value
+    chunks = Returning(gen)
+    stop_request.check()
+    for c in chunks:
         stop_request.check()
         writer.append(c)
         if on_chunk is not None:
             on_chunk(c)
         if prog:
             prog.update(c.n_events_total, c.t_now)
+        stop_request.check()
+    return chunks.value
 
 
 def _run_attrs(

@@ -424,7 +424,7 @@ FIT_IN_BAND = 0.8
 
 
 def _fit_checks(src: _Source) -> list[CheckResult]:
-    """The joint fit (issue 20): the model fitted to the run-up and the load curve together
+    """The joint fit: the model fitted to the run-up and the load curve together
     reproduces the load curve and pins every parameter. Read from the pipeline's fit file; a run
     without ``--results`` has no fit to read (a fit takes minutes), and a run-up-only fit no load
     curve: both skip it."""
@@ -435,7 +435,7 @@ def _fit_checks(src: _Source) -> list[CheckResult]:
         raise InputError(str(path), "", "missing: the results folder lacks the prototype's fit")
     ds = open_checked(path, required=("omega_measured",), what="fit")
     if "load_speed_measured" not in ds:
-        return []  # a run-up-only fit (the config names no load curve): nothing of issue 20
+        return []  # a run-up-only fit (the config names no load curve): no joint fit to check
     ds = open_checked(
         path, required=("load_speed_measured", "interval_low", "search_low"), what="fit"
     )
@@ -452,7 +452,7 @@ def _fit_checks(src: _Source) -> list[CheckResult]:
     return [
         CheckResult(
             "the model fitted to the run-up and the load curve together reproduces the load "
-            "curve (issue 20)",
+            "curve (docs/user_guide/fitting.md)",
             f"{100 * frac:.0f}% of {len(y)} readings within the fitted members' 95% band; joint "
             f"chi2 {a['chi2']:.4g} on {a['n_statistics']} statistics (p = {a['chi2_p_value']:.2g})",
             f">= {100 * FIT_IN_BAND:.0f}% within the band, fit adequate (p > 1e-3)",
@@ -460,7 +460,7 @@ def _fit_checks(src: _Source) -> list[CheckResult]:
         ),
         CheckResult(
             "the run-up and the load curve together identify the motor: every parameter has a "
-            "two-sided 95% interval inside its search range (issue 20)",
+            "two-sided 95% interval inside its search range (docs/user_guide/fitting.md)",
             ", ".join(f"{n} [{lo[j]:.4g}, {hi[j]:.4g}]" for j, n in enumerate(names)),
             "identified and strictly inside the search range, each",
             bool(np.all(ids)) and all(inner), str(path),

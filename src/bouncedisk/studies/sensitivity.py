@@ -27,11 +27,11 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 import xarray as xr
-from scipy.special import ndtri, stdtrit
+from scipy.special import ndtri
 
 from ..analysis import observables as ob
 from ..analysis.bands import member_speeds
-from ..analysis.statistics import confidence_interval, run_stats
+from ..analysis.statistics import confidence_interval, run_stats, t_quantile
 from ..analysis.sweeps import regime_attrs, shard_slice
 from ..io.provenance import base_attrs
 from ..model.scene import Scene, scene_from_mapping
@@ -92,7 +92,7 @@ def _from_ci(
     if members is None:
         q = float(ndtri(0.5 + LEVEL / 2.0))
     else:
-        q = float(stdtrit(max(1, members - 1), 0.5 + LEVEL / 2.0))
+        q = t_quantile(max(1, members - 1), LEVEL)
     return m, lo, hi, (hi - lo) / (2.0 * q)
 
 
@@ -183,7 +183,7 @@ class MotorModel:
             [math.log10(ob.first_order_trend(t, (total - om[i]) / (k - 1)).tau) for i in range(k)]
         )
         se = math.sqrt((k - 1) / k * float(np.sum((jack - jack.mean()) ** 2)))
-        half = float(stdtrit(k - 1, 0.5 + LEVEL / 2.0)) * se
+        half = t_quantile(k - 1, LEVEL) * se
         return full, full - half, full + half, se
 
     def _load(self, point: Mapping[str, float], r: float) -> dict:

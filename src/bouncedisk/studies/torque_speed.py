@@ -18,7 +18,6 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,6 +28,7 @@ from ..engine import EngineConfig, InitialState
 from ..model.engine_config import engine_config
 from ..model.errors import InputError
 from ..model.scene import Scene
+from ..run.cores import map_on_threads
 
 #: Branches of the sweep: loads increasing, then decreasing from the top load's final states.
 BRANCHES = ("up", "down")
@@ -137,8 +137,9 @@ def _per_load(stats: list[EnsembleStats]) -> dict:
 
 
 def first_zero(loads: np.ndarray, speed: np.ndarray) -> float:
-    """The first load at which ``speed`` reaches 0, linearly interpolated (docs/model.md "stall
-    torque": the smallest ``τ_L`` with ``Ω̄ <= 0``); ``nan`` when it stays positive."""
+    """The first load at which ``speed`` reaches 0, linearly interpolated (the stall torque of
+    docs/model.md "The motor under load": the smallest ``τ_L`` with ``Ω̄ <= 0``); ``nan`` when it
+    stays positive."""
     if speed[0] <= 0.0:
         return float(loads[0])
     for k in range(1, len(loads)):
@@ -329,12 +330,7 @@ def torque_speed(
     def one(m: int) -> dict[str, list[MemberStats]]:
         return member_sweep(cfg, scene.initial, m, loads, discard, duration, branches, should_stop)
 
-    results = []
-    with ThreadPoolExecutor(max_workers=max(1, cores)) as pool:
-        for res in pool.map(one, range(members)):
-            results.append(res)
-            if on_member:
-                on_member(len(results), members)
+    results = map_on_threads(one, range(members), cores, on_member)
     curve = {
         b: [
             EnsembleStats([r[b][k] for r in results], discard, t_end - t_from, True, scene.scales)

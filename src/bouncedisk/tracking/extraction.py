@@ -14,6 +14,7 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
+from ..io.provenance import sha256_file
 from .store import _one_line
 
 HASH_CACHE = ".tracking-hashes.json"
@@ -325,15 +326,6 @@ def describe_output(path: str | Path) -> tuple[dict[str, str], dict[str, float]]
     except Exception as ex:  # noqa: BLE001 - a damaged output must not lose the whole record
         return {"tracking_warning": f"{p.name}: {_one_line(ex)}"}, {}
     return {}, {}
-
-
-def sha256_file(path: Path, block: int = 1 << 20) -> str:
-    """SHA-256 of a file's bytes."""
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        while chunk := fh.read(block):
-            h.update(chunk)
-    return h.hexdigest()
 
 
 class _HashCache:

@@ -14,8 +14,8 @@ from pathlib import Path
 from typing import Any
 
 from .. import __version__
-from ..io.provenance import TAG_GIT_COMMIT, TAG_GIT_DIRTY, TAG_VERSION
-from .extraction import _keys, _netcdf_run_id, _number, describe_output, flatten, sha256_file
+from ..io.provenance import TAG_GIT_COMMIT, TAG_GIT_DIRTY, TAG_VERSION, sha256_file
+from .extraction import _keys, _netcdf_run_id, _number, describe_output, flatten
 from .store import Store, _client, _log_batch, experiment_id, store_lock
 
 ENV_TRACK = "BOUNCEDISK_TRACK"  # "1": simulate/fit/stats track without --track
