@@ -3,7 +3,7 @@
 Run:  python benchmarks/bench_basins.py [--phases 48] [--speeds 0,50,100,150] [--load 0.075]
       [--repeat 3] [--set stop.time=12000 ...]
 
-Target (issue 38): 48 phases x 4 speeds (192 starts), a window of 8,000 time units, e = 0.3 with
+Target: 48 phases x 4 speeds (192 starts), a window of 8,000 time units, e = 0.3 with
 a load, in <= 10 s on 2 cores. The scene is the pipeline's ``basins_fig3``
 (``workflow/config/scenes/basins_fig3.yaml``: stop 8000, discard 4000, restitution noise 1e-9),
 at the load asked for. Every start is two runs of the engine (the window's halves, each from the
