@@ -9,7 +9,7 @@ import time
 from ..io.history import write_with_history
 from ..model.errors import InputError
 from ..run.cores import available_cores
-from .common import _add_set_option
+from .common import _add_set_option, command_line
 from .tracking_options import _add_track_options, _track, _tracking_store
 
 
@@ -78,7 +78,7 @@ def basins_command(args: argparse.Namespace) -> dict:
         wall = time.perf_counter() - start
         ds.attrs["wall_time_s"] = round(wall, 6)
         if args.output:
-            write_with_history(ds, args.output)
+            write_with_history(ds, args.output, command_line(args))
     out = summary(ds)
     if args.json:
         print(json.dumps(out))
