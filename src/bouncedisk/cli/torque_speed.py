@@ -12,6 +12,7 @@ from ..run.cores import available_cores
 from .common import _add_set_option
 from .stats import _progress
 from .tracking_options import _add_track_options, _track, _tracking_store
+from .window_warnings import print_window_warnings
 
 #: Loads of a curve when ``--loads`` is not given: from no load to the momentum bound
 #: ``τ_L = 1`` (docs/model.md "The motor under load"), in units of the scene's load torque.
@@ -75,6 +76,8 @@ def torque_speed_command(args: argparse.Namespace) -> dict:
         if args.output:
             write_with_history(to_dataset(scene, curve, wall), args.output)
     summary = curve.summary()
+    regimes = summary["regime"] + (summary.get("down") or {}).get("regime", [])
+    print_window_warnings(scene, regimes)
     if args.json:
         print(json.dumps(summary))
     else:
