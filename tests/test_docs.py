@@ -1,6 +1,7 @@
 """The built documentation renders: headless Chromium screenshots of the landing page, a gallery
-page and an API page (file:// URLs, no network), the gallery's images on disk, and an API page for
-every public function and class.
+page and an API page (file:// URLs, no network), the gallery's images on disk, an API page for
+every public function and class, no page loading a script or style sheet from another host, and
+the model page's equations typeset by the MathJax shipped in the site (Chromium, no network).
 
 The site is built by ``.ci/docs`` (CI runs it before the tests) or by
 ``sphinx-build -W --keep-going -b html docs docs/_build/html``; without it these tests are skipped.
@@ -20,6 +21,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SITE = ROOT / "docs" / "_build" / "html"
 PAGES = {
     "landing": "index.html",
+    "model": "model.html",
     "gallery": "auto_examples/plot_simulate_scene.html",
     "api": "api/generated/bouncedisk.studies.torque_speed.torque_speed.html",
 }
@@ -41,15 +43,21 @@ def chromium() -> str:
     return exe
 
 
-def screenshot(page: str, out: Path) -> np.ndarray:
-    """Headless Chromium's screenshot of a built page, as an RGB array; no host resolves."""
+def offline_chromium(profile: Path) -> list[str]:
+    """Headless Chromium's command line, with no host resolving (nothing reaches the network)."""
+    cmd = [chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars"]
+    cmd += ["--no-first-run", "--disable-background-networking", "--disable-component-update"]
+    cmd += ["--host-resolver-rules=MAP * ~NOTFOUND", f"--user-data-dir={profile}"]
+    return cmd
+
+
+def screenshot(page: str, out: Path, size: str = "1280,1000") -> np.ndarray:
+    """Headless Chromium's screenshot of a built page (after its scripts ran), as an RGB array."""
     from PIL import Image
 
     url = (SITE / page).as_uri()
-    cmd = [chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars"]
-    cmd += ["--no-first-run", "--disable-background-networking", "--disable-component-update"]
-    cmd += ["--host-resolver-rules=MAP * ~NOTFOUND", f"--user-data-dir={out.parent / 'profile'}"]
-    cmd += ["--window-size=1280,1000", f"--screenshot={out}", url]
+    cmd = offline_chromium(out.parent / "profile") + ["--virtual-time-budget=10000"]
+    cmd += [f"--window-size={size}", f"--screenshot={out}", url]
     p = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
     assert p.returncode == 0 and out.is_file(), p.stderr[-2000:]
     return np.asarray(Image.open(out).convert("RGB"), dtype=float)
@@ -114,3 +122,57 @@ def test_every_public_function_and_class_has_an_api_page():
     # a page documents its object: the signature is there, with the docstring's first line
     text = (generated / "bouncedisk.engine.laws.impact_law.html").read_text()
     assert 'id="bouncedisk.engine.laws.impact_law"' in text
+
+
+class _Loads(html.parser.HTMLParser):
+    """The scripts and style sheets a page loads (``<script src>``, ``<link href>`` of a style
+    sheet or a preload, ``<img src>``)."""
+
+    def __init__(self):
+        super().__init__()
+        self.urls: list[str] = []
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if tag == "script" and a.get("src"):
+            self.urls.append(a["src"])
+        elif tag == "link" and a.get("rel") in ("stylesheet", "preload", "modulepreload"):
+            self.urls.append(a.get("href") or "")
+        elif tag == "img" and a.get("src"):
+            self.urls.append(a["src"])
+
+
+def test_no_page_loads_anything_from_another_host():
+    """Every script, style sheet and image of every page is a file of the site: a reader without
+    a network sees the same pages (links to other sites are fine, loads are not)."""
+    pages = [p for p in sorted(SITE.rglob("*.html")) if "_static" not in p.parts]  # not templates
+    assert len(pages) > 50
+    outside = {}
+    for page in pages:
+        parser = _Loads()
+        parser.feed(page.read_text(errors="replace"))
+        for url in parser.urls:
+            if url.startswith(("http:", "https:", "//")):
+                outside.setdefault(url, str(page.relative_to(SITE)))
+            elif not url.startswith("data:"):
+                path = (page.parent / url.split("?")[0].split("#")[0]).resolve()
+                assert path.is_file(), (page.relative_to(SITE), url)
+    assert not outside, outside
+
+
+def test_model_page_equations_are_typeset_offline(tmp_path):
+    """The model page's dollar math is in the HTML, the MathJax that typesets it is a file of the
+    site, and Chromium (no network) turns every formula into MathJax's output with no TeX error."""
+    page = SITE / "model.html"
+    text = page.read_text()
+    n_math = text.count('class="math notranslate nohighlight"')
+    assert n_math >= 100, n_math  # the page is written in formulas
+    assert '<script defer="defer" src="_static/mathjax/tex-chtml-full.js' in text
+    assert (SITE / "_static" / "mathjax" / "output" / "chtml" / "fonts" / "woff-v2").is_dir()
+    cmd = offline_chromium(tmp_path / "profile") + ["--virtual-time-budget=20000", "--dump-dom"]
+    p = subprocess.run(cmd + [page.as_uri()], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 0, p.stderr[-2000:]
+    dom = p.stdout
+    typeset = dom.count("<mjx-container")
+    assert typeset >= n_math, (typeset, n_math)
+    assert "<mjx-merror" not in dom and "data-mjx-error" not in dom
