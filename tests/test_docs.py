@@ -9,11 +9,10 @@ The site is built by ``.ci/docs`` (CI runs it before the tests) or by
 
 import html.parser
 import importlib.util
-import shutil
-import subprocess
 import sys
 from pathlib import Path
 
+import browser
 import numpy as np
 import pytest
 
@@ -36,31 +35,9 @@ pytestmark = [
 ]
 
 
-def chromium() -> str:
-    exe = shutil.which("chromium") or shutil.which("chromium-browser")
-    if exe is None:
-        pytest.fail("the documentation is built but chromium is missing (.ci/docs installs it)")
-    return exe
-
-
-def offline_chromium(profile: Path) -> list[str]:
-    """Headless Chromium's command line, with no host resolving (nothing reaches the network)."""
-    cmd = [chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars"]
-    cmd += ["--no-first-run", "--disable-background-networking", "--disable-component-update"]
-    cmd += ["--host-resolver-rules=MAP * ~NOTFOUND", f"--user-data-dir={profile}"]
-    return cmd
-
-
 def screenshot(page: str, out: Path, size: str = "1280,1000") -> np.ndarray:
     """Headless Chromium's screenshot of a built page (after its scripts ran), as an RGB array."""
-    from PIL import Image
-
-    url = (SITE / page).as_uri()
-    cmd = offline_chromium(out.parent / "profile") + ["--virtual-time-budget=10000"]
-    cmd += [f"--window-size={size}", f"--screenshot={out}", url]
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
-    assert p.returncode == 0 and out.is_file(), p.stderr[-2000:]
-    return np.asarray(Image.open(out).convert("RGB"), dtype=float)
+    return browser.screenshot((SITE / page).as_uri(), out, size)
 
 
 class _Images(html.parser.HTMLParser):
@@ -169,10 +146,7 @@ def test_model_page_equations_are_typeset_offline(tmp_path):
     assert n_math >= 100, n_math  # the page is written in formulas
     assert '<script defer="defer" src="_static/mathjax/tex-chtml-full.js' in text
     assert (SITE / "_static" / "mathjax" / "output" / "chtml" / "fonts" / "woff-v2").is_dir()
-    cmd = offline_chromium(tmp_path / "profile") + ["--virtual-time-budget=20000", "--dump-dom"]
-    p = subprocess.run(cmd + [page.as_uri()], capture_output=True, text=True, timeout=60)
-    assert p.returncode == 0, p.stderr[-2000:]
-    dom = p.stdout
+    dom = browser.dom(page.as_uri(), tmp_path / "profile")
     typeset = dom.count("<mjx-container")
     assert typeset >= n_math, (typeset, n_math)
     assert "<mjx-merror" not in dom and "data-mjx-error" not in dom
