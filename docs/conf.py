@@ -28,6 +28,7 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 os.environ.setdefault("MLFLOW_DISABLE_TELEMETRY", "true")
 
 from apipages import write_api_pages  # noqa: E402
+from perfpage import write_tables  # noqa: E402
 
 import bouncedisk  # noqa: E402
 
@@ -121,3 +122,5 @@ sphinx_gallery_conf = {
 
 
 write_api_pages()
+# the measured numbers of user_guide/performance.md, from the benchmarks' own outputs
+write_tables(ROOT / "benchmarks" / "out", DOCS / "_build" / "generated" / "performance_tables.md")

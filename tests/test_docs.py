@@ -7,6 +7,7 @@ The site is built by ``.ci/docs`` (CI runs it before the tests) or by
 ``sphinx-build -W --keep-going -b html docs docs/_build/html``; without it these tests are skipped.
 """
 
+import html
 import html.parser
 import importlib.util
 import sys
@@ -150,3 +151,44 @@ def test_model_page_equations_are_typeset_offline(tmp_path):
     typeset = dom.count("<mjx-container")
     assert typeset >= n_math, (typeset, n_math)
     assert "<mjx-merror" not in dom and "data-mjx-error" not in dom
+
+
+def test_performance_page_shows_every_benchmark_record():
+    """Every record in benchmarks/out/ (its title, date and every result) is on the built
+    performance page: the numbers come from the benchmarks' files, not from prose."""
+    import json
+
+    text = html.unescape((SITE / "user_guide" / "performance.html").read_text())
+    records = [json.loads(p.read_text()) for p in sorted((ROOT / "benchmarks/out").glob("*.json"))]
+    records = [r for r in records if "rows" in r]
+    assert len(records) >= 3
+    for r in records:
+        assert r["title"] in text and f"Measured on {r['date']}" in text, r["title"]
+        for row in r["rows"]:
+            assert row["result"] in text, (r["title"], row)
+
+
+#: The user-guide pages that teach one task each (their figures and numbers are elsewhere).
+TASK_PAGES = ["getting_started.md"] + [
+    f"user_guide/{p}.md"
+    for p in (
+        "scenes",
+        "ensembles",
+        "pipeline",
+        "reproducible",
+        "tracking",
+        "cluster",
+        "performance",
+    )
+]
+
+
+@pytest.mark.parametrize("page", TASK_PAGES)
+def test_task_pages_are_short_and_quote_no_dated_measurement(page):
+    """A task page stays under about 1,200 words (1,500 at most) and quotes no date: dated
+    measurements live in benchmarks/out/ and the performance page renders them."""
+    import re
+
+    text = (ROOT / "docs" / page).read_text()
+    assert len(text.split()) <= 1500, len(text.split())
+    assert not re.search(r"\b20\d\d-\d\d-\d\d\b", text), re.search(r"\b20\d\d-\d\d-\d\d\b", text)
