@@ -37,8 +37,8 @@ def window_warnings(scene: Scene, regimes: Iterable[str | None]) -> list[str]:
     out = []
     if scene.stats.discard <= 0.0:
         out.append(
-            f"bouncedisk: warning: {scene.source}: stats.discard: not given, so the averages "
-            "include the start-up transient; discard it, e.g. --set stats.discard=2000"
+            f"bouncedisk: warning: {scene.source}: stats.discard: 0 (or not given), so the "
+            "averages include the start-up transient; discard it, e.g. --set stats.discard=2000"
         )
     unsettled = sorted({r for r in regimes if r is not None and r not in SETTLED})
     if scene.ensemble.members == 1 and unsettled:
