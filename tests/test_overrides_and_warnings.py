@@ -91,3 +91,16 @@ def test_stats_command_prints_the_warnings_on_stderr(scene_file, capsys):
         == 0
     )
     assert capsys.readouterr().err == ""
+
+
+def test_torque_speed_keeps_the_effects_a_set_option_gave(scene_file, capsys):
+    """``--set effects=...`` is what torque-speed adds ``load`` to (not the file's list, which
+    would drop restitution_noise and refuse e_sigma); with a discard and an ensemble, no warning."""
+    f = scene_file(FIG4)
+    args = ["torque-speed", str(f), "--loads", "0,0.5", "-q", "--json"]
+    args += ["--set", "stop={time: 400}", "--set", "stats.discard=100"]
+    args += ["--set", "ensemble={members: 2, seed: 1}", "--set", "parameters.e_sigma=1e-9"]
+    args += ["--set", "effects=impacts,contact,torsion,restitution_noise"]
+    assert main(args) == 0
+    out, err = capsys.readouterr()
+    assert err == "" and '"loads": [0.0, 0.5]' in out

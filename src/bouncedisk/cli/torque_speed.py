@@ -88,11 +88,14 @@ def torque_speed_command(args: argparse.Namespace) -> dict:
 
 
 def _with_load(scene_file: str, overrides: list[str]) -> list[str]:
-    """The overrides plus what turns the ``load`` effect on (its value is set per load)."""
-    from ..model.scene import read_yaml
+    """The overrides plus what turns the ``load`` effect on (its value is set per load), read
+    from the scene as the user's overrides leave it (``--set effects=...`` included)."""
+    from ..model.scene import apply_overrides, read_yaml
 
-    raw = read_yaml(scene_file)
+    raw = apply_overrides(read_yaml(scene_file), overrides)
     effects = raw.get("effects") or []
+    if isinstance(effects, str):  # --set effects=a,b,c
+        effects = [e.strip() for e in effects.split(",") if e.strip()]
     if isinstance(effects, list) and "load" not in effects:
         overrides.append("effects=" + ",".join([*map(str, effects), "load"]))
     section = "physical" if "physical" in raw else "parameters"
