@@ -4,6 +4,7 @@ The pipeline runs from a temporary working directory holding copies of the scene
 tracked scenes are never edited), with the project's Snakefile.
 """
 
+import html
 import json
 import os
 import shutil
@@ -16,6 +17,7 @@ import time
 import urllib.request
 from pathlib import Path
 
+import browser
 import numpy as np
 import pytest
 import xarray as xr
@@ -422,6 +424,7 @@ def test_mlflow_server_on_the_store_answers_with_the_pipeline_runs(two_runs):
         )
         assert p.returncode == 0, p.stderr
         assert [r["run_id"] for r in json.loads(p.stdout)] == [r["run_id"] for r in rows]
+        check_ui_opens_on_the_runs(url, exp["experiment"], [r["name"] for r in rows], base)
     finally:
         os.killpg(server.pid, signal.SIGTERM)
         try:
@@ -430,6 +433,23 @@ def test_mlflow_server_on_the_store_answers_with_the_pipeline_runs(two_runs):
             os.killpg(server.pid, signal.SIGKILL)
             server.wait(timeout=20)
     assert server.poll() is not None
+
+
+def check_ui_opens_on_the_runs(url: str, exp: dict, names: list[str], tmp: Path) -> None:
+    """The experiment is tagged for MLflow's machine-learning view, and the URL of
+    docs/user_guide/tracking.md opens on the runs table listing the pipeline's parent runs,
+    named with their jobs' count (headless Chromium; no host but 127.0.0.1 resolves)."""
+    tags = {t["key"]: t["value"] for t in exp.get("tags", [])}
+    assert tags.get("mlflow.experimentKind") == "custom_model_development", tags
+    assert names and all(n.startswith("pipeline (") and " jobs) " in n for n in names), names
+    ui = f"{url}/#/experiments/{exp['experiment_id']}/runs?workflowType=machine_learning"
+    page = browser.dom(ui, tmp / "chromium-profile")
+    for name in names:
+        assert html.escape(name, quote=False) in page, name
+    assert "matching runs" in page  # the runs table's footer, not the GenAI overview of traces
+    img = browser.screenshot(ui, tmp / "mlflow-runs.png", size="1400,900")
+    grey = img.mean(axis=2)
+    assert grey.std() > 10.0 and 0.002 < np.mean(grey < 128) < 0.6
 
 
 # ------------------------------------------------------------------------------------------

@@ -12,6 +12,7 @@ from ..model.errors import InputError
 from ..run.cores import available_cores
 from .common import _add_set_option, command_line
 from .tracking_options import _add_track_options, _track, _tracking_store
+from .window_warnings import print_window_warnings
 
 
 def _progress(quiet: bool, label: str):
@@ -103,6 +104,7 @@ def stats_command(args: argparse.Namespace) -> dict:
         if args.output:
             write_with_history(to_dataset(scene, result, wall), args.output, command_line(args))
     summary = result.summary()
+    print_window_warnings(scene, [summary["regime"]])
     if args.json:
         print(json.dumps(summary))
     else:

@@ -12,6 +12,7 @@ from ..run.cores import available_cores
 from .common import _add_set_option, command_line
 from .stats import _progress
 from .tracking_options import _add_track_options, _track, _tracking_store
+from .window_warnings import print_window_warnings
 
 #: Loads of a curve when ``--loads`` is not given: from no load to the momentum bound
 #: ``τ_L = 1`` (docs/model.md "The motor under load"), in units of the scene's load torque.
@@ -75,6 +76,8 @@ def torque_speed_command(args: argparse.Namespace) -> dict:
         if args.output:
             write_with_history(to_dataset(scene, curve, wall), args.output, command_line(args))
     summary = curve.summary()
+    regimes = summary["regime"] + (summary.get("down") or {}).get("regime", [])
+    print_window_warnings(scene, regimes)
     if args.json:
         print(json.dumps(summary))
     else:
@@ -85,11 +88,14 @@ def torque_speed_command(args: argparse.Namespace) -> dict:
 
 
 def _with_load(scene_file: str, overrides: list[str]) -> list[str]:
-    """The overrides plus what turns the ``load`` effect on (its value is set per load)."""
-    from ..model.scene import read_yaml
+    """The overrides plus what turns the ``load`` effect on (its value is set per load), read
+    from the scene as the user's overrides leave it (``--set effects=...`` included)."""
+    from ..model.scene import apply_overrides, read_yaml
 
-    raw = read_yaml(scene_file)
+    raw = apply_overrides(read_yaml(scene_file), overrides)
     effects = raw.get("effects") or []
+    if isinstance(effects, str):  # --set effects=a,b,c
+        effects = [e.strip() for e in effects.split(",") if e.strip()]
     if isinstance(effects, list) and "load" not in effects:
         overrides.append("effects=" + ",".join([*map(str, effects), "load"]))
     section = "physical" if "physical" in raw else "parameters"

@@ -174,8 +174,19 @@ def _bool(src: str, name: str, v: Any) -> bool:
     return v
 
 
+#: Keys of a mapping of which a scene gives exactly one: an override that sets one of them drops
+#: the others the scene file gave (``--set stop.time=3000`` on a scene that stops after impacts).
+EXCLUSIVE_KEYS: dict[str, tuple[str, ...]] = {"stop": ("impacts", "time", "periods")}
+
+
 def apply_overrides(raw: dict, overrides: list[str], source: str = "--set") -> dict:
-    """Apply ``key.sub=value`` overrides (values parsed as YAML) to a copy of ``raw``."""
+    """Apply ``key.sub=value`` overrides (values parsed as YAML) to a copy of ``raw``.
+
+    The rules (docs/user_guide/scenes.md "Overrides"): ``key.sub=value`` sets one field and
+    keeps the mapping's other fields; ``key={a: 1}`` (a YAML mapping as the value) replaces the
+    whole mapping ``key``; setting one of the exclusive keys of :data:`EXCLUSIVE_KEYS` (``stop``'s
+    ``impacts``, ``time``, ``periods``) removes its siblings; an empty value gives ``None``.
+    """
     out = json.loads(json.dumps(raw, default=str)) if raw else {}
     for item in overrides:
         if "=" not in item:
@@ -197,6 +208,10 @@ def apply_overrides(raw: dict, overrides: list[str], source: str = "--set") -> d
             if not isinstance(nxt, dict):
                 raise InputError(source, key, f"{part!r} is not a mapping")
             node = nxt
+        exclusive = EXCLUSIVE_KEYS.get(".".join(parts[:-1]), ())
+        if parts[-1] in exclusive:
+            for sibling in exclusive:
+                node.pop(sibling, None)
         node[parts[-1]] = value
     return out
 

@@ -219,10 +219,7 @@ class PipelineTracker:
             exp = experiment_id(client, self.store)
             mark_stale_runs(client, exp)
             run = client.create_run(
-                exp,
-                start_time=int(self.t0 * 1000),
-                tags=tags,
-                run_name=f"pipeline-{_dt.datetime.fromtimestamp(self.t0, _dt.UTC):%Y%m%dT%H%M%SZ}",
+                exp, start_time=int(self.t0 * 1000), tags=tags, run_name=self._run_name()
             )
             self.run_id = run.info.run_id
             _log_batch(client, self.run_id, _keys(params), {})
@@ -231,6 +228,13 @@ class PipelineTracker:
 
         self.timings["tracking.open_s"] = time.perf_counter() - t
         self.timings["tracking.open_cpu_s"] = time.thread_time() - cpu
+
+    def _run_name(self) -> str:
+        """The parent run's name: its start (UTC) and how many jobs it holds as nested runs, so
+        that the runs table says there is something to expand (docs/user_guide/tracking.md)."""
+        n = sum(j.ran for j in self.jobs)
+        when = _dt.datetime.fromtimestamp(self.t0, _dt.UTC)
+        return f"pipeline ({n} job{'s' if n != 1 else ''}) {when:%Y-%m-%dT%H:%M:%SZ}"
 
     def _wait(self) -> None:
         if self._thread is not None:

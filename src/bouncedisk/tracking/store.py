@@ -287,15 +287,28 @@ def store_lock(store: Store) -> Iterator[None]:
             fcntl.flock(fh, fcntl.LOCK_UN)
 
 
+#: Experiment tags that make MLflow 3's UI open the experiment on its runs table (the
+#: machine-learning view), not on the GenAI overview of traces this project never writes.
+EXPERIMENT_TAGS = {"mlflow.experimentKind": "custom_model_development"}
+
+
 def experiment_id(client, store: Store, create: bool = True) -> str | None:
-    """Id of the store's experiment (created, with its artifact location, when missing)."""
+    """Id of the store's experiment (created, with its artifact location and
+    :data:`EXPERIMENT_TAGS`, when missing; the tags added to an older experiment that lacks them
+    when ``create``)."""
     exp = client.get_experiment_by_name(store.experiment)
     if exp is not None:
+        if create:
+            for key, value in EXPERIMENT_TAGS.items():
+                if exp.tags.get(key) != value:
+                    client.set_experiment_tag(exp.experiment_id, key, value)
         return exp.experiment_id
     if not create:
         return None
     try:
-        return client.create_experiment(store.experiment, artifact_location=store.artifact_location)
+        return client.create_experiment(
+            store.experiment, artifact_location=store.artifact_location, tags=EXPERIMENT_TAGS
+        )
     except Exception:  # noqa: BLE001 - another writer created it first
         exp = client.get_experiment_by_name(store.experiment)
         if exp is None:

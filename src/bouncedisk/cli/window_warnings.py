@@ -1,0 +1,56 @@
+"""Warnings about a statistic's averaging window, printed on stderr by ``bouncedisk stats`` and
+``bouncedisk torque-speed`` (docs/model.md "Long-run statistics of chaotic motion").
+
+A long-run average that starts at the start of the run carries the start-up transient; one member
+of a run that is not periodic gives one round-off-chosen sample with no interval. Both still give
+a number, so they warn (one line each, ``bouncedisk: warning: SCENE: FIELD: ...``) instead of
+failing.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Iterable
+
+from ..model.scene import Scene
+
+#: Regimes whose one-member average is the attractor's own (no interval needed).
+SETTLED = frozenset({"periodic", "chattering-periodic", "rest"})
+
+
+def window_warnings(scene: Scene, regimes: Iterable[str | None]) -> list[str]:
+    """The warning lines of a statistic of ``scene`` whose members ended in ``regimes``.
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene as run (after ``--set`` overrides).
+    regimes : iterable of str or None
+        The majority regime of each point (one for ``stats``, one per load for ``torque-speed``).
+
+    Returns
+    -------
+    list of str
+        At most two lines: no ``stats.discard`` (the average includes the transient), and one
+        member of a run that is not periodic (no interval, a round-off-chosen sample).
+    """
+    out = []
+    if scene.stats.discard <= 0.0:
+        out.append(
+            f"bouncedisk: warning: {scene.source}: stats.discard: 0 (or not given), so the "
+            "averages include the start-up transient; discard it, e.g. --set stats.discard=2000"
+        )
+    unsettled = sorted({r for r in regimes if r is not None and r not in SETTLED})
+    if scene.ensemble.members == 1 and unsettled:
+        out.append(
+            f"bouncedisk: warning: {scene.source}: ensemble.members: one member of a "
+            f"{'/'.join(unsettled)} run is one round-off-chosen sample with no interval; use "
+            "an ensemble, e.g. --set 'ensemble={members: 32, seed: 1}' with restitution_noise"
+        )
+    return out
+
+
+def print_window_warnings(scene: Scene, regimes: Iterable[str | None]) -> None:
+    """Print :func:`window_warnings` on stderr."""
+    for line in window_warnings(scene, regimes):
+        print(line, file=sys.stderr)
