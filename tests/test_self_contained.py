@@ -20,7 +20,14 @@ ROOT = Path(__file__).resolve().parents[1]
 SUFFIXES = {".py", ".md", ".yaml", ".yml", ".smk", ".toml", ".rst", ".txt", ".cfg", ".json", ""}
 SKIP = {"docs/changelog.md", "tests/test_self_contained.py"}  # history; the planted errors
 #: What the pipeline, the commands and the documentation build write (not in the repository).
-GENERATED = ("results/", "docs/_build", "docs/api", "docs/auto_examples", "docs/sg_execution_times")
+GENERATED = (
+    "results/",
+    "docs/_build",
+    "../_build/generated",
+    "docs/api",
+    "docs/auto_examples",
+    "docs/sg_execution_times",
+)
 #: Pages whose sections are cited, as they are written in code and in the MyST pages.
 PAGES = {"docs/model.md": "docs/model.md", "docs/formats.md": "docs/formats.md",
          "{doc}`/model`": "docs/model.md", "{doc}`/formats`": "docs/formats.md"}  # fmt: skip
@@ -40,8 +47,10 @@ _LABEL = re.compile(r"^\s*(?:[-*]\s+)?\*\*(.+?)\*\*", re.M)
 
 
 def _normal(name: str) -> str:
-    """A section name as cited: no backticks or emphasis, no trailing punctuation."""
-    return re.sub(r"[`*]", "", name).strip().rstrip(".:").strip()
+    """A section name as cited: no backticks, emphasis or math delimiters (``$w \\le 1$`` is
+    cited as "w ≤ 1"), no trailing punctuation."""
+    name = name.replace("\\le ", "≤ ").replace("\\ge ", "≥ ")
+    return re.sub(r"[`*$]", "", name).strip().rstrip(".:").strip()
 
 
 def sections(text: str) -> list[str]:
