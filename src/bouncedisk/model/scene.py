@@ -356,6 +356,10 @@ def _check_effect_parameters(
     _check_paired(src, raw, effects)
 
 
+#: Largest ``|initial.omega|``: far beyond any motor (a few hundred), far below overflow.
+MAX_INITIAL_OMEGA = 1e100
+
+
 def _initial(src: str, v: Any, params: Parameters) -> InitialState:
     """``initial: {t, omega, u, v}``; ``u >= u_s(t)`` (eq. 1) for a start in flight.
 
@@ -382,6 +386,13 @@ def _initial(src: str, v: Any, params: Parameters) -> InitialState:
             )
     if abs(t0) > 1e12:
         raise InputError(src, "initial.t", "must be within ±1e12")
+    if abs(om0) > MAX_INITIAL_OMEGA:
+        raise InputError(
+            src,
+            "initial.omega",
+            f"must be within ±{MAX_INITIAL_OMEGA:g} (the rotor's kinetic energy in the energy "
+            f"audit overflows near 1e154), got {om0:g}",
+        )
     return InitialState(t=t0, omega=om0, u=u0, v=v0)
 
 
