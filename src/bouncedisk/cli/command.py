@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import errno
 import io
 import os
 import signal
@@ -102,8 +103,8 @@ def main(argv: list[str] | None = None) -> int:
 def _discard_stdout() -> None:
     """Point standard output at /dev/null: what could not be written raises no second error
     when Python flushes it at exit."""
-    if getattr(sys.stdout, "_stream", sys.stdout) is not sys.__stdout__:
-        return  # a caller's stream (tests, embedding): theirs to handle
+    if sys.__stdout__ is None or getattr(sys.stdout, "_stream", sys.stdout) is not sys.__stdout__:
+        return  # closed (nothing to point), or a caller's stream (tests, embedding): theirs
     with contextlib.suppress(OSError, ValueError, io.UnsupportedOperation):
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.__stdout__.fileno())
 
@@ -118,6 +119,8 @@ class _NamedStdout:
         return getattr(self._stream, name)
 
     def _call(self, name: str, *a):
+        if self._stream is None:  # the shell closed it (`>&-`): Python left sys.stdout None
+            raise OSError(errno.EBADF, "standard output is closed", "<stdout>")
         try:
             return getattr(self._stream, name)(*a)
         except BrokenPipeError:
@@ -129,7 +132,8 @@ class _NamedStdout:
         return self._call("write", text)
 
     def flush(self) -> None:
-        self._call("flush")
+        if self._stream is not None:  # closed: nothing was written (a write raises)
+            self._call("flush")
 
 
 def _run_command(args: argparse.Namespace) -> tuple[int, list]:
