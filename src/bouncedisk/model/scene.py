@@ -328,8 +328,11 @@ def _parameters(src: str, raw: dict) -> tuple[Parameters, PhysicalParameters | N
             src, "physical", raw["physical"], tuple(PhysicalParameters.__dataclass_fields__)
         )
         physical = PhysicalParameters.from_mapping(pm, src)
-        params = physical.to_nondimensional()
-        params.validate(src, "physical")
+        try:
+            params = physical.to_nondimensional()  # validated as it is made
+        except InputError as ex:  # the nondimensional value the SI ones give, named by section
+            field = "physical" + ex.field.removeprefix("Parameters")
+            raise InputError(src, field, ex.message) from None
         return params, physical
     if "parameters" in raw:
         pm = raw["parameters"]
