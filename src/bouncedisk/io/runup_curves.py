@@ -72,7 +72,7 @@ class MotorCurve:
 def read_sidecar(path: str | Path) -> dict:
     """Read and validate a curve's YAML sidecar."""
     src = str(path)
-    data = read_yaml(path)
+    data = read_yaml(path, "curve sidecar")
     known = {
         "source",
         "synthetic",

@@ -201,18 +201,19 @@ def apply_overrides(raw: dict, overrides: list[str], source: str = "--set") -> d
     return out
 
 
-def read_yaml(path: str | Path) -> dict:
-    """Read a YAML mapping, turning every failure into one :class:`InputError` line."""
+def read_yaml(path: str | Path, what: str = "scene") -> dict:
+    """Read a YAML mapping, turning every failure into one :class:`InputError` line that calls
+    the file ``what`` (a scene, a sidecar, ...)."""
     p = Path(path)
     src = str(path)
     if p.exists() and not p.is_dir() and not p.is_file():  # a FIFO would block in open()
-        raise InputError(src, "", "is not a regular file (a pipe or device?), not a scene file")
+        raise InputError(src, "", f"is not a regular file (a pipe or device?), not a {what} file")
     try:
         text = p.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise InputError(src, "", "file not found") from None
     except IsADirectoryError:
-        raise InputError(src, "", "is a directory, not a scene file") from None
+        raise InputError(src, "", f"is a directory, not a {what} file") from None
     except UnicodeDecodeError:
         raise InputError(src, "", "not a text (UTF-8) file") from None
     except OSError as ex:
@@ -225,9 +226,9 @@ def read_yaml(path: str | Path) -> dict:
         problem = getattr(ex, "problem", None) or "malformed YAML"
         raise InputError(src, where, f"malformed YAML: {problem}") from None
     if data is None:
-        raise InputError(src, "", "empty scene file")
+        raise InputError(src, "", f"empty {what} file")
     if not isinstance(data, dict):
-        raise InputError(src, "", f"a scene must be a YAML mapping, got {type(data).__name__}")
+        raise InputError(src, "", f"a {what} must be a YAML mapping, got {type(data).__name__}")
     return data
 
 
