@@ -31,6 +31,7 @@ import pandas as pd
 from ..model.errors import InputError
 from ..model.params import number, whole_number
 from ..model.scene import read_yaml
+from .output_checks import sidecar_of
 
 COLUMNS = ("torque_Nm", "speed_rad_s")
 OPTIONAL_COLUMNS = ("speed_sd_rad_s",)
@@ -150,9 +151,9 @@ def read_load_curve(path: str | Path) -> LoadCurveData:
     """
     p = Path(path)
     src = str(path)
+    side = sidecar_of(p)
     if not p.is_file():
         raise InputError(src, "", "file not found")
-    side = p.with_suffix(".yaml")
     if not side.is_file():
         raise InputError(str(side), "", "sidecar not found (motor, rotor and window_s)")
     meta = _sidecar(side)
