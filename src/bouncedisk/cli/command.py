@@ -97,7 +97,18 @@ def main(argv: list[str] | None = None) -> int:
     if kept:  # interrupted or failed while recording the run: the outputs stay
         names = ", ".join(str(p) for p in kept)
         print(f"bouncedisk: the outputs were written and kept: {names}", file=sys.stderr)
+    if argv is None and code == 0:
+        _finished()
     return code
+
+
+def _finished() -> None:
+    """The command is done (outputs final, standard output flushed): a Ctrl-C or SIGTERM while
+    the interpreter shuts down (about half a second) no longer changes its outcome. Before, it
+    killed the process with status 130 and no message, the outputs kept."""
+    with contextlib.suppress(ValueError):  # not the main thread: the host's handlers stay
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, signal.SIG_IGN)
 
 
 def _discard_stdout() -> None:
