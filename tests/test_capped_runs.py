@@ -8,10 +8,10 @@ writes such a run with its status ``cap: ...``.
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
 
 import netCDF4
 import pytest
+from cli_helpers import one_line, scene_file
 from hypothesis import assume, event, given, settings
 from hypothesis import strategies as st
 
@@ -23,29 +23,6 @@ from bouncedisk.model.engine_config import engine_config
 from bouncedisk.model.errors import InputError
 from bouncedisk.model.scene import scene_from_mapping
 
-#: A small chaotic ensemble with torsion (about a second per command).
-SMALL = """
-name: small
-parameters: {e: 0.6, omega_s: 1.5, r_phi: 0.01, psi: 0.0, e_sigma: 1.0e-9}
-effects: [impacts, contact, torsion, restitution_noise]
-stop: {time: 120.0}
-ensemble: {members: 2, seed: 1}
-stats: {discard: 20.0}
-"""
-
-
-def _scene_file(tmp_path: Path) -> str:
-    f = tmp_path / "small.yaml"
-    f.write_text(SMALL)
-    return str(f)
-
-
-def _one_line(capsys) -> str:
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1, err
-    assert "Traceback" not in err[0]
-    return err[0]
-
 
 @pytest.mark.parametrize(
     "command",
@@ -53,18 +30,18 @@ def _one_line(capsys) -> str:
 )
 def test_a_capped_ensemble_is_an_error_not_a_number(tmp_path, capsys, command):
     """Before: exit 0 with the capped members' integrals divided by the whole window."""
-    scene = _scene_file(tmp_path)
+    scene = scene_file(tmp_path, time=120.0, discard=20.0)
     out = tmp_path / "out.nc"
     args = [command[0], scene, *command[1:], "--set", "stop.max_events=5", "-o", str(out)]
     assert main([*args, "--json"]) == 2
-    line = _one_line(capsys)
+    line = one_line(capsys)
     assert "stop.max_events" in line and "safety cap of 5 events" in line
     assert not out.exists()
 
 
 def test_the_same_ensemble_with_room_finishes(tmp_path, capsys):
     """The cap is the only cause: with the default cap the same command gives its numbers."""
-    assert main(["stats", _scene_file(tmp_path), "--json"]) == 0
+    assert main(["stats", scene_file(tmp_path, time=120.0, discard=20.0), "--json"]) == 0
     assert '"mean_omega"' in capsys.readouterr().out
 
 
@@ -80,7 +57,7 @@ def test_run_member_raises_on_the_cap():
 def test_simulate_flags_a_capped_time_stop(tmp_path, capsys):
     """``simulate`` keeps the run (it is a trajectory, not an average) and says it was capped."""
     out = tmp_path / "sim.nc"
-    scene = _scene_file(tmp_path)
+    scene = scene_file(tmp_path, time=120.0, discard=20.0)
     extra = ["--set", "stop.max_events=5", "--set", "ensemble.members=1"]
     assert main(["simulate", scene, "-o", str(out), "-q", *extra]) == 0
     with netCDF4.Dataset(out) as ds:

@@ -11,17 +11,12 @@ import time
 from pathlib import Path
 
 import pytest
+from cli_helpers import SMALL_MOTOR
 
 import bouncedisk
 
 ENV = {**os.environ, "PYTHONPATH": str(Path(bouncedisk.__file__).resolve().parents[1])}
-SCENE = """
-parameters: {e: 0.6, omega_s: 1.5, r_phi: 0.01, psi: 0.0, e_sigma: 1.0e-9}
-effects: [impacts, contact, torsion, restitution_noise]
-stop: {time: 40.0}
-ensemble: {members: 2, seed: 1}
-stats: {discard: 10.0}
-"""
+SCENE = SMALL_MOTOR.replace("time: 200.0", "time: 40.0").replace("discard: 50.0", "discard: 10.0")
 
 
 @pytest.mark.parametrize("delay", [0.1])

@@ -10,6 +10,7 @@ from pathlib import Path
 import netCDF4
 import numpy as np
 import pytest
+from cli_helpers import SMALL_MOTOR, one_line, scene_file
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -25,15 +26,7 @@ from bouncedisk.studies.torque_speed import (
     with_load,
 )
 
-#: A small chaotic motor (about a second per curve of a few loads).
-SMALL = """
-name: small
-parameters: {e: 0.6, omega_s: 1.5, r_phi: 0.01, psi: 0.0, e_sigma: 1.0e-9}
-effects: [impacts, contact, torsion, restitution_noise]
-stop: {time: 200.0}
-ensemble: {members: 2, seed: 1}
-stats: {discard: 50.0}
-"""
+SMALL = SMALL_MOTOR
 PHYSICAL = """
 name: phys
 physical: {m_r: 0.01, r_g: 0.004, r_c: 0.001, mu: 0.2, e: 0.5, g: 9.81, f: 2.0e+2, U0: 1.0e-4,
@@ -46,16 +39,7 @@ stats: {discard: 10.0}
 
 
 def _file(folder: Path, text: str = SMALL, name: str = "small.yaml") -> str:
-    f = Path(folder) / name
-    f.write_text(text)
-    return str(f)
-
-
-def _one_line(capsys) -> str:
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1, err
-    assert "Traceback" not in err[0]
-    return err[0]
+    return scene_file(folder, text, name)
 
 
 def _json(capsys) -> dict:
@@ -83,7 +67,7 @@ def test_removing_torsion_by_set_is_honoured(tmp_path, capsys):
     """Before: the file's torsion came back; a curve without torsion is refused."""
     args = ["torque-speed", _file(tmp_path), "--loads", "0,0.5"]
     assert main([*args, "--set", "effects=impacts,contact,restitution_noise"]) == 2
-    assert "effects: a load curve needs the 'torsion' effect" in _one_line(capsys)
+    assert "effects: a load curve needs the 'torsion' effect" in one_line(capsys)
 
 
 @pytest.mark.parametrize(
@@ -230,7 +214,7 @@ def test_hostile_loads_are_one_line(tmp_path, capsys, loads, extra):
     out = tmp_path / "c.nc"
     args = ["torque-speed", _file(tmp_path), "--loads", loads, "-o", str(out), *extra]
     assert main(args) == 2
-    line = _one_line(capsys)
+    line = one_line(capsys)
     assert ("--loads" in line) or ("initial.omega" in line)
     assert not out.exists()
     assert main([*args, "--json"]) == 2
@@ -240,7 +224,7 @@ def test_physical_overflowing_load_is_one_line(tmp_path, capsys):
     """Before: the table crashed and --json printed Infinity with exit 0."""
     args = ["torque-speed", _file(tmp_path, PHYSICAL, "p.yaml"), "--loads", "0,1e305", "--json"]
     assert main(args) == 2
-    assert "N m for this scene" in _one_line(capsys)
+    assert "N m for this scene" in one_line(capsys)
 
 
 def test_physical_default_loads_are_nondimensional(tmp_path, capsys):
