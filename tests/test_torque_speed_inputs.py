@@ -245,3 +245,24 @@ def test_pipeline_script_reads_loads_as_the_command():
     """The pipeline's torque_speed script converts its loads with the command's function."""
     script = Path(__file__).resolve().parents[1] / "workflow" / "scripts" / "torque_speed.py"
     assert "scene_loads(" in script.read_text()
+
+
+@settings(max_examples=8, deadline=None)
+@given(e=st.floats(0.1, 0.9), omega_s=st.floats(1.2, 2.5), top=st.floats(0.3, 2.0))
+def test_property_one_member_scene_has_no_intervals(e, omega_s, top):
+    """Over random small scenes of one member: no derived interval, and a stall torque (if any)
+    between two loads of the grid where the speed changes sign."""
+    raw = {
+        "parameters": {"e": e, "omega_s": omega_s, "r_phi": 0.01, "e_sigma": 1e-9},
+        "effects": ["impacts", "contact", "torsion", "restitution_noise"],
+        "stop": {"time": 40.0},
+        "stats": {"discard": 10.0},
+    }
+    loads = np.linspace(0.0, top, 4)
+    s = torque_speed(with_load(scene_from_mapping(raw)), loads, branches=("up",)).summary()
+    for k in ("no_load_speed", "stall_torque", "max_power", "max_power_load"):
+        assert s[f"{k}_ci95"] == [None, None], k
+    speed = s["mean_omega"]
+    if s["stall_torque"] is not None and s["stall_torque"] > 0:
+        k = next(i for i, v in enumerate(speed) if v <= 0)
+        assert loads[k - 1] <= s["stall_torque"] <= loads[k] and speed[k - 1] > 0
