@@ -68,19 +68,20 @@ def scene_loads(
     """
     if text is None:
         return parse_loads(DEFAULT_LOADS, source, field)
-    loads = parse_loads(text, source, field)
-    unit = ""
+    typed = parse_loads(text, source, field)
+    loads, largest, bound = typed, f"tau_L = {typed[-1]:.4g}", f"tau_L = {MAX_LOAD:g}"
     if scene.physical is not None:  # N·m, like physical.load_torque
         torque = scene.physical.scales().torque
         with np.errstate(over="ignore"):  # an overflow is a load over the bound below
-            loads = loads / torque
-        unit = f" ({MAX_LOAD * torque:.4g} N m for this scene)"
+            loads = typed / torque
+        largest = f"{typed[-1]:.4g} N m"
+        bound = f"{MAX_LOAD * torque:.4g} N m (tau_L = {MAX_LOAD:g} for this scene)"
     if not loads[-1] <= MAX_LOAD:
         raise InputError(
             source,
             field,
-            f"the largest load is tau_L = {loads[-1]:.4g}; loads must be at most tau_L = "
-            f"{MAX_LOAD:g}{unit}, a hundred times the momentum bound tau_L = 1",
+            f"the largest load is {largest}; loads must be at most {bound}, a hundred times the "
+            "momentum bound tau_L = 1",
         )
     return loads
 
