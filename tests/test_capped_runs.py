@@ -35,7 +35,7 @@ def test_a_capped_ensemble_is_an_error_not_a_number(tmp_path, capsys, command):
     args = [command[0], scene, *command[1:], "--set", "stop.max_events=5", "-o", str(out)]
     assert main([*args, "--json"]) == 2
     line = one_line(capsys)
-    assert "stop.max_events" in line and "safety cap of 5 events" in line
+    assert "stop.max_events (from --set stop.max_events)" in line and "cap of 5 events" in line
     assert not out.exists()
 
 

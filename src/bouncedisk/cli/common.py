@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..model.errors import InputError
+
 EXIT_USER = 2
 EXIT_FAIL = 1
 EXIT_INTERRUPT = 130
@@ -18,6 +20,17 @@ def _add_set_option(p: argparse.ArgumentParser, example: str) -> None:
         metavar="KEY=VALUE",
         help=f"override a scene field, e.g. --set {example} (repeatable)",
     )
+
+
+def named_override(ex: InputError, overrides: list[str] | None) -> InputError:
+    """``ex`` naming the ``--set`` option that gave its field, as a scene's own errors do
+    (``stop.max_events (from --set stop.max_events)``); ``ex`` itself when the file gave it."""
+    from ..model.scene import override_of
+
+    key = override_of(ex.field, overrides or [])
+    if key is None or "(from --set" in ex.field:
+        return ex
+    return InputError(ex.source, f"{ex.field} (from --set {key})", ex.message)
 
 
 def flush_stdout() -> None:

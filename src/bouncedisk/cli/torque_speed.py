@@ -10,7 +10,7 @@ import time
 from ..io.history import write_with_history
 from ..model.errors import InputError
 from ..run.cores import available_cores
-from .common import _add_set_option
+from .common import _add_set_option, named_override
 from .stats import _progress
 from .tracking_options import _add_track_options, _track, _tracking_store
 
@@ -112,13 +112,16 @@ def torque_speed_command(args: argparse.Namespace) -> dict:
     cores = args.cores or available_cores()
     start = time.perf_counter()
     with deferred_interrupts() as req:
-        curve = torque_speed(
-            scene,
-            loads,
-            cores=cores,
-            on_member=_progress(args.quiet, f"{scene.name} (torque-speed)"),
-            should_stop=lambda: req.signum is not None,
-        )
+        try:
+            curve = torque_speed(
+                scene,
+                loads,
+                cores=cores,
+                on_member=_progress(args.quiet, f"{scene.name} (torque-speed)"),
+                should_stop=lambda: req.signum is not None,
+            )
+        except InputError as ex:  # a capped member: name the --set that set the cap
+            raise named_override(ex, args.set) from None
         wall = time.perf_counter() - start
         summary = finite_json(curve.summary())
         if args.output:
