@@ -67,7 +67,7 @@ def test_removing_torsion_by_set_is_honoured(tmp_path, capsys):
     """Before: the file's torsion came back; a curve without torsion is refused."""
     args = ["torque-speed", _file(tmp_path), "--loads", "0,0.5"]
     assert main([*args, "--set", "effects=impacts,contact,restitution_noise"]) == 2
-    assert "effects: a load curve needs the 'torsion' effect" in one_line(capsys)
+    assert "effects (from --set effects): a load curve needs the 'torsion'" in one_line(capsys)
 
 
 @pytest.mark.parametrize(
