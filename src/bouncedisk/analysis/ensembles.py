@@ -21,8 +21,9 @@ import numpy as np
 from numba import njit
 
 from ..engine import KIND_CHATTER, KIND_IMPACT, EngineConfig, InitialState
-from ..engine.driver import audit_balances, iterate_views
+from ..engine.driver import EngineError, audit_balances, iterate_views
 from ..engine.kernel import EV_PHASE, EV_T, EV_V_REL
+from ..engine.layout import ST_EVENTS
 from ..model import stator
 from ..run.cores import map_on_threads
 from . import observables as ob
@@ -334,6 +335,22 @@ def _powers(audit: dict, duration: float) -> dict[str, float]:
     }
 
 
+class CappedRun(EngineError):
+    """A member stopped at its safety cap on events (``max_events``) before the end of its
+    averaging window: its time averages would be over a window the run did not reach."""
+
+    def __init__(self, member: int, t_reached: float, t_end: float, max_events: int):
+        super().__init__(
+            f"member {member} stopped at the safety cap of {max_events} events at t = "
+            f"{t_reached:.6g}, before the end of its averaging window (t = {t_end:.6g})",
+            ST_EVENTS,
+        )
+        self.member = member
+        self.t_reached = t_reached
+        self.t_end = t_end
+        self.max_events = max_events
+
+
 def run_member(
     cfg: EngineConfig,
     init: InitialState,
@@ -350,6 +367,11 @@ def run_member(
     stats, final, tail
         The member's observables, its final state (:func:`bouncedisk.engine.iterate`) and its
         last :data:`TAIL_EVENTS` events (``t``, ``phase``, ``v_rel``, ``kind``).
+
+    Raises
+    ------
+    CappedRun
+        The run stopped at ``cfg.max_events`` before ``cfg.t_end``: no average over the window.
     """
     if not math.isfinite(cfg.t_end) or cfg.t_end <= t_from:
         raise ValueError("an ensemble member needs a finite end time after t_from")
@@ -364,10 +386,12 @@ def run_member(
         try:
             c = next(gen)
         except StopIteration as stop:
-            _, final = stop.value
+            status, final = stop.value
             break
         ev = c.ev
         red.add(ev[:, EV_T], ev[:, EV_PHASE], ev[:, EV_V_REL], c.evk)
+    if status == ST_EVENTS:  # the cap, not the window's end, stopped the run
+        raise CappedRun(member, final["t"], cfg.t_end, cfg.max_events)
     stats = red.result(member, final, cfg.t_end, cfg.r_phi, cfg.psi)
     return stats, final, red.tail
 

@@ -23,7 +23,7 @@ from ..model.params import Scales
 from ..model.scene import Scene
 from ..run.runner import scene_attrs
 from . import observables as ob
-from .ensembles import MemberStats, run_ensemble
+from .ensembles import CappedRun, MemberStats, run_ensemble
 
 #: Ensemble statistics: field -> (long name, units) in nondimensional units (docs/formats.md).
 QUANTITIES: dict[str, tuple[str, str]] = {
@@ -216,6 +216,17 @@ def ensemble_window(scene: Scene) -> tuple[float, float]:
     return t_from, t_end
 
 
+def capped_error(scene: Scene, ex: CappedRun, where: str = "") -> InputError:
+    """The one-line error for a member that stopped at ``stop.max_events`` before the end of its
+    averaging window: a statistic over a window the run did not reach is no number."""
+    return InputError(
+        scene.source,
+        "stop.max_events",
+        f"{ex}{where}: no average over a window the run did not reach; raise stop.max_events "
+        "or shorten stop.time",
+    )
+
+
 def run_stats(
     scene: Scene,
     cores: int = 1,
@@ -227,7 +238,8 @@ def run_stats(
     Raises
     ------
     InputError
-        When the scene does not stop on time, or is not the exact bouncing model.
+        When the scene does not stop on time, is not the exact bouncing model, or a member
+        stops at ``stop.max_events`` before ``stop.time`` (:func:`capped_error`).
     """
     t_from, t_end = ensemble_window(scene)
     if scene.solver.method != "exact" or scene.model != "bouncing":
@@ -235,15 +247,18 @@ def run_stats(
             scene.source, "solver.method", "statistics run the exact bouncing model only"
         )
     cfg = engine_config(scene)
-    members = run_ensemble(
-        cfg,
-        scene.initial,
-        scene.ensemble.members,
-        t_from,
-        cores=cores,
-        on_member=on_member,
-        should_stop=should_stop,
-    )
+    try:
+        members = run_ensemble(
+            cfg,
+            scene.initial,
+            scene.ensemble.members,
+            t_from,
+            cores=cores,
+            on_member=on_member,
+            should_stop=should_stop,
+        )
+    except CappedRun as ex:
+        raise capped_error(scene, ex) from None
     return EnsembleStats(
         members, scene.stats.discard, t_end - t_from, "load" in scene.effects, scene.scales
     )

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import errno
 import io
 import os
 import signal
@@ -108,14 +109,25 @@ def main(argv: list[str] | None = None) -> int:
     if kept:  # interrupted or failed while recording the run: the outputs stay
         names = ", ".join(str(p) for p in kept)
         print(f"bouncedisk: the outputs were written and kept: {names}", file=sys.stderr)
+    if argv is None and code == 0:
+        _finished()
     return code
+
+
+def _finished() -> None:
+    """The command is done (outputs final, standard output flushed): a Ctrl-C or SIGTERM while
+    the interpreter shuts down (about half a second) no longer changes its outcome. Before, it
+    killed the process with status 130 and no message, the outputs kept."""
+    with contextlib.suppress(ValueError):  # not the main thread: the host's handlers stay
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, signal.SIG_IGN)
 
 
 def _discard_stdout() -> None:
     """Point standard output at /dev/null: what could not be written raises no second error
     when Python flushes it at exit."""
-    if getattr(sys.stdout, "_stream", sys.stdout) is not sys.__stdout__:
-        return  # a caller's stream (tests, embedding): theirs to handle
+    if sys.__stdout__ is None or getattr(sys.stdout, "_stream", sys.stdout) is not sys.__stdout__:
+        return  # closed (nothing to point), or a caller's stream (tests, embedding): theirs
     with contextlib.suppress(OSError, ValueError, io.UnsupportedOperation):
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.__stdout__.fileno())
 
@@ -130,6 +142,8 @@ class _NamedStdout:
         return getattr(self._stream, name)
 
     def _call(self, name: str, *a):
+        if self._stream is None:  # the shell closed it (`>&-`): Python left sys.stdout None
+            raise OSError(errno.EBADF, "standard output is closed", "<stdout>")
         try:
             return getattr(self._stream, name)(*a)
         except BrokenPipeError:
@@ -141,7 +155,8 @@ class _NamedStdout:
         return self._call("write", text)
 
     def flush(self) -> None:
-        self._call("flush")
+        if self._stream is not None:  # closed: nothing was written (a write raises)
+            self._call("flush")
 
 
 def _run_command(args: argparse.Namespace) -> tuple[int, list]:

@@ -6,6 +6,8 @@ import argparse
 import shlex
 import sys
 
+from ..model.errors import InputError
+
 EXIT_USER = 2
 EXIT_FAIL = 1
 EXIT_INTERRUPT = 130
@@ -25,6 +27,17 @@ def command_line(args: argparse.Namespace) -> str:
     """The command line that ran: ``bouncedisk`` and the words :func:`~.command.main` parsed,
     quoted for a shell (a file's ``history``, a tracked run's command)."""
     return "bouncedisk " + shlex.join(args.argv)
+
+
+def named_override(ex: InputError, overrides: list[str] | None) -> InputError:
+    """``ex`` naming the ``--set`` option that gave its field, as a scene's own errors do
+    (``stop.max_events (from --set stop.max_events)``); ``ex`` itself when the file gave it."""
+    from ..model.scene import override_of
+
+    key = override_of(ex.field, overrides or [])
+    if key is None or "(from --set" in ex.field:
+        return ex
+    return InputError(ex.source, f"{ex.field} (from --set {key})", ex.message)
 
 
 def flush_stdout() -> None:

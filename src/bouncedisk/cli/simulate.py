@@ -14,7 +14,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from ..run.runner import run_scene
 
     out = check_output_path(args.output, "-o", inputs=[args.scene])
-    limit = parse_size(args.max_output) if args.max_output else default_max_output()
+    limit = parse_size(args.max_output) if args.max_output is not None else default_max_output()
     scene = load_scene(args.scene, args.set or [])
     store = _tracking_store(args)
     summary = run_scene(

@@ -10,7 +10,7 @@ import time
 from ..io.history import write_with_history
 from ..model.errors import InputError
 from ..run.cores import available_cores
-from .common import _add_set_option, command_line
+from .common import _add_set_option, command_line, named_override
 from .tracking_options import _add_track_options, _track, _tracking_store
 from .window_warnings import print_window_warnings
 
@@ -94,12 +94,15 @@ def stats_command(args: argparse.Namespace) -> dict:
     cores = args.cores or available_cores()
     start = time.perf_counter()
     with deferred_interrupts() as req:
-        result = run_stats(
-            scene,
-            cores=cores,
-            on_member=_progress(args.quiet, scene.name),
-            should_stop=lambda: req.signum is not None,
-        )
+        try:
+            result = run_stats(
+                scene,
+                cores=cores,
+                on_member=_progress(args.quiet, scene.name),
+                should_stop=lambda: req.signum is not None,
+            )
+        except InputError as ex:  # a capped member: name the --set that set the cap
+            raise named_override(ex, args.set) from None
         wall = time.perf_counter() - start
         if args.output:
             write_with_history(to_dataset(scene, result, wall), args.output, command_line(args))

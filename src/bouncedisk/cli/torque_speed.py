@@ -4,104 +4,140 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import time
 
 from ..io.history import write_with_history
 from ..model.errors import InputError
 from ..run.cores import available_cores
-from .common import _add_set_option, command_line
+from .common import _add_set_option, command_line, named_override
 from .stats import _progress
 from .tracking_options import _add_track_options, _track, _tracking_store
 from .window_warnings import print_window_warnings
 
-#: Loads of a curve when ``--loads`` is not given: from no load to the momentum bound
-#: ``τ_L = 1`` (docs/model.md "The motor under load"), in units of the scene's load torque.
-DEFAULT_LOADS = "0:1:11"
+#: The table's columns and derived lines: nondimensional, and for a physical scene in SI units.
+_COLUMNS = {
+    False: ("loads", "mean_omega", "power_out", "efficiency_torsion"),
+    True: ("loads_Nm", "mean_omega_rad_s", "power_out_W", "efficiency"),
+}
+_HEADS = {
+    False: ("load", "mean speed", "power"),
+    True: ("load (N m)", "speed (rad/s)", "power (W)"),
+}
+_DERIVED = {
+    False: ("no_load_speed", "stall_torque", "max_power", "max_power_load"),
+    True: ("no_load_speed_rad_s", "stall_torque_Nm", "max_power_W", "max_power_load_Nm"),
+}
 
 
-def format_curve(summary: dict) -> str:
-    """A human-readable table of :meth:`bouncedisk.studies.torque_speed.LoadCurve.summary`."""
-    lines = [f"{'load':>8} {'mean speed':>12} {'95% CI':>25} {'power':>10} {'efficiency':>10}"]
-    for k, load in enumerate(summary["loads"]):
-        lo, hi = summary["mean_omega_ci95"][k]
-        ci = "n/a" if lo is None else f"[{lo:.5g}, {hi:.5g}]"
-        eff = summary["efficiency_torsion"][k]
+def format_curve(summary: dict, physical: bool = False) -> str:
+    """A human-readable table of :meth:`bouncedisk.studies.torque_speed.LoadCurve.summary`.
+
+    A physical scene's table is in SI units (loads in N·m, as typed), else nondimensional; a
+    value that is unknown or not finite is ``n/a``.
+    """
+    load, speed, power, eff = (summary[k] for k in _COLUMNS[physical])
+    ci95 = summary[f"{_COLUMNS[physical][1]}_ci95"]
+    h_load, h_speed, h_power = _HEADS[physical]
+    lines = [f"{h_load:>10} {h_speed:>13} {'95% CI':>25} {h_power:>10} {'efficiency':>10}"]
+    for k in range(len(load)):
+        lo, hi = ci95[k]
+        ci = "n/a" if lo is None or hi is None else f"[{lo:.5g}, {hi:.5g}]"
         lines.append(
-            f"{load:>8.4g} {summary['mean_omega'][k]:>12.6g} {ci:>25} "
-            f"{summary['power_out'][k]:>10.4g} {'n/a' if eff is None else f'{eff:.4g}':>10}"
+            f"{_f(load[k], '.4g'):>10} {_f(speed[k], '.6g'):>13} {ci:>25} "
+            f"{_f(power[k], '.4g'):>10} {_f(eff[k], '.4g'):>10}"
         )
-    for name in ("no_load_speed", "stall_torque", "max_power", "max_power_load"):
+    for name in _DERIVED[physical]:
         v, (lo, hi) = summary[name], summary[f"{name}_ci95"]
         ci = "" if lo is None and hi is None else f"  95% CI [{_g(lo)}, {_g(hi)}]"
-        lines.append(f"{name:>14}: {_g(v)}{ci}")
+        value = _why_none(name, summary) if v is None else _g(v)
+        lines.append(f"{name:>19}: {value}{ci}")
     if summary.get("branches_differ_at"):
         at = ", ".join(f"{x:.4g}" for x in summary["branches_differ_at"])
-        lines.append(f"{'two speeds':>14}: the up and down branches differ at loads {at}")
+        lines.append(f"{'two speeds':>19}: the up and down branches differ at tau_L = {at}")
     return "\n".join(lines)
 
 
+def _f(x, spec: str) -> str:
+    return "n/a" if x is None else format(x, spec)
+
+
 def _g(x) -> str:
-    return "n/a (speed stays positive)" if x is None else f"{x:.6g}"
+    return "n/a" if x is None else f"{x:.6g}"
+
+
+def _why_none(name: str, summary: dict) -> str:
+    """Why a derived quantity has no value, in the table's words."""
+    speeds = summary["mean_omega"]
+    if name.startswith("no_load_speed") and summary["loads"][0] != 0.0:
+        return "n/a (the loads do not include 0)"
+    if not name.startswith("stall_torque"):
+        return "n/a"
+    if speeds and speeds[0] is not None and speeds[0] <= 0.0:
+        return "n/a (the speed is already <= 0 at the smallest load: the stall lies below it)"
+    if all(x is not None and x > 0.0 for x in speeds):
+        return "n/a (speed stays positive)"
+    return "n/a"
+
+
+def finite_json(x):
+    """``x`` with every non-finite float as ``None`` (JSON has no ``Infinity`` or ``NaN``)."""
+    if isinstance(x, dict):
+        return {k: finite_json(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [finite_json(v) for v in x]
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    return x
 
 
 def torque_speed_command(args: argparse.Namespace) -> dict:
-    """Run ``bouncedisk torque-speed``; returns the printed summary."""
+    """Run ``bouncedisk torque-speed``; returns the printed summary.
+
+    The scene is built once, from the file and the ``--set`` overrides, with the ``load`` effect
+    added to whatever effects they give (:func:`~bouncedisk.studies.torque_speed.with_load`).
+    """
     from ..analysis.statistics import ensemble_window
     from ..io.output_checks import check_output_path
     from ..model.scene import load_scene
     from ..run.runner import deferred_interrupts
-    from ..studies.torque_speed import parse_loads, to_dataset, torque_speed
+    from ..studies.torque_speed import scene_loads, to_dataset, torque_speed, with_load
 
     if args.cores is not None and args.cores < 1:
         raise InputError("<arguments>", "--cores", f"must be >= 1, got {args.cores}")
-    loads = parse_loads(args.loads or DEFAULT_LOADS)
     if args.output is not None:
         check_output_path(args.output, "-o", inputs=[args.scene])
-    overrides = list(args.set or [])
-    scene = load_scene(args.scene, _with_load(args.scene, overrides))
+    scene = with_load(load_scene(args.scene, list(args.set or [])))
     ensemble_window(scene)
-    if scene.physical is not None:  # loads in N·m, like physical.load_torque
-        loads = loads / scene.physical.scales().torque
+    loads = scene_loads(scene, args.loads)
     cores = args.cores or available_cores()
     start = time.perf_counter()
     with deferred_interrupts() as req:
-        curve = torque_speed(
-            scene,
-            loads,
-            cores=cores,
-            on_member=_progress(args.quiet, f"{scene.name} (torque-speed)"),
-            should_stop=lambda: req.signum is not None,
-        )
+        try:
+            curve = torque_speed(
+                scene,
+                loads,
+                cores=cores,
+                on_member=_progress(args.quiet, f"{scene.name} (torque-speed)"),
+                should_stop=lambda: req.signum is not None,
+            )
+        except InputError as ex:  # a capped member: name the --set that set the cap
+            raise named_override(ex, args.set) from None
         wall = time.perf_counter() - start
+        summary = finite_json(curve.summary())
         if args.output:
-            write_with_history(to_dataset(scene, curve, wall), args.output, command_line(args))
-    summary = curve.summary()
+            write_with_history(
+                to_dataset(scene, curve, wall, summary), args.output, command_line(args)
+            )
     regimes = summary["regime"] + (summary.get("down") or {}).get("regime", [])
     print_window_warnings(scene, regimes)
     if args.json:
-        print(json.dumps(summary))
+        print(json.dumps(summary, allow_nan=False))
     else:
-        print(format_curve(summary))
+        print(format_curve(summary, scene.physical is not None))
         if args.output:
             print(f"{args.output}: the curve ({wall:.2f} s on {cores} cores)")
     return summary
-
-
-def _with_load(scene_file: str, overrides: list[str]) -> list[str]:
-    """The overrides plus what turns the ``load`` effect on (its value is set per load), read
-    from the scene as the user's overrides leave it (``--set effects=...`` included)."""
-    from ..model.scene import apply_overrides, read_yaml
-
-    raw = apply_overrides(read_yaml(scene_file), overrides)
-    effects = raw.get("effects") or []
-    if isinstance(effects, str):  # --set effects=a,b,c
-        effects = [e.strip() for e in effects.split(",") if e.strip()]
-    if isinstance(effects, list) and "load" not in effects:
-        overrides.append("effects=" + ",".join([*map(str, effects), "load"]))
-    section = "physical" if "physical" in raw else "parameters"
-    if "load_torque" not in (raw.get(section) or {}):
-        overrides.append(f"{section}.load_torque=0")
-    return overrides
 
 
 def _add_torque_speed(sub) -> None:
@@ -116,7 +152,8 @@ def _add_torque_speed(sub) -> None:
     p.add_argument(
         "--loads",
         metavar="START:STOP:N | A,B,C",
-        help=f"load torques (nondimensional tau_L; N*m for a physical scene; default {DEFAULT_LOADS})",
+        help="load torques (nondimensional tau_L; N*m for a physical scene; default: 11 loads "
+        "of tau_L from 0 to the momentum bound 1, for any scene)",
     )
     p.add_argument("-o", "--output", help="write the curve (per branch, load and member) here")
     _add_set_option(p, "ensemble.members=32")

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Generator, Iterator
 from dataclasses import dataclass, field
+from numbers import Integral, Real
 from typing import Generic, TypeVar
 
 import numpy as np
@@ -88,6 +89,55 @@ class EngineConfig:
     member: int = 0
     stats_from: float = math.inf
     load_torque: float = 0.0
+
+    def __post_init__(self) -> None:
+        """Refuse what the kernel cannot run: a ``nan`` or out-of-range parameter would make its
+        event searches spin without end (``e = nan``, ``e = 2``) instead of failing."""
+        for name, ok in _CONFIG_RANGES.items():
+            value = getattr(self, name)
+            if not ok(value):
+                raise ValueError(f"EngineConfig.{name} = {value!r}: {_CONFIG_TEXT[name]}")
+
+
+def _finite(x: float) -> bool:
+    return isinstance(x, Real) and math.isfinite(x)
+
+
+#: The ranges :class:`EngineConfig` accepts (docs/model.md), field by field.
+_CONFIG_RANGES: dict[str, Callable[[float], bool]] = {
+    "e": lambda x: _finite(x) and 0.0 <= x <= 1.0,
+    "omega_s": lambda x: _finite(x) and x > 0.0,
+    "r_phi": lambda x: _finite(x) and x > 0.0,
+    "psi": _finite,
+    "inertia_ratio": lambda x: isinstance(x, Real) and x > 0.0,
+    "mu_ratio": lambda x: _finite(x) and x >= 1.0,
+    "tol": lambda x: _finite(x) and x > 0.0,
+    "t_end": lambda x: isinstance(x, Real) and not math.isnan(x),
+    "max_events": lambda x: isinstance(x, Integral) and x >= 1,
+    "traj_dt": lambda x: _finite(x) and x >= 0.0,
+    "e_sigma": lambda x: _finite(x) and x >= 0.0,
+    "seed": lambda x: isinstance(x, Integral) and 0 <= x < 2**63,
+    "member": lambda x: isinstance(x, Integral) and 0 <= x < 2**63,
+    "stats_from": lambda x: isinstance(x, Real) and not math.isnan(x),
+    "load_torque": _finite,  # the engine also runs a driving torque (< 0)
+}
+_CONFIG_TEXT = {
+    "e": "must be a number in [0, 1]",
+    "omega_s": "must be a finite number > 0",
+    "r_phi": "must be a finite number > 0",
+    "psi": "must be a finite number (radians)",
+    "inertia_ratio": "must be > 0 (inf for a stator not moved by impacts)",
+    "mu_ratio": "must be a finite number >= 1",
+    "tol": "must be a finite number > 0",
+    "t_end": "must be a number or inf, not nan",
+    "max_events": "must be a whole number >= 1",
+    "traj_dt": "must be a finite number >= 0",
+    "e_sigma": "must be a finite number >= 0",
+    "seed": "must be a whole number in [0, 2**63)",
+    "member": "must be a whole number in [0, 2**63)",
+    "stats_from": "must be a number or inf, not nan",
+    "load_torque": "must be a finite number",
+}
 
 
 @dataclass(frozen=True)

@@ -29,8 +29,9 @@ import numpy as np
 import pandas as pd
 
 from ..model.errors import InputError
-from ..model.params import number
+from ..model.params import number, whole_number
 from ..model.scene import read_yaml
+from .output_checks import sidecar_of
 
 COLUMNS = ("torque_Nm", "speed_rad_s")
 OPTIONAL_COLUMNS = ("speed_sd_rad_s",)
@@ -39,7 +40,13 @@ SIDECAR_KEYS = (
     "description", "generating_parameters", "generator", "repeats",
 )  # fmt: skip
 ROTOR_KEYS = ("m_r_kg", "r_g_m", "r_c_m")
+MOTOR_KEYS = ("drive_frequency_hz", "Phi0_rad")
 MIN_LOADS = 3
+#: Most loads (rows) a curve may hold: as many as the samples of a fitted run-up.
+MAX_LOADS = 12_000
+#: Latest end of the window, in drive periods: as long as a fitted run-up
+#: (each reading is a run of the model from rest to ``window_s[1]``).
+MAX_WINDOW_PERIODS = 20_000
 
 
 @dataclass(frozen=True)
@@ -62,14 +69,17 @@ class LoadCurveData:
 def _sidecar(path: Path) -> dict:
     """Read and check a load curve's sidecar (one line naming the file and field)."""
     src = str(path)
-    data = read_yaml(path)
+    data = read_yaml(path, "load curve sidecar")
     for k in data:
         if k not in SIDECAR_KEYS:
             raise InputError(src, str(k), f"unknown key (known: {', '.join(SIDECAR_KEYS)})")
     motor = data.get("motor")
     if not isinstance(motor, dict):
         raise InputError(src, "motor", "is required: {drive_frequency_hz, Phi0_rad}")
-    for k in ("drive_frequency_hz", "Phi0_rad"):
+    for k in motor:
+        if k not in MOTOR_KEYS:
+            raise InputError(src, f"motor.{k}", f"unknown key (known: {', '.join(MOTOR_KEYS)})")
+    for k in MOTOR_KEYS:
         if k not in motor:
             raise InputError(src, f"motor.{k}", "is required")
         number(src, f"motor.{k}", motor[k], positive=True)
@@ -91,9 +101,21 @@ def _sidecar(path: Path) -> dict:
     t1 = number(src, "window_s[1]", win[1], positive=True)
     if not t1 > t0:
         raise InputError(src, "window_s", f"must have t1 > t0, got {win}")
-    rep = data.get("repeats", 1)
-    if isinstance(rep, bool) or not isinstance(rep, int) or rep < 1:
-        raise InputError(src, "repeats", f"must be a whole number >= 1, got {rep!r}")
+    periods = t1 * float(motor["drive_frequency_hz"])
+    if periods > MAX_WINDOW_PERIODS:
+        raise InputError(
+            src,
+            "window_s[1]",
+            f"{t1:g} s is {periods:.4g} drive periods; a reading may last at most "
+            f"{MAX_WINDOW_PERIODS:,} periods ({MAX_WINDOW_PERIODS / float(motor['drive_frequency_hz']):.4g} s "
+            "at this drive), as a fitted run-up",
+        )
+    if isinstance(data.get("repeats"), str):  # a quoted '5' is text, as a scene's members
+        raise InputError(
+            src, "repeats", f"must be a whole number, got the text {data['repeats']!r}"
+        )
+    if "repeats" in data:  # 5.0 reads as 5, as a scene's members
+        data["repeats"] = whole_number(src, "repeats", data["repeats"], minimum=1)
     if not isinstance(data.get("synthetic", False), bool):
         raise InputError(src, "synthetic", f"must be true or false, got {data['synthetic']!r}")
     return data
@@ -124,13 +146,14 @@ def read_load_curve(path: str | Path) -> LoadCurveData:
     InputError
         One line naming the file, row and column: a missing file, sidecar, column or rotor key;
         text, NaN or a negative value where a torque or spread is due; a repeated torque; fewer
-        than :data:`MIN_LOADS` loads; a bad window or unit.
+        than :data:`MIN_LOADS` or more than :data:`MAX_LOADS` loads; a bad window (ending past
+        :data:`MAX_WINDOW_PERIODS` drive periods) or unit.
     """
     p = Path(path)
     src = str(path)
+    side = sidecar_of(p)
     if not p.is_file():
         raise InputError(src, "", "file not found")
-    side = p.with_suffix(".yaml")
     if not side.is_file():
         raise InputError(str(side), "", "sidecar not found (motor, rotor and window_s)")
     meta = _sidecar(side)
@@ -159,6 +182,12 @@ def read_load_curve(path: str | Path) -> LoadCurveData:
         raise InputError(src, "torque_Nm", f"row {row + 2}: repeats the load {torque[row]!r}")
     if len(torque) < MIN_LOADS:
         raise InputError(src, "", f"has {len(torque)} loads; at least {MIN_LOADS} are needed")
+    if len(torque) > MAX_LOADS:
+        raise InputError(
+            src,
+            "",
+            f"has {len(torque):,} loads; at most {MAX_LOADS:,} (as the samples of a run-up)",
+        )
     order = np.argsort(torque)
     motor, rotor = meta["motor"], meta["rotor"]
     return LoadCurveData(

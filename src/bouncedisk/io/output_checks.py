@@ -99,6 +99,13 @@ def check_output_path(
         raise InputError(src, option, "exists and is not a regular file")
     # a symbolic link is written through: its target's folder must accept the file
     dest = Path(os.path.realpath(out)) if out.is_symlink() else out
+    if out.is_symlink() and not dest.parent.is_dir():  # no folders made at a link's whim
+        raise InputError(
+            src,
+            option,
+            f"is a symbolic link to {str(dest)!r}, whose folder does not exist; create it or "
+            "give another file name",
+        )
     # the nearest folder that exists must accept a new file (this also catches read-only file
     # systems and root-owned folders, which os.access misjudges for root)
     parent = dest.parent
@@ -119,6 +126,22 @@ def check_output_path(
     with contextlib.suppress(OSError):
         os.unlink(probe)
     return out
+
+
+def sidecar_of(path: str | Path, option: str = "") -> Path:
+    """The YAML sidecar of a data file (same name, suffix ``.yaml``), for reading or for
+    refusing it as an output.
+
+    Raises
+    ------
+    InputError
+        One line naming the path and ``option`` when the path is a folder or has no file name
+        (``.``, ``/``, ``..``), instead of pathlib's ``ValueError``.
+    """
+    p = Path(path)
+    if str(path).strip() == "" or p.name in ("", ".", "..") or p.is_dir():
+        raise InputError(str(path), option, "is a directory, not a data file such as curve.csv")
+    return p.with_suffix(".yaml")
 
 
 #: Folders of devices and process files: never an output (``/dev/stdout``, ``/proc/self/fd/1``).

@@ -24,6 +24,7 @@ import pandas as pd
 from ..model.errors import InputError
 from ..model.params import number
 from ..model.scene import read_yaml
+from .output_checks import sidecar_of
 
 MIN_ROWS = 20
 #: Largest torsional amplitude Φ0 (rad) a sidecar may state: half a turn (docs/model.md's Φ0 is a
@@ -72,7 +73,7 @@ class MotorCurve:
 def read_sidecar(path: str | Path) -> dict:
     """Read and validate a curve's YAML sidecar."""
     src = str(path)
-    data = read_yaml(path)
+    data = read_yaml(path, "curve sidecar")
     known = {
         "source",
         "synthetic",
@@ -134,9 +135,9 @@ def read_curve(path: str | Path, sidecar: str | Path | None = None) -> MotorCurv
     """
     p = Path(path)
     src = str(path)
+    side = Path(sidecar) if sidecar else sidecar_of(p)
     if not p.is_file():
         raise InputError(src, "", "file not found")
-    side = Path(sidecar) if sidecar else p.with_suffix(".yaml")
     if not side.is_file():
         raise InputError(str(side), "", "sidecar not found (units, source and motor constants)")
     meta = read_sidecar(side)

@@ -112,6 +112,11 @@ class Parameters:
     e_sigma: float = 0.0
     load_torque: float = 0.0
 
+    def __post_init__(self) -> None:
+        """Refuse values outside the model (``e`` in ``[0, 1]``, ``omega_s > 0``, ...), however
+        the parameters are made (:meth:`validate`, with the source ``Parameters``)."""
+        self.validate("Parameters", "Parameters")
+
     @classmethod
     def from_mapping(cls, data: dict, source: str = "", prefix: str = "parameters") -> Parameters:
         """Validate a mapping (e.g. a scene's ``parameters:``) into :class:`Parameters`."""
@@ -135,9 +140,11 @@ class Parameters:
                 vals["inertia_ratio"] = math.inf
             else:
                 vals["inertia_ratio"] = number(source, f"{prefix}.inertia_ratio", j)
-        p = cls(**vals)
-        p.validate(source, prefix)
-        return p
+        try:
+            return cls(**vals)
+        except InputError as ex:  # name the file and its section, not the class
+            field = prefix + ex.field.removeprefix("Parameters")
+            raise InputError(source, field, ex.message) from None
 
     def validate(self, source: str = "", prefix: str = "parameters") -> None:
         """Raise :class:`InputError` for out-of-range values."""

@@ -216,18 +216,19 @@ def apply_overrides(raw: dict, overrides: list[str], source: str = "--set") -> d
     return out
 
 
-def read_yaml(path: str | Path) -> dict:
-    """Read a YAML mapping, turning every failure into one :class:`InputError` line."""
+def read_yaml(path: str | Path, what: str = "scene") -> dict:
+    """Read a YAML mapping, turning every failure into one :class:`InputError` line that calls
+    the file ``what`` (a scene, a sidecar, ...)."""
     p = Path(path)
     src = str(path)
     if p.exists() and not p.is_dir() and not p.is_file():  # a FIFO would block in open()
-        raise InputError(src, "", "is not a regular file (a pipe or device?), not a scene file")
+        raise InputError(src, "", f"is not a regular file (a pipe or device?), not a {what} file")
     try:
         text = p.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise InputError(src, "", "file not found") from None
     except IsADirectoryError:
-        raise InputError(src, "", "is a directory, not a scene file") from None
+        raise InputError(src, "", f"is a directory, not a {what} file") from None
     except UnicodeDecodeError:
         raise InputError(src, "", "not a text (UTF-8) file") from None
     except OSError as ex:
@@ -240,9 +241,9 @@ def read_yaml(path: str | Path) -> dict:
         problem = getattr(ex, "problem", None) or "malformed YAML"
         raise InputError(src, where, f"malformed YAML: {problem}") from None
     if data is None:
-        raise InputError(src, "", "empty scene file")
+        raise InputError(src, "", f"empty {what} file")
     if not isinstance(data, dict):
-        raise InputError(src, "", f"a scene must be a YAML mapping, got {type(data).__name__}")
+        raise InputError(src, "", f"a {what} must be a YAML mapping, got {type(data).__name__}")
     return data
 
 
@@ -343,8 +344,11 @@ def _parameters(src: str, raw: dict) -> tuple[Parameters, PhysicalParameters | N
             src, "physical", raw["physical"], tuple(PhysicalParameters.__dataclass_fields__)
         )
         physical = PhysicalParameters.from_mapping(pm, src)
-        params = physical.to_nondimensional()
-        params.validate(src, "physical")
+        try:
+            params = physical.to_nondimensional()  # validated as it is made
+        except InputError as ex:  # the nondimensional value the SI ones give, named by section
+            field = "physical" + ex.field.removeprefix("Parameters")
+            raise InputError(src, field, ex.message) from None
         return params, physical
     if "parameters" in raw:
         pm = raw["parameters"]
@@ -369,6 +373,10 @@ def _check_effect_parameters(
     ):
         raise InputError(src, "parameters.mu_ratio", "is required by the 'kinetic_static' effect")
     _check_paired(src, raw, effects)
+
+
+#: Largest ``|initial.omega|``: far beyond any motor (a few hundred), far below overflow.
+MAX_INITIAL_OMEGA = 1e100
 
 
 def _initial(src: str, v: Any, params: Parameters) -> InitialState:
@@ -397,6 +405,13 @@ def _initial(src: str, v: Any, params: Parameters) -> InitialState:
             )
     if abs(t0) > 1e12:
         raise InputError(src, "initial.t", "must be within ±1e12")
+    if abs(om0) > MAX_INITIAL_OMEGA:
+        raise InputError(
+            src,
+            "initial.omega",
+            f"must be within ±{MAX_INITIAL_OMEGA:g} (the rotor's kinetic energy in the energy "
+            f"audit overflows near 1e154), got {om0:g}",
+        )
     return InitialState(t=t0, omega=om0, u=u0, v=v0)
 
 

@@ -78,11 +78,18 @@ def _expanded_size(node: yaml.Node, source: str) -> int:
         elif isinstance(n, yaml.SequenceNode):
             children = list(n.value)
         if not done:
-            sizes[id(n)] = -1  # in progress: a recursive alias (`&a [*a]`) counts once
+            sizes[id(n)] = -1  # open: a child still open when n closes is an ancestor
             stack.append((n, True))
             stack.extend((c, False) for c in children if id(c) not in sizes)
             continue
-        total = 1 + sum(max(sizes.get(id(c), 1), 1) for c in children)
+        if any(sizes.get(id(c)) == -1 for c in children):  # a child still open: an ancestor
+            raise InputError(
+                source,
+                "",
+                "a YAML alias (*name) refers to a value that holds it (`a: &a [*a]`): a "
+                "recursive structure is no scene; write the values out",
+            )
+        total = 1 + sum(sizes.get(id(c), 1) for c in children)
         sizes[id(n)] = total
         if total > MAX_EXPANDED_NODES:
             raise InputError(
@@ -126,8 +133,9 @@ def load(text: str, source: str = "<yaml>", path: str = ""):
     yaml.YAMLError
         Malformed YAML (the caller reports the line).
     InputError
-        A key given twice in one mapping (names the dotted key), or aliases that expand to
-        more than :data:`MAX_EXPANDED_NODES` values.
+        A key given twice in one mapping (names the dotted key), aliases that expand to more
+        than :data:`MAX_EXPANDED_NODES` values or refer to a value that holds them, or nesting
+        deeper than Python's recursion limit.
     """
     loader = Loader(text)
     try:
@@ -137,5 +145,9 @@ def load(text: str, source: str = "<yaml>", path: str = ""):
         _expanded_size(node, source)  # before any walk of the expanded document
         _check_duplicates(node, source, path)
         return loader.construct_document(node)
+    except RecursionError:  # PyYAML composes and constructs recursively
+        raise InputError(
+            source, "", "YAML nested too deeply (a scene nests a few levels): malformed YAML"
+        ) from None
     finally:
         loader.dispose()

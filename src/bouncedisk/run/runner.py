@@ -226,14 +226,15 @@ def run_scene(
     Raises
     ------
     InputError
-        When the scene leaves out an effect its dynamics need (names ``effects``), or its output
-        would exceed ``max_output_bytes``.
+        When ``out`` cannot be written (a folder, a read-only place), the scene leaves out an
+        effect its dynamics need (names ``effects``), or its output would exceed
+        ``max_output_bytes``.
     EngineError
         On a numerical failure of the engine.
     """
-    from ..io.output_checks import check_output_size, default_max_output
+    from ..io.output_checks import check_output_path, check_output_size, default_max_output
 
-    out = Path(out)
+    out = check_output_path(out, "out")  # a folder or an unwritable place: before the run
     limit = default_max_output() if max_output_bytes is None else max_output_bytes
     check_output_size(scene, out, limit)
     run_id = new_run_id(scene.name, scene.sha256)

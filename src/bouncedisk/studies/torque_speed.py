@@ -22,8 +22,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..analysis.ensembles import MemberStats, run_member
-from ..analysis.statistics import EnsembleStats, confidence_interval, ensemble_window
+from ..analysis.ensembles import CappedRun, MemberStats, run_member
+from ..analysis.statistics import (
+    EnsembleStats,
+    capped_error,
+    confidence_interval,
+    ensemble_window,
+)
 from ..engine import EngineConfig, InitialState
 from ..model.engine_config import engine_config
 from ..model.errors import InputError
@@ -39,6 +44,64 @@ BOOTSTRAP_SEED = 20261123
 MATERIAL = 1e-3
 #: Largest number of loads one curve may ask for.
 MAX_LOADS = 1000
+#: Largest load torque ``τ_L`` of a curve: a hundred times the momentum bound ``τ_L = 1``
+#: (docs/model.md "The motor under load"), far past the stall; larger loads only drive the
+#: rotor backwards towards overflow.
+MAX_LOAD = 100.0
+#: Loads of a curve when none are given: from no load to the momentum bound ``τ_L = 1``, in
+#: nondimensional units whether the scene is physical or not.
+DEFAULT_LOADS = "0:1:11"
+
+
+def scene_loads(
+    scene: Scene, text: str | None, source: str = "<arguments>", field: str = "--loads"
+) -> np.ndarray:
+    """The nondimensional loads ``τ_L`` of a curve of ``scene`` from ``text`` (:func:`parse_loads`):
+    in N·m for a physical scene (as ``physical.load_torque``), else in units of
+    ``μ m_r g_eff r_eff``; without ``text`` (``None``) :data:`DEFAULT_LOADS`, nondimensional.
+    The command and the pipeline read loads through this one function.
+
+    Raises
+    ------
+    InputError
+        As :func:`parse_loads`, or a load above :data:`MAX_LOAD` once nondimensional.
+    """
+    if text is None:
+        return parse_loads(DEFAULT_LOADS, source, field)
+    typed = parse_loads(text, source, field)
+    loads, largest, bound = typed, f"tau_L = {typed[-1]:.4g}", f"tau_L = {MAX_LOAD:g}"
+    if scene.physical is not None:  # N·m, like physical.load_torque
+        torque = scene.physical.scales().torque
+        with np.errstate(over="ignore"):  # an overflow is a load over the bound below
+            loads = typed / torque
+        largest = f"{typed[-1]:.4g} N m"
+        bound = f"{MAX_LOAD * torque:.4g} N m (tau_L = {MAX_LOAD:g} for this scene)"
+    if not loads[-1] <= MAX_LOAD:
+        raise InputError(
+            source,
+            field,
+            f"the largest load is {largest}; loads must be at most {bound}, a hundred times the "
+            "momentum bound tau_L = 1",
+        )
+    return loads
+
+
+def with_load(scene: Scene) -> Scene:
+    """``scene`` with the ``load`` effect (its torque set per load by :func:`torque_speed`): the
+    user's effects and parameters, whatever form they were given in, kept as they are."""
+    if "load" in scene.effects:
+        return scene
+    raw = dict(scene.raw)
+    given = raw.get("effects")
+    if isinstance(given, dict):
+        raw["effects"] = {**given, "load": True}
+    elif isinstance(given, str):
+        raw["effects"] = f"{given},load"
+    else:
+        raw["effects"] = [*(given or ["impacts", "contact"]), "load"]
+    section = "physical" if scene.physical is not None else "parameters"
+    raw[section] = {**(raw.get(section) or {}), "load_torque": 0.0}
+    return dataclasses.replace(scene, effects=scene.effects | {"load"}, raw=raw)
 
 
 def parse_loads(text: str, source: str = "<arguments>", field: str = "--loads") -> np.ndarray:
@@ -53,6 +116,8 @@ def parse_loads(text: str, source: str = "<arguments>", field: str = "--loads") 
     from ..model.params import number, whole_number
 
     text = str(text).strip()
+    if not text:
+        raise InputError(source, field, "is empty; give START:STOP:N or A,B,C")
     if ":" in text:
         parts = text.split(":")
         if len(parts) != 3:
@@ -139,9 +204,10 @@ def _per_load(stats: list[EnsembleStats]) -> dict:
 def first_zero(loads: np.ndarray, speed: np.ndarray) -> float:
     """The first load at which ``speed`` reaches 0, linearly interpolated (the stall torque of
     docs/model.md "The motor under load": the smallest ``τ_L`` with ``Ω̄ <= 0``); ``nan`` when it
-    stays positive."""
+    stays positive, ``-inf`` when it is already ``<= 0`` at the smallest load and that load is not
+    0 (the stall lies below the loads asked for: unknown, not the smallest load)."""
     if speed[0] <= 0.0:
-        return float(loads[0])
+        return 0.0 if loads[0] == 0.0 else -math.inf
     for k in range(1, len(loads)):
         if speed[k] <= 0.0:
             f = speed[k - 1] / (speed[k - 1] - speed[k])
@@ -156,7 +222,9 @@ def peak(loads: np.ndarray, power: np.ndarray) -> tuple[float, float]:
     the largest sample and its neighbours overshoots every sample several-fold, so the grid of
     loads sets the resolution (ask for more loads near the peak to refine it).
     """
-    k = int(np.nanargmax(power))
+    if not np.isfinite(power).any():  # no finite mean power (an overflowing run)
+        return math.nan, math.nan
+    k = int(np.nanargmax(np.where(np.isfinite(power), power, np.nan)))
     return float(power[k]), float(loads[k])
 
 
@@ -166,7 +234,8 @@ def derived(loads: np.ndarray, speed: np.ndarray, power: np.ndarray) -> dict:
     ``speed`` and ``power`` are ``(members, loads)``. The estimates are those of the members'
     mean curve; their intervals are the central 95 % of :data:`BOOTSTRAP` resamples of the
     members (fixed seed: the same numbers on every run). The no-load speed is the mean speed at
-    ``τ_L = 0`` (Student interval, as every ``stats`` field) when the loads start at 0.
+    ``τ_L = 0`` (Student interval, as every ``stats`` field) when the loads start at 0. One
+    member has no intervals (``None``): a resample of one member is that member, every time.
     """
     out: dict = {}
     if loads[0] == 0.0:
@@ -187,12 +256,15 @@ def derived(loads: np.ndarray, speed: np.ndarray, power: np.ndarray) -> dict:
     every = np.arange(members)
     st = stall(every)
     st_b = np.array([stall(i) for i in boots])
+    spread = members > 1
     out["stall_torque"] = _num(st)
-    out["stall_torque_ci95"] = _interval(st_b) if math.isfinite(st) else [None, None]
+    out["stall_torque_ci95"] = _interval(st_b) if math.isfinite(st) and spread else [None, None]
     p, at = pmax(every)
     pb = np.array([pmax(i) for i in boots])
-    out["max_power"], out["max_power_ci95"] = _num(p), _interval(pb[:, 0])
-    out["max_power_load"], out["max_power_load_ci95"] = _num(at), _interval(pb[:, 1])
+    none = [None, None]
+    out["max_power"], out["max_power_ci95"] = _num(p), _interval(pb[:, 0]) if spread else none
+    out["max_power_load"] = _num(at)
+    out["max_power_load_ci95"] = _interval(pb[:, 1]) if spread else none
     return out
 
 
@@ -206,9 +278,9 @@ def _nan(x: float | None) -> float:
 
 def _interval(samples: np.ndarray) -> list[float | None]:
     """Central 95 % of bootstrap samples. A resample with no value (``nan``: its mean speed
-    stayed positive) lies beyond the largest load: it counts as ``+inf``, and an end of the
-    interval that falls on one is unknown (``None``)."""
-    x = np.where(np.isfinite(samples), samples, np.inf)
+    stayed positive) lies beyond the largest load: it counts as ``+inf``; one below the smallest
+    load is ``-inf``; an end of the interval that falls on either is unknown (``None``)."""
+    x = np.where(np.isnan(samples), np.inf, samples)
     lo = np.quantile(x, 0.025, method="lower")
     hi = np.quantile(x, 0.975, method="higher")
     return [_num(lo), _num(hi)]
@@ -224,7 +296,7 @@ def _physical(out: dict, sc) -> dict:
     def conv(v, unit):
         if isinstance(v, list):
             return [conv(x, unit) for x in v]
-        return None if v is None else v * unit
+        return None if v is None else _num(v * unit)
 
     si = {"loads_Nm": conv(out["loads"], sc.torque)}
     si["mean_omega_rad_s"] = conv(out["mean_omega"], sc.omega_scale)
@@ -272,7 +344,11 @@ def member_sweep(
         for k in order[branch]:
             t0 = state.t
             run = dataclasses.replace(cfg, load_torque=float(loads[k]), t_end=t0 + duration)
-            stats, final, _tail = run_member(run, state, member, t0 + discard, should_stop)
+            try:
+                stats, final, _tail = run_member(run, state, member, t0 + discard, should_stop)
+            except CappedRun as ex:
+                ex.load = float(loads[k])
+                raise
             got[k] = stats
             state = _continued(final, cfg.omega_s)
         out[branch] = [got[k] for k in range(len(loads))]
@@ -313,8 +389,8 @@ def torque_speed(
     Raises
     ------
     InputError
-        When the scene has no ``torsion`` effect, does not stop on time, or is not the exact
-        bouncing model.
+        When the scene has no ``torsion`` effect, does not stop on time, is not the exact
+        bouncing model, or a member stops at ``stop.max_events`` before the end of a load's run.
     """
     t_from, t_end = ensemble_window(scene)
     if "torsion" not in scene.effects:
@@ -330,7 +406,12 @@ def torque_speed(
     def one(m: int) -> dict[str, list[MemberStats]]:
         return member_sweep(cfg, scene.initial, m, loads, discard, duration, branches, should_stop)
 
-    results = map_on_threads(one, range(members), cores, on_member)
+    try:
+        results = map_on_threads(one, range(members), cores, on_member)
+    except CappedRun as ex:
+        raise capped_error(
+            scene, ex, f" (load tau_L = {getattr(ex, 'load', math.nan):.6g})"
+        ) from None
     curve = {
         b: [
             EnsembleStats([r[b][k] for r in results], discard, t_end - t_from, True, scene.scales)
@@ -355,10 +436,11 @@ CURVE_QUANTITIES = (
 )
 
 
-def to_dataset(scene: Scene, curve: LoadCurve, wall_time_s: float):
+def to_dataset(scene: Scene, curve: LoadCurve, wall_time_s: float, summary: dict | None = None):
     """The load curve as an xarray Dataset (docs/formats.md): per branch and load the ensemble
     means with their 95 % intervals, per member the speed and output power, the audit residuals,
-    and the derived quantities as attributes, with the scene's provenance."""
+    and the derived quantities as attributes, with the scene's provenance. ``summary`` is
+    ``curve.summary()`` when the caller has it already (its bootstrap is not run twice)."""
     import xarray as xr
 
     from ..analysis.statistics import AUDIT, QUANTITIES
@@ -406,7 +488,7 @@ def to_dataset(scene: Scene, curve: LoadCurve, wall_time_s: float):
     ds = xr.Dataset(data, coords=coords)
     ds.attrs.update(base_attrs(f"bouncedisk load characteristic of scene '{scene.name}'"))
     ds.attrs.update(scene_attrs(scene))
-    summary = curve.summary()
+    summary = curve.summary() if summary is None else summary
     for k in DERIVED:
         for key in (k, *(f"{k}{si}" for si in ("_rad_s", "_Nm", "_W"))):
             if key in summary:
@@ -488,7 +570,10 @@ def readings_from_rest(
     for j, load in enumerate(loads):
         seed = cfg.seed + j + 1 if independent else cfg.seed
         run = dataclasses.replace(cfg, load_torque=float(load), seed=seed)
-        members = run_ensemble(run, scene.initial, scene.ensemble.members, t_from, cores=cores)
+        try:
+            members = run_ensemble(run, scene.initial, scene.ensemble.members, t_from, cores=cores)
+        except CappedRun as ex:
+            raise capped_error(scene, ex, f" (load tau_L = {float(load):.6g})") from None
         out.append(EnsembleStats(members, scene.stats.discard, t_end - t_from, True, scene.scales))
     return out
 
