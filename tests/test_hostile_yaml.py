@@ -1,4 +1,4 @@
-"""Hostile YAML is one line, exit 2, never a RecursionError traceback (issue 37 item 13)."""
+"""Hostile YAML is one line, exit 2, never a RecursionError traceback."""
 
 from __future__ import annotations
 

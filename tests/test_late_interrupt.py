@@ -1,5 +1,5 @@
 """An interrupt as a finished command exits: either the command counts as done (exit 0, its
-output kept) or as interrupted (exit 130, a message, no output), never both (issue 37 item 14)."""
+output kept) or as interrupted (exit 130, a message, no output), never both."""
 
 from __future__ import annotations
 

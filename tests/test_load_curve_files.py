@@ -1,5 +1,5 @@
 """Load-curve files (docs/formats.md): bounded like run-ups, and their sidecars read as a
-scene's fields are (issue 37 items 9 and 14)."""
+scene's fields are."""
 
 from __future__ import annotations
 

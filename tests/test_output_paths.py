@@ -1,5 +1,5 @@
 """Paths the user names: a folder where a data file is due, a dangling link as an output, an
-empty size (issue 37 items 8 and 14)."""
+empty size."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The public API refuses what the engine cannot run, before it runs (issue 37 item 12)."""
+"""The public API refuses what the engine cannot run, before it runs."""
 
 from __future__ import annotations
 

@@ -49,7 +49,7 @@ def _json(capsys) -> dict:
     return json.loads(capsys.readouterr().out, parse_constant=refuse)
 
 
-# ------------------------------------------------ items 2, 3: the user's effects, in every form
+# ------------------------------------------------ the user's effects, in every form
 def test_set_effects_reach_the_curve(tmp_path, capsys):
     """Before: the file's own effects were appended after the user's --set, so kinetic_static
     and mu_ratio were lost."""
@@ -123,7 +123,7 @@ def test_property_the_curve_runs_the_users_effects(chosen, cap, form):
     assert np.isfinite(curve.matrix("up", "mean_omega")).all()
 
 
-# ------------------------------------------------------- item 4: honest intervals at the edges
+# ------------------------------------------------------- honest intervals at the edges
 def test_one_member_has_no_intervals(tmp_path, capsys):
     """Before: stall_torque_ci95 [0.7394, 0.7394] from 2,000 resamples of one member."""
     args = ["torque-speed", _file(tmp_path), "--set", "ensemble.members=1", "--loads", "0:1:6"]
@@ -198,7 +198,7 @@ def test_property_derived_quantities_are_honest(members, steps, start, data):
             assert lo <= hi
 
 
-# ----------------------------------------------------- items 5, 6: loads in the scene's units
+# ----------------------------------------------------- loads in the scene's units
 @pytest.mark.parametrize(
     "loads,extra",
     [

@@ -87,6 +87,7 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the console script."""
     _install_signal_handlers()
     parser = build_parser()
+    console = argv is None  # the console script: this process ends with the command
     argv = sys.argv[1:] if argv is None else list(argv)
     args, extra = parser.parse_known_args(argv)
     args.argv = argv
@@ -109,7 +110,7 @@ def main(argv: list[str] | None = None) -> int:
     if kept:  # interrupted or failed while recording the run: the outputs stay
         names = ", ".join(str(p) for p in kept)
         print(f"bouncedisk: the outputs were written and kept: {names}", file=sys.stderr)
-    if argv is None and code == 0:
+    if console and code == 0:
         _finished()
     return code
 
