@@ -380,6 +380,7 @@ def to_dataset(scene: Scene, curve: LoadCurve, wall_time_s: float):
             ds.attrs[key] = summary[key]
     for key in ("stall_torque_bracket", "max_power_bracket"):
         ds.attrs[key] = [_nan(x) for x in summary[key]]
+    ds.attrs["stats_discard"], ds.attrs["stats_duration"] = summary["discard"], summary["duration"]
     ds.attrs["branches_differ_at"] = summary.get("branches_differ_at") or "none"
     if scene.physical is not None:
         sc = scene.physical.scales()
