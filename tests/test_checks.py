@@ -13,11 +13,11 @@ import math
 import numpy as np
 import pytest
 import xarray as xr
+from load_scenes import small_load_scene
 
 from bouncedisk.cli import main
 from bouncedisk.io.netcdf import write_dataset
 from bouncedisk.model.errors import InputError
-from bouncedisk.model.scene import scene_from_mapping
 from bouncedisk.studies import reproduction as checks
 from bouncedisk.studies.torque_speed import to_dataset, torque_speed
 
@@ -109,24 +109,7 @@ def _results(tmp_path):
     res = tmp_path / "results"
     for sub in ("load", "bands", "stats", "fit"):
         (res / sub).mkdir(parents=True)
-    scene = scene_from_mapping(
-        {
-            "name": "load_fig3",
-            "parameters": {
-                "e": 0.3,
-                "omega_s": 1.5,
-                "r_phi": 0.01,
-                "psi": 0.0,
-                "e_sigma": 1e-9,
-                "load_torque": 0.0,
-            },  # fmt: skip
-            "effects": ["impacts", "contact", "torsion", "restitution_noise", "load"],
-            "stop": {"time": 300.0},
-            "ensemble": {"members": 2, "seed": 1},
-            "stats": {"discard": 50.0},
-        },
-        "<test>",
-    )
+    scene = small_load_scene(0.3)
     write_dataset(to_dataset(scene, torque_speed(scene, [0.0, 1.1]), 0.0), res / "load" / "a.nc")
     band = xr.Dataset(
         {"trend_steady": ("member", [90.0, 91.0]), "omega_mean": ("time", [0.0, 1.0])},

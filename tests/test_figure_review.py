@@ -9,12 +9,12 @@ import numpy as np
 import pandas as pd
 import pytest
 import xarray as xr
+from load_scenes import small_load_scene
 from matplotlib.figure import Figure
 
 from bouncedisk.figures.cost import fig_scaling, fig_stats_cost, fig_work_precision
 from bouncedisk.figures.load import fig_torque_speed
 from bouncedisk.figures.review import legend_overlaps, panel_problems
-from bouncedisk.model.scene import scene_from_mapping
 from bouncedisk.studies.torque_speed import motor_scene, to_dataset, torque_speed
 
 
@@ -52,27 +52,9 @@ def test_the_review_finds_a_legend_over_the_data():
 
 
 # ----------------------------------------------------------------------------- load curves
-def _raw(e: float, loads_reach: float):
-    return {
-        "name": "small_load",
-        "parameters": {
-            "e": e,
-            "omega_s": 1.5,
-            "r_phi": 0.01,
-            "psi": 0.0,
-            "e_sigma": 1e-9,
-            "load_torque": 0.0,
-        },  # fmt: skip
-        "effects": ["impacts", "contact", "torsion", "restitution_noise", "load"],
-        "stop": {"time": 600.0},
-        "ensemble": {"members": 3, "seed": 1},
-        "stats": {"discard": 100.0},
-    }
-
-
 @pytest.fixture(scope="module")
 def curves() -> dict[str, xr.Dataset]:
-    scene = scene_from_mapping(_raw(0.6, 1.0), "<test>")
+    scene = small_load_scene(0.6, members=3, time=600.0, discard=100.0)
     past = to_dataset(scene, torque_speed(scene, np.linspace(0.0, 1.1, 6)), 0.0)
     short = to_dataset(scene, torque_speed(scene, [0.0, 0.1, 0.2]), 0.0)
     from bouncedisk.model.params import Parameters

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from load_scenes import small_load_scene
 
-from bouncedisk.model.scene import scene_from_mapping
 from bouncedisk.studies.load_summary import (
     ONE_MEMBER,
     derived,
@@ -192,27 +192,6 @@ def test_property_the_stall_torque_lies_in_a_sign_change_and_no_interval_is_from
         assert d["max_power"] == pytest.approx(float(np.max(mean * loads)))
 
 
-def _small_scene(e: float, members: int, time: float = 300.0, discard: float = 50.0):
-    return scene_from_mapping(
-        {
-            "name": "small",
-            "parameters": {
-                "e": e,
-                "omega_s": 1.5,
-                "r_phi": 0.01,
-                "psi": 0.0,
-                "e_sigma": 1e-9,
-                "load_torque": 0.0,
-            },  # fmt: skip
-            "effects": ["impacts", "contact", "torsion", "restitution_noise", "load"],
-            "stop": {"time": time},
-            "ensemble": {"members": members, "seed": 1},
-            "stats": {"discard": discard},
-        },
-        "<small>",
-    )
-
-
 @settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
     st.floats(0.3, 0.8),
@@ -221,7 +200,7 @@ def _small_scene(e: float, members: int, time: float = 300.0, discard: float = 5
 )
 def test_property_small_scenes_never_report_a_root_outside_a_sign_change(e, members, loads):
     loads = np.sort(np.asarray(loads))
-    s = torque_speed(_small_scene(e, members), loads, branches=("up",)).summary()
+    s = torque_speed(small_load_scene(e, members), loads, branches=("up",)).summary()
     mean = np.asarray(s["mean_omega"], float)
     if members < 2:
         assert s["stall_torque_ci95"] == [None, None] and s["interval_note"] == ONE_MEMBER
@@ -244,7 +223,7 @@ def test_design_map_and_torque_speed_stall_torques_agree_at_the_fig3_point():
     rotor decelerates at >= tau_L - 1 (docs/model.md), so a run started at the speed W has a
     mean speed <= 0 over [discard, D] from tau_L = 1 + 2 W / (D + discard): the window's
     resolution, which the intervals' upper ends respect."""
-    scene = _small_scene(0.3, 2, time=3000.0, discard=500.0)
+    scene = small_load_scene(0.3, 2, time=3000.0, discard=500.0)
     res = 0.005
     # what the design map runs (studies/sensitivity.py, MotorModel._load) and the command
     coarse = refined_torque_speed(scene, [0.0, 0.2, 0.5, 1.3], res, branches=("up",)).summary()
