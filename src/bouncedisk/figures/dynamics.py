@@ -94,6 +94,7 @@ def fig_bifurcation(up: xr.Dataset, down: xr.Dataset) -> Figure:
         ax2.plot(e, lam, "-", color=color, lw=0.8, label=f"{label}, mean and 95% interval")
         reset = ds["lyapunov_reset_fraction"].values > 0.5
         ax2.plot(e[reset], np.full(reset.sum(), -2.4), "v", ms=3, color=color)
+    top = max(float(np.nanmax(ds["lyapunov_ci_high"].values, initial=0.0)) for ds in (up, down))
     g = w * w
     e1 = _param_where(lambda e: period_n_threshold(1, e), g)
     epd = _param_where(lambda e: period_doubling_threshold(1, e), g)
@@ -104,7 +105,7 @@ def fig_bifurcation(up: xr.Dataset, down: xr.Dataset) -> Figure:
             ax.text(x + 0.004, 3.0, text, ha="left", va="center", fontsize=8, color="0.3")
     ax.set_ylim(0, TWO_PI)
     ax.set_ylabel(r"impact phase $\omega_s t$ mod $2\pi$")
-    fig.suptitle(
+    ax.set_title(
         f"bifurcation diagram by continuation, $\\omega_s$ = {w:.3g} ($\\Gamma$ = {g:.3g})",
         fontsize=10,
     )
@@ -112,7 +113,7 @@ def fig_bifurcation(up: xr.Dataset, down: xr.Dataset) -> Figure:
     fig.legend(*ax.get_legend_handles_labels(), loc="outside upper center", ncol=3, fontsize=7,
                markerscale=3)  # fmt: skip
     ax2.axhline(0, color="k", lw=0.6)
-    ax2.set_ylim(-2.6, 1.5)
+    ax2.set_ylim(-2.6, max(1.5, 1.05 * top))  # holds every interval (the ▼ row at -2.4)
     ax2.set_ylabel("Lyapunov exponent\n(per impact; ▼ = −∞)")
     ax2.set_xlabel("coefficient of restitution $e$")
     ax2.legend(loc="upper left", fontsize=7)

@@ -61,6 +61,7 @@ def fig_torque_speed(ds: xr.Dataset) -> Figure:
     ``stall_torque_state`` and ``max_power_state``).
     """
     kt, kw, kp, xlab, ylab, plab = _units(ds)
+    tu, wu, pu = (" mN·m", " rad/s", " mW") if "torque_scale_Nm" in ds.attrs else ("", "", "")
     load = ds["load_torque"].values * kt
     fig = Figure(figsize=(7.5, 8.0), layout="constrained")
     axes = fig.subplots(3, 1, sharex=True)
@@ -81,13 +82,17 @@ def fig_torque_speed(ds: xr.Dataset) -> Figure:
                     color=color, label=text)  # fmt: skip
         ax.axhline(0.0, color="0.5", lw=0.6)
         ax.set_ylabel(label)
-    _stall(axes[0], ds, kt)
-    _max_power(axes[1], ds, kt, kp)
+    _stall(axes[0], ds, kt, tu)
+    _max_power(axes[1], ds, kt, kp, tu, pu)
     axes[0].legend(fontsize=8, loc="best")
     axes[1].legend(fontsize=8, loc="best")
     axes[2].set_xlabel(xlab)
     members = ds.sizes.get("member", 0)
-    bands = "95% bands of zero width: a periodic attractor" if _zero_width(ds) else "95% bands"
+    if _zero_width(ds):
+        bands = "95% bands of zero width: a periodic attractor"
+    else:
+        half = np.nanmax(ds["mean_omega_ci95_high"] - ds["mean_omega_ci95_low"]) / 2 * kw
+        bands = f"95% bands, the mean speed's half-width at most {half:.2g}{wu}"
     fig.suptitle(
         f"Load characteristic: e = {ds.attrs.get('e', np.nan):.3g}, "
         f"$\\omega_s$ = {ds.attrs.get('omega_s', np.nan):.4g}, "
@@ -103,7 +108,7 @@ def _interval(ds: xr.Dataset, name: str) -> tuple[float, float]:
     return float(lo), float(hi)
 
 
-def _stall(ax, ds: xr.Dataset, kt: float) -> None:
+def _stall(ax, ds: xr.Dataset, kt: float, tu: str) -> None:
     """The stall torque: a line with its interval shaded, or a note where it lies."""
     x = float(ds.attrs.get("stall_torque", np.nan))
     state = str(ds.attrs.get("stall_torque_state", "found" if np.isfinite(x) else "none"))
@@ -111,13 +116,13 @@ def _stall(ax, ds: xr.Dataset, kt: float) -> None:
         ax.plot([], [], " ", label=f"stall torque: {STATE_TEXT.get(state, state)}")
         return
     lo, hi = _interval(ds, "stall_torque")
-    ax.axvline(x * kt, color="k", lw=0.8, ls="--", label=f"stall torque {x * kt:.3g}")
+    ax.axvline(x * kt, color="k", lw=0.8, ls="--", label=f"stall torque {x * kt:.3g}{tu}")
     if np.isfinite(lo) and np.isfinite(hi):
         ax.axvspan(lo * kt, hi * kt, color="k", alpha=0.12, lw=0,
                    label=f"its 95% interval [{lo * kt:.3g}, {hi * kt:.3g}]")  # fmt: skip
 
 
-def _max_power(ax, ds: xr.Dataset, kt: float, kp: float) -> None:
+def _max_power(ax, ds: xr.Dataset, kt: float, kp: float, tu: str, pu: str) -> None:
     """The maximum-power point (a star) with its load's interval, where the power has a
     maximum among the loads; a note where it has none."""
     x = float(ds.attrs.get("max_power_load", np.nan))
@@ -126,7 +131,7 @@ def _max_power(ax, ds: xr.Dataset, kt: float, kp: float) -> None:
         ax.plot([], [], " ", label=f"max. power: {STATE_TEXT.get(state, state)}")
         return
     p = float(ds.attrs.get("max_power", np.nan)) * kp
-    ax.plot([x * kt], [p], "k*", ms=9, label=f"max. power {p:.3g} at load {x * kt:.3g}")
+    ax.plot([x * kt], [p], "k*", ms=9, label=f"max. power {p:.3g}{pu} at load {x * kt:.3g}{tu}")
     lo, hi = _interval(ds, "max_power_load")
     if np.isfinite(lo) and np.isfinite(hi):
         ax.axvspan(lo * kt, hi * kt, color="k", alpha=0.12, lw=0,

@@ -6,6 +6,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 from matplotlib.figure import Figure
+from matplotlib.ticker import FixedLocator, FormatStrFormatter, NullLocator
 
 from .common import COLORS
 from .joint_fit import fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
@@ -143,6 +144,10 @@ def fig_fit_profiles(fitted: xr.Dataset) -> Figure:
         ax.set_yscale("symlog", linthresh=10.0)
         top = float(np.nanmax(y)) if np.isfinite(y).any() else 10.0
         ax.set_ylim(-0.5, max(10.0, top * 1.3))
+        ticks = [t for t in (0, 2, 4, 6, 8, 10, 20, 50, 100, 200, 500, 1000) if t <= top * 1.3]
+        ax.yaxis.set_major_locator(FixedLocator(ticks))
+        ax.yaxis.set_major_formatter(FormatStrFormatter("%g"))
+        ax.yaxis.set_minor_locator(NullLocator())
         label = PARAM_LABELS.get(n, n)
         ax.set_xlabel(f"{label} [{a['units']}]")
         tag = "" if a.get("identified", 1) else " (not identified)"
