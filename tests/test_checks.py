@@ -178,3 +178,13 @@ def test_check_results_with_a_file_missing_a_field_is_one_line_and_exit_2(
     lines = out.err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("bouncedisk: error: ")
     assert "prototype.nc" in lines[0] and "chi2" in lines[0] and "Traceback" not in out.err
+
+
+def test_the_speed_may_not_rise_with_the_load_below_the_bound_only():
+    c = {
+        "loads": np.array([0.0, 0.5, 0.9, 1.01, 1.02]),
+        "low": np.array([90.0, 80.0, 85.0, -400.0, -70.0]),
+        "high": np.array([91.0, 81.0, 86.0, -390.0, -60.0]),
+    }
+    # 0.9 rises above 0.5's interval; 1.02 above 1.01's, but past the bound it may
+    assert checks._rises(c) == [0.9]

@@ -128,7 +128,8 @@ def test_refinement_narrows_the_bracket_to_the_resolution_around_the_root():
     curve = _Curve(np.linspace(0.0, 1.0, 5))
     calls = []
 
-    def sweep(loads, omega0):
+    def sweep(loads, omega0, branch):
+        assert branch == "up"  # the curve has no down branch
         calls.append((loads.copy(), omega0))
         return _Curve(loads)
 
@@ -149,10 +150,10 @@ def test_refinement_narrows_the_bracket_to_the_resolution_around_the_root():
     assert refinement_loads(out.loads, d, 1e-3).size == 0
 
 
-def test_merged_keeps_every_branch_sorted_and_drops_the_restart():
+def test_merged_keeps_every_branch_sorted():
     a = _Curve([0.0, 0.5, 1.0])
-    b = _Curve([0.5, 0.6, 0.7])
-    m = merged(a, b, skip_first=True)
+    b = _Curve([0.6, 0.7])
+    m = merged(a, b)
     assert list(m.loads) == [0.0, 0.5, 0.6, 0.7, 1.0]
     np.testing.assert_array_equal(m.matrix("up", "x")[:, 2], _Curve.factors * (_Curve.root - 0.6))
 
@@ -238,3 +239,26 @@ def test_design_map_and_torque_speed_stall_torques_agree_at_the_fig3_point():
     # unrefined, the map's loads put the root far below the bound
     plain = torque_speed(scene, [0.0, 0.2, 0.5, 1.3], branches=("up",)).summary()
     assert plain["stall_torque_ci95"][1] == 1.3 and plain["stall_torque"] < 1.0
+
+
+def test_refinement_sweeps_the_down_branch_from_the_load_above():
+    def both(loads):
+        c = _Curve(loads)
+        c.branches["down"] = [x + 1.0 for x in c.branches["up"]]
+        return c
+
+    calls = []
+
+    def sweep(loads, omega0, branch):
+        calls.append((branch, loads.copy(), omega0))
+        return both(loads)
+
+    out = refine(both(np.linspace(0.0, 1.0, 5)), sweep, resolution=0.1, rounds=1)
+    assert len(out.branches["down"]) == len(out.loads) == len(out.branches["up"])
+    for branch, loads, omega0 in calls:
+        start = loads[0] if branch == "up" else loads[-1]  # the curve's load below / above
+        shift = 0.0 if branch == "up" else 1.0
+        assert omega0 == pytest.approx(100.0 * (_Curve.root - start) + shift)
+    # every added load holds the sweep's own reading on each branch, not the restart's
+    np.testing.assert_allclose(out.matrix("down", "x") - out.matrix("up", "x"), 1.0)
+    assert {b for b, _, _ in calls} == {"up", "down"}

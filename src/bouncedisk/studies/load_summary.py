@@ -239,19 +239,21 @@ def _boot_width(lo, hi, a: float, b: float) -> float:
 
 def refine(
     curve,
-    sweep: Callable[[np.ndarray, float], object],
+    sweep: Callable[[np.ndarray, float, str], object],
     resolution: float,
     rounds: int = REFINE_ROUNDS,
     points: int = REFINE_POINTS,
 ):
     """``curve`` with loads added where the stall torque and the maximum power lie.
 
-    ``curve`` is a :class:`~bouncedisk.studies.torque_speed.LoadCurve`; ``sweep(loads,
-    omega0)`` returns the curve of the same ensemble at ``loads`` (increasing) started at the
-    mean speed ``omega0``. Each round asks :func:`refinement_loads` for loads inside the
-    brackets and sweeps them from the largest load of the curve below them, started at the
-    up branch's mean speed there (which stands in for the continuation's state; its own reading
-    there is dropped), until the brackets are resolved or after ``rounds`` rounds.
+    ``curve`` is a :class:`~bouncedisk.studies.torque_speed.LoadCurve`; ``sweep(loads, omega0,
+    branch)`` returns the curve of the same ensemble at ``loads`` (increasing) on that one
+    branch, its members started at the mean speed ``omega0``. Each round asks
+    :func:`refinement_loads` for loads inside the brackets; a group of them between two loads
+    of the curve is swept up from the load below, started at the up branch's mean speed there,
+    and down from the load above, started at the down branch's (standing in for the
+    continuation's state; the readings at those two loads are dropped). Until the brackets are
+    resolved, or after ``rounds`` rounds.
     """
     for _ in range(rounds):
         loads = np.asarray(curve.loads, float)
@@ -259,10 +261,17 @@ def refine(
         if new.size == 0:
             break
         for group in _groups(loads, new):
-            start = int(np.searchsorted(loads, group[0]) - 1)
-            omega0 = float(np.nanmean(curve.matrix("up", "mean_omega")[:, start]))
-            extra = sweep(np.concatenate(([loads[start]], group)), omega0)
-            curve = merged(curve, extra, skip_first=True)
+            below = int(np.searchsorted(loads, group[0]) - 1)
+            branches = {}
+            for branch in curve.branches:
+                k = below if branch == "up" else below + 1
+                omega0 = float(np.nanmean(curve.matrix(branch, "mean_omega")[:, k]))
+                ends = np.concatenate(
+                    ([loads[k]], group) if branch == "up" else (group, [loads[k]])
+                )
+                got = sweep(np.sort(ends), omega0, branch).branches[branch]
+                branches[branch] = got[1:] if branch == "up" else got[:-1]
+            curve = merged(curve, type(curve)(group, branches))
             loads = np.asarray(curve.loads, float)
     return curve
 
@@ -279,14 +288,12 @@ def summary_of(curve) -> dict:
     return derived(curve.loads, curve.matrix("up", "mean_omega"), curve.power("up"), MOMENTUM_BOUND)
 
 
-def merged(curve, extra, skip_first: bool = False):
-    """One curve of the loads of both (``extra``'s first load left out with ``skip_first``),
-    sorted by load, with the branches ``curve`` has."""
-    first = 1 if skip_first else 0
-    loads = np.concatenate((curve.loads, extra.loads[first:]))
+def merged(curve, extra):
+    """One curve of the loads of both, sorted by load, with the branches ``curve`` has."""
+    loads = np.concatenate((curve.loads, extra.loads))
     order = np.argsort(loads, kind="stable")
     branches = {}
     for b, stats in curve.branches.items():
-        every = list(stats) + list(extra.branches[b][first:])
+        every = list(stats) + list(extra.branches[b])
         branches[b] = [every[i] for i in order]
     return type(curve)(loads[order], branches)

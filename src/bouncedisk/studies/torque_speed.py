@@ -289,17 +289,17 @@ def refined_torque_speed(
     maximum power lie until their brackets are no wider than the ensemble's resolution or
     ``resolution`` (:func:`bouncedisk.studies.load_summary.refine`, at most ``rounds`` rounds).
 
-    An added group of loads is swept (both ``branches``) from the curve's load below it, its
-    members started at the up branch's mean speed there: each round costs ``REFINE_POINTS + 1``
-    loads per bracket, not a new curve. The down branch at an added load continues from the
-    group's largest load, not from the curve's.
+    An added group of loads is swept up from the curve's load below it, its members started at
+    the up branch's mean speed there, and down from the load above, started at the down
+    branch's: each round costs ``REFINE_POINTS + 1`` loads per bracket and branch, not a new
+    curve.
     """
     curve = torque_speed(scene, loads, cores, branches, on_member, should_stop)
 
-    def sweep(extra: np.ndarray, omega0: float) -> LoadCurve:
+    def sweep(extra: np.ndarray, omega0: float, branch: str) -> LoadCurve:
         start = dataclasses.replace(scene.initial, omega=omega0, u=None, v=None)
         moved = dataclasses.replace(scene, initial=start)
-        return torque_speed(moved, extra, cores, branches, None, should_stop)
+        return torque_speed(moved, extra, cores, (branch,), None, should_stop)
 
     return refine(curve, sweep, resolution, rounds)
 
