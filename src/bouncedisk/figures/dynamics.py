@@ -220,8 +220,10 @@ def fig_clipped_vs_bouncing(ds: xr.Dataset) -> Figure:
             )
         ax.set_ylabel(r"$\Omega$")
         ax.set_title(f"$\\psi$ = {p:.3g}", fontsize=10)
-        ax.legend(fontsize=7, loc="lower right", ncol=2)
     axes[-1].set_xlabel("time $t/t_c$")
+    # one legend for every panel, below them: the runs fill each panel's corners
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncol=2,
+               fontsize=7)  # fmt: skip
     fig.suptitle(
         "bouncing disk vs clipped spring contact (refs. [2, 3] of the paper): "
         f"e = {_param(ds, 'e'):.3g}, $\\omega_s$ = {_param(ds, 'omega_s'):.3g}",
