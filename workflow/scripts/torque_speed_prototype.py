@@ -35,5 +35,6 @@ with log_to(snakemake.log[0]) as log:
     ds.attrs["fit_file"] = "fit/prototype.nc (in the results folder)"
     write_dataset(ds, snakemake.output[0])
     s = curve.summary()
-    log.info("fitted motor %s: stall %s N*m, max power %s W", fitted, s.get("stall_torque_Nm"),
-             s.get("max_power_W"))  # fmt: skip
+    log.info("fitted motor %s: stall %s N*m %s (%s), max power %s W (%s), %d loads", fitted,
+             s.get("stall_torque_Nm"), s.get("stall_torque_Nm_ci95"), s["stall_torque_state"],
+             s.get("max_power_W"), s["max_power_state"], len(curve.loads))  # fmt: skip
