@@ -92,7 +92,10 @@ def test_motor_shards_join_to_the_one_job_result_bit_for_bit():
     # the loads start at 0, where the power is 0: the largest power over them is never negative
     assert np.all(one["max_power"].values >= 0.0)
     stall = one["stall_torque"].values
-    assert np.all((stall >= 0.0) & (stall <= 1.3))  # the speed is <= 0 by tau_L = 1.3 > 1
+    # the speed is <= 0 by tau_L = 1.3 > 1; a motor that runs backwards at no load has no stall
+    # torque (NaN, not 0: bouncedisk.studies.load_summary)
+    found = np.isfinite(stall)
+    assert found.any() and np.all((stall[found] > 0.0) & (stall[found] <= 1.3))
 
 
 def test_joining_refuses_missing_points():

@@ -8,6 +8,7 @@ rule reproduction_checks:
         sims=[f"{RES}/simulations/fig5.nc"],
         stats=expand(f"{RES}/stats/{{s}}.nc", s=CHECKED_STATS),
         band=f"{RES}/bands/fig5.nc",
+        load=expand(f"{RES}/load/{{c}}.nc", c=CHECKED_LOAD_CURVES),
         fit=f"{RES}/fit/prototype.nc",
         basins=[f"{RES}/basins/startup.nc"] if "basins" in config else [],
     output:

@@ -5,7 +5,8 @@ import time
 from bouncedisk.io.job_log import log_to
 from bouncedisk.io.netcdf import write_dataset
 from bouncedisk.model.scene import load_scene
-from bouncedisk.studies.torque_speed import scene_loads, to_dataset, torque_speed
+from bouncedisk.studies.load_summary import REFINE_ROUNDS
+from bouncedisk.studies.torque_speed import refined_torque_speed, scene_loads, to_dataset
 
 with log_to(snakemake.log[0]) as log:
     scene = load_scene(snakemake.input.scene)
@@ -14,8 +15,11 @@ with log_to(snakemake.log[0]) as log:
         scene, snakemake.params.spec["loads"], "workflow/config/config.yaml", "loads"
     )
     start = time.perf_counter()
-    curve = torque_speed(scene, loads, cores=snakemake.threads)
+    resolution = snakemake.params.spec.get("resolution")  # none: the loads as given
+    rounds = REFINE_ROUNDS if resolution is not None else 0
+    curve = refined_torque_speed(scene, loads, resolution or 0.0, rounds, cores=snakemake.threads)
     s = curve.summary()
     write_dataset(to_dataset(scene, curve, time.perf_counter() - start, s), snakemake.output[0])
-    log.info("%s: stall %s, max power %s at %s", scene.name, s["stall_torque"], s["max_power"],
-             s["max_power_load"])  # fmt: skip
+    log.info("%s: stall %s %s (%s), max power %s at %s (%s), %d loads", scene.name,
+             s["stall_torque"], s["stall_torque_ci95"], s["stall_torque_state"], s["max_power"],
+             s["max_power_load"], s["max_power_state"], len(curve.loads))  # fmt: skip

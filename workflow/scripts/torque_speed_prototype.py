@@ -8,7 +8,13 @@ import yaml
 from bouncedisk.io.job_log import log_to
 from bouncedisk.io.netcdf import write_dataset
 from bouncedisk.model.params import Parameters
-from bouncedisk.studies.torque_speed import motor_scene, parse_loads, to_dataset, torque_speed
+from bouncedisk.studies.load_summary import REFINE_ROUNDS
+from bouncedisk.studies.torque_speed import (
+    motor_scene,
+    parse_loads,
+    refined_torque_speed,
+    to_dataset,
+)
 
 with log_to(snakemake.log[0]) as log:
     spec = snakemake.params.spec
@@ -22,10 +28,13 @@ with log_to(snakemake.log[0]) as log:
     )  # fmt: skip
     loads = parse_loads(spec["loads"], "workflow/config/config.yaml", "prototype_load.loads")
     start = time.perf_counter()
-    curve = torque_speed(scene, loads, cores=snakemake.threads)
+    resolution = spec.get("resolution")  # none: the loads as given
+    rounds = REFINE_ROUNDS if resolution is not None else 0
+    curve = refined_torque_speed(scene, loads, resolution or 0.0, rounds, cores=snakemake.threads)
     ds = to_dataset(scene, curve, time.perf_counter() - start)
     ds.attrs["fit_file"] = "fit/prototype.nc (in the results folder)"
     write_dataset(ds, snakemake.output[0])
     s = curve.summary()
-    log.info("fitted motor %s: stall %s N*m, max power %s W", fitted, s.get("stall_torque_Nm"),
-             s.get("max_power_W"))  # fmt: skip
+    log.info("fitted motor %s: stall %s N*m %s (%s), max power %s W (%s), %d loads", fitted,
+             s.get("stall_torque_Nm"), s.get("stall_torque_Nm_ci95"), s["stall_torque_state"],
+             s.get("max_power_W"), s["max_power_state"], len(curve.loads))  # fmt: skip

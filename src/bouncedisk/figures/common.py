@@ -35,6 +35,6 @@ def _param(ds: xr.Dataset, name: str) -> float:
 def _title(ds: xr.Dataset) -> str:
     a = ds.attrs
     return (
-        f"e = {a.get('e'):.3g}, ω_s = {a.get('omega_s'):.3g}, R_φ = {a.get('r_phi'):.3g}, "
-        f"ψ = {a.get('psi'):.3g}"
+        f"e = {a.get('e'):.3g}, $\\omega_s$ = {a.get('omega_s'):.3g}, "
+        f"$R_\\phi$ = {a.get('r_phi'):.3g}, $\\psi$ = {a.get('psi'):.3g}"
     )

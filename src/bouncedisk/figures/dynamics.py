@@ -24,7 +24,9 @@ def fig_poincare(datasets: dict[str, xr.Dataset]) -> Figure:
     for j, (label, ds) in enumerate(datasets.items()):
         impacts = ds["kind"].values == 0 if "kind" in ds else slice(None)
         ax = axes[0, j]
-        ax.plot(ds["phase"].values[impacts], ds["v_rel"].values[impacts], ",", color="k", alpha=0.6)
+        n = int(np.size(ds["phase"].values[impacts]))
+        ax.plot(ds["phase"].values[impacts], ds["v_rel"].values[impacts], ".", ms=1.0, mew=0,
+                color="k", alpha=0.6, label=f"all {n} impacts")  # fmt: skip
         ax.plot(
             ds["phase"].values[impacts][-50:],
             ds["v_rel"].values[impacts][-50:],
@@ -37,14 +39,17 @@ def fig_poincare(datasets: dict[str, xr.Dataset]) -> Figure:
         ax.set_xlabel(r"impact phase $\omega_s t$ mod $2\pi$")
         ax.set_ylabel(r"relative impact velocity $v_s - v^-$")
         ax.set_title(f"impact map, {label}", fontsize=10)
-        ax.legend(fontsize=8, loc="upper right")
+        ax.legend(
+            fontsize=8, loc="upper left", bbox_to_anchor=(0.0, -0.16), ncol=2, markerscale=2
+        )  # below the axis: the map fills the panel
         ax = axes[1, j]
         if "strobe_u" in ds:
             su, sv = ds["strobe_u"].values, ds["strobe_v"].values
-            ax.plot(su, sv, ".", ms=1.0, color=COLORS["rotor"])
+            ax.plot(su, sv, ".", ms=1.0, color=COLORS["rotor"], label=f"all {su.size} periods")
             ax.plot(su[-50:], sv[-50:], "o", ms=3, color=COLORS["fit"], label="last 50 periods")
             ax.margins(0.08)
-            ax.legend(fontsize=8, loc="best")
+            ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(0.0, -0.16), ncol=2,
+                      markerscale=2)  # fmt: skip
         ax.set_xlabel("rotor position at phase 0")
         ax.set_ylabel("rotor velocity at phase 0")
         ax.set_title(f"stroboscopic map, {label}", fontsize=10)
@@ -89,20 +94,26 @@ def fig_bifurcation(up: xr.Dataset, down: xr.Dataset) -> Figure:
         ax2.plot(e, lam, "-", color=color, lw=0.8, label=f"{label}, mean and 95% interval")
         reset = ds["lyapunov_reset_fraction"].values > 0.5
         ax2.plot(e[reset], np.full(reset.sum(), -2.4), "v", ms=3, color=color)
+    top = max(float(np.nanmax(ds["lyapunov_ci_high"].values, initial=0.0)) for ds in (up, down))
     g = w * w
     e1 = _param_where(lambda e: period_n_threshold(1, e), g)
     epd = _param_where(lambda e: period_doubling_threshold(1, e), g)
-    for x, text in ((e1, "Γ₁"), (epd, "Γ_PD")):
+    for x, text in ((e1, r"$\Gamma_1$"), (epd, r"$\Gamma_{PD}$")):
         if math.isfinite(x):
             for a in (ax, ax2):
                 a.axvline(x, color="0.4", lw=0.7, ls="--")
             ax.text(x + 0.004, 3.0, text, ha="left", va="center", fontsize=8, color="0.3")
     ax.set_ylim(0, TWO_PI)
     ax.set_ylabel(r"impact phase $\omega_s t$ mod $2\pi$")
-    ax.set_title(f"bifurcation diagram by continuation, ω_s = {w:.3g} (Γ = {g:.3g})", fontsize=10)
-    ax.legend(loc="upper right", fontsize=7, markerscale=3)
+    ax.set_title(
+        f"bifurcation diagram by continuation, $\\omega_s$ = {w:.3g} ($\\Gamma$ = {g:.3g})",
+        fontsize=10,
+    )
+    # above the panel: the phases fill it at every e
+    fig.legend(*ax.get_legend_handles_labels(), loc="outside upper center", ncol=3, fontsize=7,
+               markerscale=3)  # fmt: skip
     ax2.axhline(0, color="k", lw=0.6)
-    ax2.set_ylim(-2.6, 1.5)
+    ax2.set_ylim(-2.6, max(1.5, 1.05 * top))  # holds every interval (the ▼ row at -2.4)
     ax2.set_ylabel("Lyapunov exponent\n(per impact; ▼ = −∞)")
     ax2.set_xlabel("coefficient of restitution $e$")
     ax2.legend(loc="upper left", fontsize=7)
@@ -177,7 +188,8 @@ def fig_speed_vs_psi(ds: xr.Dataset) -> Figure:
     r = ds["r_phi"]
     half = float(np.nanmax(r * (ds["mean_omega_ci_high"] - ds["mean_omega_ci_low"]) / 2))
     ax.set_title(
-        f"motor curve: e = {_param(ds, 'e'):.3g}, ω_s = {_param(ds, 'omega_s'):.3g}; bands: 95% "
+        f"motor curve: e = {_param(ds, 'e'):.3g}, $\\omega_s$ = {_param(ds, 'omega_s'):.3g}; "
+        "bands: 95% "
         f"interval over {members} members (half-width at most {half:.2g})",
         fontsize=9,
     )
@@ -207,12 +219,14 @@ def fig_clipped_vs_bouncing(ds: xr.Dataset) -> Figure:
                 label=f"{model} model" + (" (one run)" if model == "bouncing" else ""),
             )
         ax.set_ylabel(r"$\Omega$")
-        ax.set_title(f"ψ = {p:.3g}", fontsize=10)
-        ax.legend(fontsize=7, loc="lower right", ncol=2)
+        ax.set_title(f"$\\psi$ = {p:.3g}", fontsize=10)
     axes[-1].set_xlabel("time $t/t_c$")
+    # one legend for every panel, below them: the runs fill each panel's corners
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncol=2,
+               fontsize=7)  # fmt: skip
     fig.suptitle(
         "bouncing disk vs clipped spring contact (refs. [2, 3] of the paper): "
-        f"e = {_param(ds, 'e'):.3g}, ω_s = {_param(ds, 'omega_s'):.3g}",
+        f"e = {_param(ds, 'e'):.3g}, $\\omega_s$ = {_param(ds, 'omega_s'):.3g}",
         fontsize=10,
     )
     return fig

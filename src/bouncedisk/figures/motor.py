@@ -6,6 +6,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 from matplotlib.figure import Figure
+from matplotlib.ticker import FixedLocator, FormatStrFormatter, NullLocator
 
 from .common import COLORS
 from .joint_fit import fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
@@ -77,12 +78,13 @@ def _fig5_fitted(ax, axr, fitted: xr.Dataset) -> None:
         axr.fill_between(t, fitted["residual_band_low"].values,
                          fitted["residual_band_high"].values, color=COLORS["fit"], alpha=0.3,
                          lw=0, label="95% of the members + noise")  # fmt: skip
+        # said in the title, not a legend over the residuals
+        title = "band: 95% of the members + noise"
         if "residual_outside_fraction" in fitted.attrs:
             a = fitted.attrs
-            axr.set_title(f"outside the band: {100 * a['residual_outside_fraction']:.1f} % of the "
-                          f"samples, longest run {1e3 * a['residual_longest_run_s']:.2g} ms",
-                          fontsize=7)  # fmt: skip
-        axr.legend(loc="upper right", fontsize=7)
+            title += (f"; outside it: {100 * a['residual_outside_fraction']:.1f} % of the "
+                      f"samples, longest run {1e3 * a['residual_longest_run_s']:.2g} ms")  # fmt: skip
+        axr.set_title(title, fontsize=7)
     axr.plot(t, resid, color="k", lw=0.4)
     axr.axhline(0, color=COLORS["fit"], lw=0.8)
     axr.set_ylabel("data − model [rad/s]")
@@ -105,31 +107,53 @@ def _fig5_fitted(ax, axr, fitted: xr.Dataset) -> None:
     )
 
 
+#: Parameter names as the figures write them.
+PARAM_LABELS = {
+    "e": "$e$",
+    "r_phi": r"$R_\phi$",
+    "psi": r"$\psi$",
+    "omega_s": r"$\omega_s$",
+    "speed_scale": "speed scale",
+}
+
+
 def fig_fit_profiles(fitted: xr.Dataset) -> Figure:
     """Profile likelihoods of the fitted parameters: ``Δχ²`` against each parameter.
 
     The dashed line is the 95 % threshold ``χ²₁(0.95) = 3.84``; the shaded span is the reported
-    interval, the marker the estimate. A profile that stays under the line over the whole search
-    range is "not identified".
+    interval, the star the estimate. A profile that stays under the line over the whole search
+    range is "not identified". The axis is linear up to 10 and logarithmic above, so that it
+    holds every profile point and still shows the threshold.
     """
     names = [n for n in ("e", "r_phi", "psi", "omega_s", "speed_scale")
              if f"profile_chi2_{n}" in fitted]  # fmt: skip
-    fig = Figure(figsize=(3.0 * max(1, len(names)), 3.2), layout="constrained")
+    fig = Figure(figsize=(3.0 * max(1, len(names)), 3.6), layout="constrained")
     axes = np.atleast_1d(fig.subplots(1, max(1, len(names)), squeeze=False)[0])
     for ax, n in zip(axes, names, strict=False):
         x = fitted[f"profile_{n}"].values
         y = fitted[f"profile_chi2_{n}"].values
         a = fitted[n].attrs
-        ax.axvspan(a["ci_low"], a["ci_high"], color=COLORS["fit"], alpha=0.2, lw=0)
-        ax.plot(x, y, "o-", color=COLORS["fit"], ms=3, lw=1)
-        ax.axhline(3.841, ls="--", color="k", lw=0.8)
-        ax.plot([float(fitted[n])], [0.0], "k*", ms=8)
+        ax.axvspan(a["ci_low"], a["ci_high"], color=COLORS["fit"], alpha=0.2, lw=0,
+                   label="95% interval")  # fmt: skip
+        ax.plot(x, y, "o-", color=COLORS["fit"], ms=3, lw=1, label="profile")
+        ax.axhline(3.841, ls="--", color="k", lw=0.8, label=r"95% threshold $\chi^2_1$ = 3.84")
+        ax.plot([float(fitted[n])], [0.0], "k*", ms=8, label="estimate")
         ax.set_xlim(a["search_low"], a["search_high"])
         if n in ("r_phi", "speed_scale"):
             ax.set_xscale("log")
-        ax.set_ylim(-0.5, max(10.0, min(float(np.nanmax(y)) * 1.05, 50.0)))
-        ax.set_xlabel(f"{n} [{a['units']}]")
+        ax.set_yscale("symlog", linthresh=10.0)
+        top = float(np.nanmax(y)) if np.isfinite(y).any() else 10.0
+        ax.set_ylim(-0.5, max(10.0, top * 1.3))
+        ticks = [t for t in (0, 2, 4, 6, 8, 10, 20, 50, 100, 200, 500, 1000) if t <= top * 1.3]
+        ax.yaxis.set_major_locator(FixedLocator(ticks))
+        ax.yaxis.set_major_formatter(FormatStrFormatter("%g"))
+        ax.yaxis.set_minor_locator(NullLocator())
+        label = PARAM_LABELS.get(n, n)
+        ax.set_xlabel(f"{label} [{a['units']}]")
         tag = "" if a.get("identified", 1) else " (not identified)"
-        ax.set_title(f"{n}: 95% [{a['ci_low']:.3g}, {a['ci_high']:.3g}]{tag}", fontsize=8)
+        ax.set_title(f"{label}: 95% [{a['ci_low']:.3g}, {a['ci_high']:.3g}]{tag}", fontsize=8)
     axes[0].set_ylabel("Δχ² (profile)")
+    if names:
+        fig.legend(*axes[0].get_legend_handles_labels(), loc="outside upper center", ncol=4,
+                   fontsize=7)  # fmt: skip
     return fig

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
@@ -13,6 +14,12 @@ from .load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
 def _band(ax, t, low, high, color, label, alpha=0.25) -> None:
     """A shaded band between ``low`` and ``high``."""
     ax.fill_between(t, low, high, color=color, alpha=alpha, lw=0, label=label)
+
+
+def _zero_width(low: np.ndarray, high: np.ndarray) -> bool:
+    """Is a band too narrow to see (below a thousandth of its values' range) everywhere?"""
+    span = float(np.nanmax(high) - np.nanmin(low)) or 1.0
+    return bool(np.nanmax(high - low) <= 1e-3 * span)
 
 
 def fig_trajectory(ds: xr.Dataset, band: xr.Dataset | None = None, window: float = 40.0) -> Figure:
@@ -31,16 +38,18 @@ def fig_trajectory(ds: xr.Dataset, band: xr.Dataset | None = None, window: float
         ax.plot(t[sel], ds["u_rotor"].values[sel], color=COLORS["rotor"], lw=1.0, label="rotor")
         ax.set_ylabel("axial position $u/U_0$")
         ax.set_title(f"flight paths, {label}", fontsize=10)
-        ax.legend(loc="upper right", fontsize=8)
+        ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=8)  # beside the paths
     axes[1].set_xlabel("time $t/t_c$")
     if "omega_rotor" in ds:
         if band is not None:
             bt = band["time"].values
             k = band.sizes["member"]
+            zero = _zero_width(band["omega_p025"].values, band["omega_p975"].values)
+            note = " (zero width: the members coincide)" if zero else ""
             _band(axes[2], bt, band["omega_p025"], band["omega_p975"], "0.6",
-                  f"central 95% of {k} members", alpha=0.3)  # fmt: skip
+                  f"central 95% of {k} members{note}", alpha=0.3)  # fmt: skip
             _band(axes[2], bt, band["omega_ci_low"], band["omega_ci_high"], COLORS["fit"],
-                  "95% interval of the ensemble mean", alpha=0.45)  # fmt: skip
+                  f"95% interval of the ensemble mean{note}", alpha=0.45)  # fmt: skip
         axes[2].plot(t, ds["omega_rotor"].values, color=COLORS["rotor"], lw=0.8, label="this run")
         if "t_impact" in ds:
             axes[2].plot(

@@ -34,12 +34,20 @@ from ..model.engine_config import engine_config
 from ..model.errors import InputError
 from ..model.scene import Scene
 from ..run.cores import map_on_threads
+from .load_summary import (  # first_zero and peak: the summary's API, also from here
+    BOOTSTRAP,
+    DERIVED,
+    REFINE_ROUNDS,
+    _num,
+    derived,  # noqa: F401
+    first_zero,  # noqa: F401
+    peak,  # noqa: F401
+    refine,
+    summary_of,
+)
 
 #: Branches of the sweep: loads increasing, then decreasing from the top load's final states.
 BRANCHES = ("up", "down")
-#: Bootstrap resamples of the members for the derived quantities' intervals (fixed seed).
-BOOTSTRAP = 2000
-BOOTSTRAP_SEED = 20261123
 #: Relative difference of two branches' mean speeds below which they count as one speed.
 MATERIAL = 1e-3
 #: Largest number of loads one curve may ask for.
@@ -161,7 +169,7 @@ class LoadCurve:
         under ``"down"`` and the loads where the branches differ."""
         out: dict = {"loads": [float(x) for x in self.loads]}
         out.update(_per_load(self.branches["up"]))
-        out.update(derived(self.loads, self.matrix("up", "mean_omega"), self.power("up")))
+        out.update(summary_of(self))
         if "down" in self.branches:
             out["down"] = _per_load(self.branches["down"])
             out["branches_differ_at"] = self.branches_differ()
@@ -201,93 +209,8 @@ def _per_load(stats: list[EnsembleStats]) -> dict:
     return out
 
 
-def first_zero(loads: np.ndarray, speed: np.ndarray) -> float:
-    """The first load at which ``speed`` reaches 0, linearly interpolated (the stall torque of
-    docs/model.md "The motor under load": the smallest ``τ_L`` with ``Ω̄ <= 0``); ``nan`` when it
-    stays positive, ``-inf`` when it is already ``<= 0`` at the smallest load and that load is not
-    0 (the stall lies below the loads asked for: unknown, not the smallest load)."""
-    if speed[0] <= 0.0:
-        return 0.0 if loads[0] == 0.0 else -math.inf
-    for k in range(1, len(loads)):
-        if speed[k] <= 0.0:
-            f = speed[k - 1] / (speed[k - 1] - speed[k])
-            return float(loads[k - 1] + f * (loads[k] - loads[k - 1]))
-    return math.nan
-
-
-def peak(loads: np.ndarray, power: np.ndarray) -> tuple[float, float]:
-    """The largest sampled ``power`` and its load.
-
-    No interpolation: where the speed collapses just past the peak (a stall), a parabola through
-    the largest sample and its neighbours overshoots every sample several-fold, so the grid of
-    loads sets the resolution (ask for more loads near the peak to refine it).
-    """
-    if not np.isfinite(power).any():  # no finite mean power (an overflowing run)
-        return math.nan, math.nan
-    k = int(np.nanargmax(np.where(np.isfinite(power), power, np.nan)))
-    return float(power[k]), float(loads[k])
-
-
-def derived(loads: np.ndarray, speed: np.ndarray, power: np.ndarray) -> dict:
-    """No-load speed, stall torque and maximum-power point with 95 % intervals.
-
-    ``speed`` and ``power`` are ``(members, loads)``. The estimates are those of the members'
-    mean curve; their intervals are the central 95 % of :data:`BOOTSTRAP` resamples of the
-    members (fixed seed: the same numbers on every run). The no-load speed is the mean speed at
-    ``τ_L = 0`` (Student interval, as every ``stats`` field) when the loads start at 0. One
-    member has no intervals (``None``): a resample of one member is that member, every time.
-    """
-    out: dict = {}
-    if loads[0] == 0.0:
-        mean, lo, hi = confidence_interval(speed[:, 0])
-        out["no_load_speed"], out["no_load_speed_ci95"] = _num(mean), [_num(lo), _num(hi)]
-    else:
-        out["no_load_speed"], out["no_load_speed_ci95"] = None, [None, None]
-
-    def stall(idx: np.ndarray) -> float:
-        return first_zero(loads, speed[idx].mean(axis=0))
-
-    def pmax(idx: np.ndarray) -> tuple[float, float]:
-        return peak(loads, power[idx].mean(axis=0))
-
-    members = speed.shape[0]
-    rng = np.random.default_rng(BOOTSTRAP_SEED)
-    boots = rng.integers(0, members, size=(BOOTSTRAP, members))
-    every = np.arange(members)
-    st = stall(every)
-    st_b = np.array([stall(i) for i in boots])
-    spread = members > 1
-    out["stall_torque"] = _num(st)
-    out["stall_torque_ci95"] = _interval(st_b) if math.isfinite(st) and spread else [None, None]
-    p, at = pmax(every)
-    pb = np.array([pmax(i) for i in boots])
-    none = [None, None]
-    out["max_power"], out["max_power_ci95"] = _num(p), _interval(pb[:, 0]) if spread else none
-    out["max_power_load"] = _num(at)
-    out["max_power_load_ci95"] = _interval(pb[:, 1]) if spread else none
-    return out
-
-
-#: The load curve's derived quantities (docs/formats.md), each with its ``*_ci95``.
-DERIVED = ("no_load_speed", "stall_torque", "max_power", "max_power_load")
-
-
 def _nan(x: float | None) -> float:
     return math.nan if x is None else x
-
-
-def _interval(samples: np.ndarray) -> list[float | None]:
-    """Central 95 % of bootstrap samples. A resample with no value (``nan``: its mean speed
-    stayed positive) lies beyond the largest load: it counts as ``+inf``; one below the smallest
-    load is ``-inf``; an end of the interval that falls on either is unknown (``None``)."""
-    x = np.where(np.isnan(samples), np.inf, samples)
-    lo = np.quantile(x, 0.025, method="lower")
-    hi = np.quantile(x, 0.975, method="higher")
-    return [_num(lo), _num(hi)]
-
-
-def _num(x: float) -> float | None:
-    return float(x) if math.isfinite(x) else None
 
 
 def _physical(out: dict, sc) -> dict:
@@ -422,6 +345,35 @@ def torque_speed(
     return LoadCurve(loads, curve)
 
 
+def refined_torque_speed(
+    scene: Scene,
+    loads: Sequence[float],
+    resolution: float,
+    rounds: int = REFINE_ROUNDS,
+    cores: int = 1,
+    branches: Sequence[str] = BRANCHES,
+    on_member: Callable[[int, int], None] | None = None,
+    should_stop: Callable[[], bool] | None = None,
+) -> LoadCurve:
+    """:func:`torque_speed` at ``loads``, then at loads added where the stall torque and the
+    maximum power lie until their brackets are no wider than the ensemble's resolution or
+    ``resolution`` (:func:`bouncedisk.studies.load_summary.refine`, at most ``rounds`` rounds).
+
+    An added group of loads is swept up from the curve's load below it, its members started at
+    the up branch's mean speed there, and down from the load above, started at the down
+    branch's: each round costs ``REFINE_POINTS + 1`` loads per bracket and branch, not a new
+    curve.
+    """
+    curve = torque_speed(scene, loads, cores, branches, on_member, should_stop)
+
+    def sweep(extra: np.ndarray, omega0: float, branch: str) -> LoadCurve:
+        start = dataclasses.replace(scene.initial, omega=omega0, u=None, v=None)
+        moved = dataclasses.replace(scene, initial=start)
+        return torque_speed(moved, extra, cores, (branch,), None, should_stop)
+
+    return refine(curve, sweep, resolution, rounds)
+
+
 #: Per-load statistics written to a load-curve file: the ``stats`` quantities that have a mean
 #: and an interval (QUANTITIES), and the audit's residuals.
 CURVE_QUANTITIES = (
@@ -494,6 +446,12 @@ def to_dataset(scene: Scene, curve: LoadCurve, wall_time_s: float, summary: dict
             if key in summary:
                 ds.attrs[key] = _nan(summary[key])
                 ds.attrs[f"{key}_ci95"] = [_nan(x) for x in summary[f"{key}_ci95"]]
+    for key in ("stall_torque_state", "max_power_state", "interval_note"):
+        if key in summary:
+            ds.attrs[key] = summary[key]
+    for key in ("stall_torque_bracket", "max_power_bracket"):
+        ds.attrs[key] = [_nan(x) for x in summary[key]]
+    ds.attrs["stats_discard"], ds.attrs["stats_duration"] = summary["discard"], summary["duration"]
     ds.attrs["branches_differ_at"] = summary.get("branches_differ_at") or "none"
     if scene.physical is not None:
         sc = scene.physical.scales()
