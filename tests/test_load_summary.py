@@ -43,7 +43,7 @@ def test_the_stall_torque_is_the_bracketed_root_and_its_state_says_where_it_is()
 
 
 def test_a_speed_negative_at_the_first_load_is_not_a_root_at_that_load():
-    # issue 37.4: `--loads 1.5,2` with the speed already -79.6 at 1.5 gave "stall torque 1.5
+    # before: `--loads 1.5,2` with the speed already -79.6 at 1.5 gave "stall torque 1.5
     # [1.5, 1.5]"
     loads = np.array([1.5, 2.0])
     speed = np.array([[-79.6, -180.0], [-79.0, -181.0], [-80.1, -179.0]])
@@ -54,7 +54,7 @@ def test_a_speed_negative_at_the_first_load_is_not_a_root_at_that_load():
 
 
 def test_one_member_gives_no_interval_and_says_why():
-    # issue 37.4: one member gave stall_torque_ci95 [0.7394, 0.7394]
+    # before: one member gave stall_torque_ci95 [0.7394, 0.7394]
     loads = np.linspace(0.0, 1.0, 6)
     speed = (90.0 - 120.0 * loads)[None, :]
     d = derived(loads, speed, speed * loads)
@@ -81,7 +81,7 @@ def test_the_maximum_power_is_a_maximum_only_between_smaller_powers():
 
 
 def test_peak_of_no_finite_power_is_nan_without_a_warning():
-    # issue 37.5: `--set initial.omega=1e308 --loads 0,0.5` raised "All-NaN slice" in peak
+    # before: `--set initial.omega=1e308 --loads 0,0.5` raised "All-NaN slice" in peak
     loads = np.array([0.0, 0.5])
     with warnings.catch_warnings():
         warnings.simplefilter("error")

@@ -167,8 +167,8 @@ def test_table_says_why_a_derived_value_is_missing():
 )
 def test_property_derived_quantities_are_honest(members, steps, start, data):
     """Over random curves: one member gives no interval; the stall torque is a zero crossing
-    between two loads of the grid (or 0 when the loads start at 0), never the first load of a
-    grid that starts past the stall; no interval is reversed."""
+    between two loads of the grid, never the first load of a grid that starts past the stall
+    (nor 0 for a motor that turns backwards with no load); no interval is reversed."""
     loads = start + np.cumsum([0.0, *steps[1:]])
     n = len(loads)
     values = st.floats(-50.0, 50.0, allow_nan=False)
@@ -181,15 +181,14 @@ def test_property_derived_quantities_are_honest(members, steps, start, data):
         assert all(out[f"{k}_ci95"] == [None, None] for k in ("stall_torque", "max_power"))
         assert out["max_power_load_ci95"] == [None, None]
     st_ = out["stall_torque"]
-    if st_ is not None:
-        if mean[0] <= 0:
-            assert loads[0] == 0.0 and st_ == 0.0
-        else:
-            k = int(np.argmax(mean <= 0))
-            assert mean[k] <= 0 < mean[k - 1]
-            assert loads[k - 1] <= st_ <= loads[k]
-    elif mean[0] <= 0:
-        assert loads[0] > 0.0
+    if mean[0] <= 0:  # no stall torque: the motor turns backwards, or stalls below the loads
+        assert st_ is None
+        want = "backwards_at_no_load" if loads[0] == 0.0 else "below_smallest_load"
+        assert out["stall_torque_state"] == want
+    elif st_ is not None:
+        k = int(np.argmax(mean <= 0))
+        assert mean[k] <= 0 < mean[k - 1]
+        assert loads[k - 1] <= st_ <= loads[k]
     else:
         assert (mean > 0).all()
     for k in ("stall_torque", "max_power", "max_power_load"):

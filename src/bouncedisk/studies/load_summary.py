@@ -69,7 +69,7 @@ def stall_bracket(loads: np.ndarray, speed: np.ndarray) -> tuple[str, int]:
 
 def first_zero(loads: np.ndarray, speed: np.ndarray) -> float:
     """The stall torque: the root of ``speed`` in the load, linear between the two loads that
-    bracket its first sign change (docs/model.md "stall torque": the smallest ``τ_L`` with
+    bracket its first sign change (docs/model.md "The motor under load": the smallest ``τ_L`` with
     ``Ω̄ <= 0``); ``nan`` when there is no such bracket (:func:`stall_bracket` says why)."""
     state, k = stall_bracket(loads, speed)
     if state != "found":
