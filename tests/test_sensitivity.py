@@ -161,6 +161,17 @@ def test_motor_shards_join_to_the_one_job_result_bit_for_bit():
     assert np.all((one["no_load_speed"].values > 0.0) | (stall == 0.0))
 
 
+def test_the_design_maps_read_their_curves_every_0_05_past_the_momentum_bound():
+    st = sens.map_settings(settings())
+    assert st.loads[-1] == settings().loads[-1] == 2.0  # still brackets every stall
+    inner = np.array(st.loads[:-1])
+    assert inner[0] == 0.0 and inner[-1] == pytest.approx(sens.MAP_LOAD_TOP) and inner[-1] > 1.0
+    assert np.allclose(np.diff(inner), sens.MAP_LOAD_STEP)
+    assert set(settings().loads) <= set(st.loads)
+    assert sens.map_settings(settings(loads=())).loads == ()
+    assert st.members == max(settings().members, sens.MAP_MIN_MEMBERS)
+
+
 def test_joining_refuses_missing_points():
     model = sens.IshigamiModel(list(ISHIGAMI_RANGES))
     st = settings(ranges=ISHIGAMI_RANGES, base_samples=8, shards=3)

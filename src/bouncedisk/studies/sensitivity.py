@@ -61,6 +61,15 @@ OUTPUTS: dict[str, tuple[str, str, bool]] = {
 #: The design maps' outputs, and the one that picks the best operating point (first present).
 MAP_OUTPUTS = ("no_load_speed", "stall_torque", "efficiency_at_max_power")
 BEST_BY = ("max_power", "no_load_speed")
+#: The design maps' load step and how far it goes: their curves add every multiple of the step up
+#: to :data:`MAP_LOAD_TOP` (just past the momentum bound's stall torque 1, docs/model.md "The
+#: motor under load"), so that a stall torque or a power peak is read between loads this close;
+#: the study's own sample keeps its configured loads (its points are many).
+MAP_LOAD_STEP = 0.05
+MAP_LOAD_TOP = 1.1
+#: Fewest members of a design map's points: their intervals pick the best point and those not
+#: resolved from it (with 2 members Student's factor is 12.7, with 4 it is 3.2).
+MAP_MIN_MEMBERS = 4
 #: Samples of the run-up per unit of ``1/R_φ`` (the trend's time constant is 1-3 of these).
 RUNUP_SAMPLES_PER_UNIT = 20
 
@@ -210,10 +219,11 @@ def load_figures(curve, r: float) -> dict[str, tuple[float, float, float, float]
     """
     from .torque_speed import first_zero, peak
 
-    loads = np.asarray(curve.loads, float)
-    speed = curve.matrix("up", "mean_omega")
-    power = curve.power("up")
-    eff = curve.matrix("up", "efficiency_torsion")
+    order = np.argsort(np.asarray(curve.loads, float), kind="stable")
+    loads = np.asarray(curve.loads, float)[order]
+    speed = curve.matrix("up", "mean_omega")[:, order]
+    power = curve.power("up")[:, order]
+    eff = curve.matrix("up", "efficiency_torsion")[:, order]
     k = speed.shape[0]
 
     def figures(idx: np.ndarray) -> np.ndarray:
@@ -244,6 +254,19 @@ def sample(ranges: Mapping[str, tuple[float, float]], base_samples: int, seed: i
     from SALib.sample import sobol
 
     return sobol.sample(problem(ranges), base_samples, calc_second_order=False, seed=seed)
+
+
+def map_settings(settings: StudySettings) -> StudySettings:
+    """The settings of the design maps: the study's, with at least :data:`MAP_MIN_MEMBERS`
+    members and loads every :data:`MAP_LOAD_STEP` up to :data:`MAP_LOAD_TOP` added (the study's
+    largest load stays, bracketing every stall)."""
+    members = max(settings.members, MAP_MIN_MEMBERS)
+    if not settings.loads:
+        return dataclasses.replace(settings, members=members)
+    top = min(MAP_LOAD_TOP, max(settings.loads))
+    steps = MAP_LOAD_STEP * np.arange(round(top / MAP_LOAD_STEP) + 1)
+    loads = np.unique(np.round(np.r_[steps, settings.loads], 12))
+    return dataclasses.replace(settings, members=members, loads=tuple(float(x) for x in loads))
 
 
 def map_sample(settings: StudySettings, e: float) -> tuple[np.ndarray, tuple[int, int]]:
@@ -369,7 +392,7 @@ def design_map(
     ds = evaluate(x, PARAMETERS, model, progress=progress)
     ds.attrs.update(
         {"map_e": e, "map_omega_s": settings.map_omega_s, "map_n_psi": shape[0],
-         "map_n_r_phi": shape[1],
+         "map_n_r_phi": shape[1], "map_loads": list(settings.loads),
          "members": settings.members, "seed": settings.seed}
     )  # fmt: skip
     return ds
@@ -380,7 +403,7 @@ def join_maps(maps: Sequence[xr.Dataset]) -> xr.Dataset:
     ds = xr.concat(list(maps), dim="map", combine_attrs="drop_conflicts")
     e = [float(m.attrs["map_e"]) for m in maps]
     ds = ds.assign_coords(map_e=("map", np.array(e), {"long_name": "restitution e of the map"}))
-    for key in ("map_n_psi", "map_n_r_phi", "map_omega_s"):
+    for key in ("map_n_psi", "map_n_r_phi", "map_omega_s", "map_loads"):
         ds.attrs[key] = maps[0].attrs[key]
     ds.attrs["cpu_time_s"] = float(sum(float(m.attrs.get("cpu_time_s", 0.0)) for m in maps))
     return ds
