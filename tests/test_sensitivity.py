@@ -157,6 +157,10 @@ def test_motor_shards_join_to_the_one_job_result_bit_for_bit():
     assert np.all(one["max_power"].values >= 0.0)
     stall = one["stall_torque"].values
     assert np.all((stall >= 0.0) & (stall <= 2.0))  # the speed is <= 0 by tau_L = 2 > 1
+    # the axial motion does not see psi: in Saltelli's rows (A, A_B^e, A_B^w, A_B^R, A_B^psi, B)
+    # the chatter rate of A is that of A_B^psi to the bit (R_phi sets the run's length: not so)
+    rate = one["chatter_rate"].values.reshape(4, 6)
+    assert np.array_equal(rate[:, 0], rate[:, 4]) and not np.array_equal(rate[:, 0], rate[:, 5])
     # the no-load speed is the load curve's first point: where it is <= 0 the stall torque is 0
     assert np.all((one["no_load_speed"].values > 0.0) | (stall == 0.0))
 
