@@ -40,7 +40,7 @@ def run_sharded(st: sc.StudySettings, model) -> xr.Dataset:
 
 
 def test_ishigami_through_the_sharded_path_recovers_the_analytic_indices():
-    st = settings(ranges=ISHIGAMI_RANGES, base_samples=2048, shards=3, resamples=500)
+    st = settings(ranges=ISHIGAMI_RANGES, base_samples=2048, shards=3, resamples=200)
     model = sens.IshigamiModel(list(ISHIGAMI_RANGES))
     points = run_sharded(st, model)
     assert points.sizes["point"] == 2048 * 5
@@ -51,6 +51,70 @@ def test_ishigami_through_the_sharded_path_recovers_the_analytic_indices():
         assert np.all(conf > 0) and np.all(conf < 0.1), (key, conf)
         assert np.all(np.abs(est - exact) <= conf), (key, est, exact, conf)
     assert float(ind["noise_share"]) == 0.0  # a deterministic function has no ensemble noise
+    assert np.all(ind["resolved"].values == 1)
+    assert "RBD-FAST" in ind.attrs["estimators"]
+
+
+def test_rbd_fast_first_order_intervals_are_narrower_than_saltellis_at_the_same_points():
+    from SALib.analyze import sobol
+
+    st = settings(ranges=ISHIGAMI_RANGES, base_samples=256, shards=1, resamples=200)
+    points = run_sharded(st, sens.IshigamiModel(list(ISHIGAMI_RANGES)))
+    ours = sens.analyse(points, st.ranges, st.resamples, st.seed).sel(output="ishigami")
+    y = points["ishigami"].values
+    prob = sens.problem(st.ranges)
+    saltelli = sobol.analyze(prob, y, calc_second_order=False, num_resamples=200, seed=1)
+    assert np.all(ours["S1_conf"].values < 0.6 * np.asarray(saltelli["S1_conf"]))
+    assert np.allclose(ours["ST"].values, saltelli["ST"])  # ST stays Jansen's (SALib sobol)
+    s1, _ = ishigami_indices()
+    assert np.all(np.abs(ours["S1"].values - s1) <= ours["S1_conf"].values)
+
+
+def test_a_smoke_sized_study_falls_back_to_saltellis_first_order_estimator():
+    st = settings(ranges=ISHIGAMI_RANGES, base_samples=8, shards=1, resamples=20)
+    points = run_sharded(st, sens.IshigamiModel(list(ISHIGAMI_RANGES)))
+    assert points.sizes["point"] < sens.RBD_FAST_MIN_POINTS
+    ind = sens.analyse(points, st.ranges, st.resamples, st.seed)
+    assert "Saltelli" in ind.attrs["estimators"]
+    assert np.all(np.isfinite(ind["S1_conf"].values)) and np.all(ind["S1_conf"].values > 0)
+
+
+class _Curve:
+    """A load curve's up branch from given (member, load) matrices (the attributes
+    :func:`bouncedisk.studies.sensitivity.load_figures` reads)."""
+
+    def __init__(self, loads, speed, efficiency):
+        self.loads = np.asarray(loads, float)
+        self._m = {"mean_omega": speed, "efficiency_torsion": efficiency,
+                   "power_out": self.loads * speed}  # fmt: skip
+
+    def matrix(self, branch, name):
+        assert branch == "up"
+        return self._m[name]
+
+    def power(self, branch):
+        return self.matrix(branch, "power_out")
+
+
+def test_load_figures_are_the_mean_curves_with_jackknife_errors():
+    # speed_m(tau) = c_m - tau: the mean curve's root is mean(c) (linear: exact between loads),
+    # and the jackknife error of a mean is the standard error s / sqrt(K)
+    loads = np.array([0.0, 0.25, 0.5, 0.75, 1.0, 2.0])
+    c = np.array([0.55, 0.61, 0.58, 0.66])
+    speed = c[:, None] - loads[None, :]
+    eff = np.tile(np.linspace(0.0, 0.5, len(loads)), (len(c), 1))
+    got = sens.load_figures(_Curve(loads, speed, eff), r=0.1)
+    value, low, high, se = got["stall_torque"]
+    assert value == pytest.approx(c.mean(), abs=1e-12)
+    assert se == pytest.approx(np.std(c, ddof=1) / 2.0, rel=1e-9)
+    assert low < value < high
+    # the power tau (cbar - tau) is largest on the grid at tau = 0.25: R_phi times it
+    assert got["max_power"][0] == pytest.approx(0.1 * 0.25 * (c.mean() - 0.25), rel=1e-12)
+    assert got["efficiency_at_max_power"][0] == pytest.approx(0.1)  # eff at the second load
+    # runs backwards at no load: stall torque 0, no power, no efficiency
+    back = sens.load_figures(_Curve(loads, speed - 1.0, eff), r=0.1)
+    assert back["stall_torque"][0] == 0.0 and back["max_power"][0] == 0.0
+    assert back["efficiency_at_max_power"][0] == 0.0
 
 
 def test_noise_share_is_the_noise_variance_over_the_output_variance():
@@ -77,7 +141,7 @@ def test_ishigami_shards_join_to_the_one_job_result_bit_for_bit(tmp_path):
 
 
 def test_motor_shards_join_to_the_one_job_result_bit_for_bit():
-    st = settings(base_samples=4, members=2, duration=5.0, discard=5.0, loads=(0.0, 0.7, 1.3))
+    st = settings(base_samples=4, members=2, duration=5.0, discard=5.0, loads=(0.0, 0.7, 2.0))
     model = sens.MotorModel(st)
     assert model.outputs == tuple(sens.OUTPUTS)  # the load figures too
     one = run_sharded(dataclasses.replace(st, shards=1), model)
@@ -92,10 +156,24 @@ def test_motor_shards_join_to_the_one_job_result_bit_for_bit():
     # the loads start at 0, where the power is 0: the largest power over them is never negative
     assert np.all(one["max_power"].values >= 0.0)
     stall = one["stall_torque"].values
-    # the speed is <= 0 by tau_L = 1.3 > 1; a motor that runs backwards at no load has no stall
-    # torque (NaN, not 0: bouncedisk.studies.load_summary)
-    found = np.isfinite(stall)
-    assert found.any() and np.all((stall[found] > 0.0) & (stall[found] <= 1.3))
+    assert np.all((stall >= 0.0) & (stall <= 2.0))  # the speed is <= 0 by tau_L = 2 > 1
+    # the axial motion does not see psi: in Saltelli's rows (A, A_B^e, A_B^w, A_B^R, A_B^psi, B)
+    # the chatter rate of A is that of A_B^psi to the bit (R_phi sets the run's length: not so)
+    rate = one["chatter_rate"].values.reshape(4, 6)
+    assert np.array_equal(rate[:, 0], rate[:, 4]) and not np.array_equal(rate[:, 0], rate[:, 5])
+    # the no-load speed is the load curve's first point: where it is <= 0 the stall torque is 0
+    assert np.all((one["no_load_speed"].values > 0.0) | (stall == 0.0))
+
+
+def test_the_design_maps_read_their_curves_every_0_05_past_the_momentum_bound():
+    st = sens.map_settings(settings())
+    assert st.loads[-1] == settings().loads[-1] == 2.0  # still brackets every stall
+    inner = np.array(st.loads[:-1])
+    assert inner[0] == 0.0 and inner[-1] == pytest.approx(sens.MAP_LOAD_TOP) and inner[-1] > 1.0
+    assert np.allclose(np.diff(inner), sens.MAP_LOAD_STEP)
+    assert set(settings().loads) <= set(st.loads)
+    assert sens.map_settings(settings(loads=())).loads == ()
+    assert st.members == max(settings().members, sens.MAP_MIN_MEMBERS)
 
 
 def test_joining_refuses_missing_points():
@@ -148,6 +226,7 @@ def bad(path: str, value) -> dict:
         ("sensitivity_study.sizes.small.members", 1, "sizes.small.members"),
         ("sensitivity_study.sizes.small.duration", -1, "sizes.small.duration"),
         ("sensitivity_study.sizes.small.loads", [0.5, 0.2], "sizes.small.loads"),
+        ("sensitivity_study.sizes.small.loads", [0.2, 0.5], "sizes.small.loads"),
         ("sensitivity_study.sizes.small.map_points", [1, 3], "sizes.small.map_points"),
         ("sensitivity_study.design_map.e", [], "sensitivity_study.design_map.e"),
         ("sensitivity_study.e_sigma", 0, "sensitivity_study.e_sigma"),
@@ -190,3 +269,24 @@ def test_settings_survive_the_rule_params_round_trip():
     st = settings()
     assert sc.StudySettings.from_params(dataclasses.asdict(st)) == st
     assert re.fullmatch(r"[a-z_,0-9]+", ",".join(sens.OUTPUTS))
+
+
+def test_the_indices_figure_greys_out_what_is_not_resolved_and_states_the_sample():
+    from matplotlib.colors import to_hex
+
+    from bouncedisk.figures.sensitivity import fig_sensitivity_indices
+
+    st = settings(ranges=ISHIGAMI_RANGES, base_samples=256, shards=1, resamples=50)
+    ind = sens.analyse(run_sharded(st, sens.IshigamiModel(list(ISHIGAMI_RANGES))), st.ranges, 50, 1)
+    ind["S1_conf"][:] = 0.05
+    ind["ST_conf"][:] = 0.05
+    ind["ST_conf"][0, 2] = 0.3  # x3's total index: an interval wider than +-0.10
+    fig = fig_sensitivity_indices(ind)
+    ax = fig.axes[0]
+    bars = [p for p in ax.patches if p.get_width() == pytest.approx(0.38)]
+    colors = [to_hex(b.get_facecolor()) for b in bars]  # S1 x1..x3, then ST x1..x3
+    assert colors[:3] == ["#1f77b4"] * 3
+    assert colors[3:] == ["#ff7f0e", "#ff7f0e", "#bbbbbb"]
+    title = fig._suptitle.get_text()
+    assert f"{256 * 5} points" in title and "N = 256" in title
+    assert "noise: 0.0 %" in ax.get_title()

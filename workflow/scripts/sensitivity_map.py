@@ -2,11 +2,11 @@
 
 from bouncedisk.io.job_log import log_to
 from bouncedisk.io.netcdf import write_dataset
-from bouncedisk.studies.sensitivity import MotorModel, design_map
+from bouncedisk.studies.sensitivity import MotorModel, design_map, map_settings
 from bouncedisk.studies.sensitivity_settings import StudySettings
 
 with log_to(snakemake.log[0]) as log:
-    settings = StudySettings.from_params(snakemake.params.settings)
+    settings = map_settings(StudySettings.from_params(snakemake.params.settings))
     ds = design_map(settings, MotorModel(settings), int(snakemake.wildcards.i))
     write_dataset(ds, snakemake.output[0])
     log.info(

@@ -20,8 +20,9 @@ def _short(output: str) -> str:
 
 
 def fig_sensitivity_indices(ds: xr.Dataset) -> Figure:
-    """First-order and total Sobol' indices of every output with SALib's 95 % bootstrap
-    intervals, and the share of each output's variance that is ensemble noise."""
+    """First-order and total Sobol' indices of every output with their 95 % bootstrap intervals,
+    the sample size and the share of each output's variance that is ensemble noise. An index
+    whose interval is wider than ``±resolved_half_width`` is drawn grey (not resolved)."""
     outputs = ds["output"].values.tolist()
     names = ds["parameter"].values.tolist()
     ncol = min(3, len(outputs))
@@ -29,11 +30,14 @@ def fig_sensitivity_indices(ds: xr.Dataset) -> Figure:
     fig = Figure(figsize=(4.6 * ncol, 3.4 * nrow), layout="constrained")
     axes = np.atleast_1d(fig.subplots(nrow, ncol, squeeze=False).ravel())
     pos = np.arange(len(names))
+    limit = float(ds.attrs.get("resolved_half_width", math.inf))
     for ax, o in zip(axes, outputs, strict=False):
         row = ds.sel(output=o)
         for k, (key, color) in enumerate((("S1", "#1f77b4"), ("ST", "#ff7f0e"))):
-            ax.bar(pos + (k - 0.5) * 0.38, row[key].values, 0.38, color=color,
-                   yerr=row[f"{key}_conf"].values, capsize=3, label=key)  # fmt: skip
+            conf = row[f"{key}_conf"].values
+            colors = [color if c <= limit else "#bbbbbb" for c in conf]
+            ax.bar(pos + (k - 0.5) * 0.38, row[key].values, 0.38, color=colors,
+                   yerr=conf, capsize=3, label=key)  # fmt: skip
         share = float(row["noise_share"])
         undefined = int(row["n_undefined"])
         note = (f"undefined at {undefined} points: no indices" if undefined
@@ -41,12 +45,20 @@ def fig_sensitivity_indices(ds: xr.Dataset) -> Figure:
         ax.set_title(f"{_short(o)}\n{note}", fontsize=9)
         ax.set_xticks(pos, names, fontsize=8)
         ax.axhline(0, color="k", lw=0.5)
-        ax.set_ylim(-0.1, 1.1)
+        low = np.nanmin(np.r_[row["S1"].values - row["S1_conf"].values, -0.1])
+        high = np.nanmax(np.r_[row["ST"].values + row["ST_conf"].values, 1.1])
+        ax.set_ylim(low - 0.02, high + 0.02)
     for ax in axes[len(outputs) :]:
         ax.set_visible(False)
-    axes[0].legend(fontsize=8)
+    handles = [Rectangle((0, 0), 1, 1, color=c, label=lab) for c, lab in
+               (("#1f77b4", "S1 (RBD-FAST)"), ("#ff7f0e", "ST (Jansen)"),
+                ("#bbbbbb", f"not resolved (half-width > {limit:g})"))]  # fmt: skip
+    axes[0].legend(handles=handles, fontsize=7, loc="upper left")
     axes[0].set_ylabel("Sobol' index (95 % bootstrap interval)")
-    fig.suptitle(f"Sobol' indices over {ds.attrs.get('n_points', '?')} points (SALib)", fontsize=10)
+    n = ds.attrs.get("n_points", "?")
+    base = int(n) // (len(names) + 2) if str(n).isdigit() else "?"
+    fig.suptitle(f"Sobol' indices from {n} points (SALib, N = {base} base samples); "
+                 f"grey: interval wider than ±{limit:g}", fontsize=10)  # fmt: skip
     return fig
 
 
@@ -78,7 +90,11 @@ def fig_sensitivity_scatter(ds: xr.Dataset) -> Figure:
 
 def fig_design_maps(ds: xr.Dataset) -> Figure:
     """No-load speed, stall torque and efficiency over ``(psi, log10 R_phi)`` for each map's
-    ``e``, with the best operating point and its 95 % interval (hollow: not resolved from it)."""
+    ``e``, with the best operating point and its 95 % interval (hollow: not resolved from it).
+
+    Where the motor runs backwards at no load (mean speed ``<= 0``) its stall torque and
+    efficiency are not figures of a motor: those cells are crossed out; a stall beyond the
+    largest load asked for is undefined (blank) and ringed."""
     from ..studies.sensitivity import BEST_BY, MAP_OUTPUTS, best_point
 
     outputs = [o for o in MAP_OUTPUTS if o in ds]
@@ -87,26 +103,40 @@ def fig_design_maps(ds: xr.Dataset) -> Figure:
     best_by = next(b for b in BEST_BY if b in ds)
     w = ds.attrs.get("map_omega_s")
     w_label = rf"$\omega_s$ = {float(w):g}" if w is not None else ""
-    fig = Figure(figsize=(4.8 * len(maps), 3.4 * len(outputs)), layout="constrained")
+    fig = Figure(figsize=(4.8 * len(maps), 3.4 * len(outputs) + 0.4), layout="constrained")
     axes = fig.subplots(len(outputs), len(maps), squeeze=False)
     for j, m in enumerate(maps):
         xp, xr_ = (m["x"].sel(parameter=p).values for p in ("psi", "log10_r_phi"))
         psi, lr = xp.reshape(n_psi, n_r)[:, 0], xr_.reshape(n_psi, n_r)[0]
         best = best_point(m, best_by)
+        backwards = m["no_load_speed"].values <= 0.0
         for i, o in enumerate(outputs):
             ax = axes[i, j]
-            z = m[o].values.reshape(n_psi, n_r).T
-            mesh = ax.pcolormesh(psi, lr, z, shading="nearest", cmap="viridis")
+            z = m[o].values
+            if o != "no_load_speed":
+                z = np.where(backwards, np.nan, z)
+                ax.scatter(xp[backwards], xr_[backwards], marker="x", c="k", s=18, lw=0.8)
+            beyond = ~np.isfinite(m[o].values)
+            ax.scatter(xp[beyond], xr_[beyond], marker="o", s=30, facecolors="none",
+                       edgecolors="k", lw=0.8)  # fmt: skip
+            mesh = ax.pcolormesh(
+                psi, lr, z.reshape(n_psi, n_r).T, shading="nearest", cmap="viridis"
+            )
             fig.colorbar(mesh, ax=ax, label=_short(o))
             if best["index"] is not None:
                 near = [k for k in best["indistinguishable"] if k != best["index"]]
                 ax.scatter(xp[near], xr_[near], s=14, facecolors="none", edgecolors="w", lw=0.7)
                 ax.plot(xp[best["index"]], xr_[best["index"]], "r*", ms=12)
-            ax.set_xlabel(r"$\psi$")
+            ax.set_xlabel(r"$\psi$ (rad)")
             ax.set_ylabel(r"$\log_{10} R_\phi$")
             ax.set_title(f"e = {float(m['map_e']):g}, {w_label}", fontsize=9)
         if best["index"] is not None:
             lo, hi = best["ci95"]
             axes[0, j].text(0.02, 0.02, f"best {_short(best_by)}: {best['value']:.3g} [{lo:.3g}, {hi:.3g}]",
                             transform=axes[0, j].transAxes, fontsize=7, color="w")  # fmt: skip
+    fig.suptitle(
+        f"red star: largest {_short(best_by)}; white rings: points whose 95 % interval reaches "
+        "it; x: runs backwards at no load; black ring: no stall up to the largest load",
+        fontsize=8,
+    )
     return fig

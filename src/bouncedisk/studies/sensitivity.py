@@ -27,7 +27,6 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 import xarray as xr
-from scipy.special import ndtri
 
 from ..analysis import observables as ob
 from ..analysis.bands import member_speeds
@@ -38,6 +37,11 @@ from ..model.scene import Scene, scene_from_mapping
 from .sensitivity_settings import PARAMETERS, StudySettings
 
 LEVEL = 0.95
+#: Largest half-width of a 95 % interval at which an index counts as resolved (the figure greys
+#: out the others).
+RESOLVED = 0.10
+#: Fewest points for RBD-FAST's first-order indices (10 harmonics; below, Saltelli's estimator).
+RBD_FAST_MIN_POINTS = 200
 #: Figures of merit: name -> (long name, units, needs the ``load`` effect). Speeds and powers are
 #: scaled by ``R_φ``: ``R_φ Ω`` is the rotor speed in units of ``Φ0/t_c`` (docs/model.md "Variables and
 #: scales"), so they compare motors of the same stator at different ``R_φ``.
@@ -56,6 +60,15 @@ OUTPUTS: dict[str, tuple[str, str, bool]] = {
 #: The design maps' outputs, and the one that picks the best operating point (first present).
 MAP_OUTPUTS = ("no_load_speed", "stall_torque", "efficiency_at_max_power")
 BEST_BY = ("max_power", "no_load_speed")
+#: The design maps' load step and how far it goes: their curves add every multiple of the step up
+#: to :data:`MAP_LOAD_TOP` (just past the momentum bound's stall torque 1, docs/model.md "The
+#: motor under load"), so that a stall torque or a power peak is read between loads this close;
+#: the study's own sample keeps its configured loads (its points are many).
+MAP_LOAD_STEP = 0.05
+MAP_LOAD_TOP = 1.1
+#: Fewest members of a design map's points: their intervals pick the best point and those not
+#: resolved from it (with 2 members Student's factor is 12.7, with 4 it is 3.2).
+MAP_MIN_MEMBERS = 4
 #: Samples of the run-up per unit of ``1/R_φ`` (the trend's time constant is 1-3 of these).
 RUNUP_SAMPLES_PER_UNIT = 20
 
@@ -76,24 +89,6 @@ def interval(values: Sequence[float]) -> tuple[float, float, float, float]:
     mean, low, high = confidence_interval(x, LEVEL)
     se = float(np.std(x, ddof=1) / math.sqrt(len(x))) if len(x) > 1 else math.nan
     return mean, low, high, se
-
-
-def _from_ci(
-    mean, ci, members: int | None, scale: float = 1.0
-) -> tuple[float, float, float, float]:
-    """``(mean, low, high, se)`` from a reported value and ``[low, high]`` (``None``: NaN).
-
-    The standard error is the half-width over Student's ``t_{0.975, K−1}`` for a Student
-    interval of ``members`` members, over the normal ``z_{0.975}`` for a bootstrap percentile
-    interval (``members=None``).
-    """
-    m = math.nan if mean is None else float(mean) * scale
-    lo, hi = (math.nan if v is None else float(v) * scale for v in (ci or (None, None)))
-    if members is None:
-        q = float(ndtri(0.5 + LEVEL / 2.0))
-    else:
-        q = t_quantile(max(1, members - 1), LEVEL)
-    return m, lo, hi, (hi - lo) / (2.0 * q)
 
 
 # ----------------------------------------------------------------------------- models
@@ -122,11 +117,15 @@ class MotorModel:
 
     Each point is an ensemble of ``members`` runs from rest, differing by restitution noise
     ``e_sigma`` (docs/model.md "Long-run statistics of chaotic motion"), over ``(discard + duration)/R_φ``:
-    no-load speed, chatter rate and regime from :func:`bouncedisk.analysis.statistics.run_stats` (after the
-    transient ``discard/R_φ``), the run-up time constant from the first-order trend
+    the run-up time constant from the first-order trend
     (:func:`bouncedisk.analysis.observables.first_order_trend`) of the members' mean run-up with a
-    jackknife interval over members, and with ``loads`` the torque–speed curve's stall torque,
-    maximum power and the torsional efficiency at it (docs/model.md "The motor under load").
+    jackknife interval over members (:meth:`_runup`), and with ``loads`` (starting at 0) one
+    torque–speed curve (:func:`bouncedisk.studies.torque_speed.torque_speed`, up branch): its
+    first load, ``τ_L = 0``, gives the no-load speed, chatter rate and regime (after the
+    transient ``discard/R_φ``), the whole curve the stall torque, maximum power and the
+    torsional efficiency at it (:func:`load_figures`; docs/model.md "The motor under load").
+    Without loads the no-load figures come from one ensemble
+    (:func:`bouncedisk.analysis.statistics.run_stats`).
     """
 
     def __init__(self, settings: StudySettings, torque_speed: Callable | None = None):
@@ -161,53 +160,91 @@ class MotorModel:
 
     def __call__(self, point: Mapping[str, float]) -> PointValues:
         r = 10.0 ** point["log10_r_phi"]
-        scene = self.scene(point)
-        st = run_stats(scene, cores=1)
+        loaded = bool(self.s.loads)
+        scene = self.scene(point, load=loaded)
+        if loaded:
+            curve = self._torque_speed(scene, list(self.s.loads), cores=1, branches=("up",))
+            free = curve.branches["up"][0]  # tau_L = 0: the no-load run (loads start at 0)
+        else:
+            free = run_stats(scene, cores=1)
         out = {
-            "no_load_speed": interval(r * st.column("mean_omega")),
-            "chatter_rate": interval(st.column("chatter_rate")),
-            "log10_tau": self._runup(scene),
+            "no_load_speed": interval(r * free.column("mean_omega")),
+            "chatter_rate": interval(free.column("chatter_rate")),
+            "log10_tau": self._runup(self.scene(point)),
         }
-        if self.s.loads:
-            out.update(self._load(point, r))
-        name, _, _ = st.regime
+        if loaded:
+            out.update(load_figures(curve, r))
+        name, _, _ = free.regime
         return PointValues(out, ob.REGIME_CODES[name])
 
     def _runup(self, scene: Scene) -> tuple[float, float, float, float]:
         """log10 τ of the members' mean run-up, with a jackknife interval over members."""
-        t, om = member_speeds(scene, self.s.members, self.s.seed)
-        k = len(om)
-        full = math.log10(ob.first_order_trend(t, om.mean(axis=0)).tau)
-        total = om.sum(axis=0)
-        jack = np.array(
-            [math.log10(ob.first_order_trend(t, (total - om[i]) / (k - 1)).tau) for i in range(k)]
-        )
-        se = math.sqrt((k - 1) / k * float(np.sum((jack - jack.mean()) ** 2)))
-        half = t_quantile(k - 1, LEVEL) * se
-        return full, full - half, full + half, se
+        return _runup_tau(*member_speeds(scene, self.s.members, self.s.seed))
 
-    def _load(self, point: Mapping[str, float], r: float) -> dict:
-        """Stall torque, maximum power and the efficiency at it, from the torque–speed curve's
-        up branch (loads increasing by continuation; docs/model.md "The motor under load").
 
-        The stall torque and its bootstrap interval are the curve's. The maximum power is the
-        largest mean power ``τ_L Ω̄`` over the loads asked for, with its Student interval, and
-        the efficiency is taken at that load: the curve's parabolic peak overshoots where the
-        speed collapses at the stall (a vertex far above every sample).
-        """
-        scene = self.scene(point, load=True)
-        curve = self._torque_speed(scene, list(self.s.loads), cores=1, branches=("up",))
-        s = curve.summary()
-        k = self.s.members
-        power = np.array([math.nan if p is None else p for p in s["power_out"]], float)
-        i = int(np.nanargmax(power)) if np.isfinite(power).any() else 0
-        return {
-            "stall_torque": _from_ci(s["stall_torque"], s["stall_torque_ci95"], None),
-            "max_power": _from_ci(s["power_out"][i], s["power_out_ci95"][i], k, scale=r),
-            "efficiency_at_max_power": _from_ci(
-                s["efficiency_torsion"][i], s["efficiency_torsion_ci95"][i], k
-            ),
-        }
+def _runup_tau(t: np.ndarray, om: np.ndarray) -> tuple[float, float, float, float]:
+    """log10 τ of the first-order trend of the members' mean run-up ``om`` (member, time)
+    (:func:`bouncedisk.analysis.observables.first_order_trend`), with its jackknife standard
+    error over members and Student interval."""
+    k = len(om)
+    full = math.log10(ob.first_order_trend(t, om.mean(axis=0)).tau)
+    total = om.sum(axis=0)
+    jack = np.array(
+        [math.log10(ob.first_order_trend(t, (total - om[i]) / (k - 1)).tau) for i in range(k)]
+    )
+    se = _jackknife_se(jack)
+    half = t_quantile(k - 1, LEVEL) * se
+    return full, full - half, full + half, se
+
+
+def _jackknife_se(leave_one_out: np.ndarray) -> float:
+    """Jackknife standard error ``sqrt((K−1)/K Σ (θ_(i) − θ̄)²)`` of ``K`` leave-one-out values."""
+    k = len(leave_one_out)
+    return math.sqrt((k - 1) / k * float(np.sum((leave_one_out - leave_one_out.mean()) ** 2)))
+
+
+def load_figures(curve, r: float) -> dict[str, tuple[float, float, float, float]]:
+    """Stall torque, maximum power and the torsional efficiency at it, from a load curve's up
+    branch (docs/model.md "The motor under load"), each ``(value, low, high, se)``.
+
+    The values are those of the members' mean curve, found by the torque–speed summary's own
+    rules (:func:`bouncedisk.studies.torque_speed.first_zero`: the root of the mean speed in
+    the load; here 0 when the motor runs backwards at no load, where the curve's summary gives
+    no value but the state ``backwards_at_no_load``);
+    :func:`bouncedisk.studies.torque_speed.peak`: the largest power over the curve's loads; the
+    efficiency is 0 where that power is not positive);
+    their standard errors are the jackknife's over members (``K`` re-evaluations, where the
+    summary's bootstrap takes thousands), their intervals Student's. The power is scaled by
+    ``R_φ`` (``R_φ τ_L Ω̄``, units of ``Φ0/t_c``).
+    """
+    from .torque_speed import first_zero, peak
+
+    order = np.argsort(np.asarray(curve.loads, float), kind="stable")
+    loads = np.asarray(curve.loads, float)[order]
+    speed = curve.matrix("up", "mean_omega")[:, order]
+    power = curve.power("up")[:, order]
+    eff = curve.matrix("up", "efficiency_torsion")[:, order]
+    k = speed.shape[0]
+
+    def figures(idx: np.ndarray) -> np.ndarray:
+        p, at = peak(loads, power[idx].mean(axis=0))
+        j = int(np.argmin(np.abs(loads - at)))
+        eta = eff[idx, j].mean() if p > 0.0 else 0.0  # no power delivered: no efficiency
+        mean = speed[idx].mean(axis=0)
+        # a motor that turns backwards at no load holds no load forwards: stall torque 0 in the
+        # study (the load curve's own summary calls this state backwards_at_no_load, no value)
+        stall = 0.0 if loads[0] == 0.0 and mean[0] <= 0.0 else first_zero(loads, mean)
+        return np.array([stall, r * p, eta])
+
+    every = np.arange(k)
+    full = figures(every)
+    jack = np.array([figures(np.delete(every, i)) for i in range(k)])
+    q = t_quantile(k - 1, LEVEL)
+    out = {}
+    for n, name in enumerate(("stall_torque", "max_power", "efficiency_at_max_power")):
+        se = _jackknife_se(jack[:, n])
+        out[name] = (float(full[n]), full[n] - q * se, full[n] + q * se, se)
+    return out
 
 
 # ----------------------------------------------------------------------------- sampling
@@ -221,6 +258,19 @@ def sample(ranges: Mapping[str, tuple[float, float]], base_samples: int, seed: i
     from SALib.sample import sobol
 
     return sobol.sample(problem(ranges), base_samples, calc_second_order=False, seed=seed)
+
+
+def map_settings(settings: StudySettings) -> StudySettings:
+    """The settings of the design maps: the study's, with at least :data:`MAP_MIN_MEMBERS`
+    members and loads every :data:`MAP_LOAD_STEP` up to :data:`MAP_LOAD_TOP` added (the study's
+    largest load stays, bracketing every stall)."""
+    members = max(settings.members, MAP_MIN_MEMBERS)
+    if not settings.loads:
+        return dataclasses.replace(settings, members=members)
+    top = min(MAP_LOAD_TOP, max(settings.loads))
+    steps = MAP_LOAD_STEP * np.arange(round(top / MAP_LOAD_STEP) + 1)
+    loads = np.unique(np.round(np.r_[steps, settings.loads], 12))
+    return dataclasses.replace(settings, members=members, loads=tuple(float(x) for x in loads))
 
 
 def map_sample(settings: StudySettings, e: float) -> tuple[np.ndarray, tuple[int, int]]:
@@ -346,7 +396,7 @@ def design_map(
     ds = evaluate(x, PARAMETERS, model, progress=progress)
     ds.attrs.update(
         {"map_e": e, "map_omega_s": settings.map_omega_s, "map_n_psi": shape[0],
-         "map_n_r_phi": shape[1],
+         "map_n_r_phi": shape[1], "map_loads": list(settings.loads),
          "members": settings.members, "seed": settings.seed}
     )  # fmt: skip
     return ds
@@ -357,7 +407,7 @@ def join_maps(maps: Sequence[xr.Dataset]) -> xr.Dataset:
     ds = xr.concat(list(maps), dim="map", combine_attrs="drop_conflicts")
     e = [float(m.attrs["map_e"]) for m in maps]
     ds = ds.assign_coords(map_e=("map", np.array(e), {"long_name": "restitution e of the map"}))
-    for key in ("map_n_psi", "map_n_r_phi", "map_omega_s"):
+    for key in ("map_n_psi", "map_n_r_phi", "map_omega_s", "map_loads"):
         ds.attrs[key] = maps[0].attrs[key]
     ds.attrs["cpu_time_s"] = float(sum(float(m.attrs.get("cpu_time_s", 0.0)) for m in maps))
     return ds
@@ -374,17 +424,28 @@ def noise_share(y: np.ndarray, se: np.ndarray) -> float:
 
 
 def analyse(points: xr.Dataset, ranges: Mapping, resamples: int, seed: int) -> xr.Dataset:
-    """First-order and total Sobol' indices of every output with SALib's bootstrap intervals.
+    """First-order and total Sobol' indices of every output with 95 % bootstrap intervals.
+
+    Both from SALib, on the Saltelli sample's points: ``ST`` by Jansen's estimator
+    (``SALib.analyze.sobol``, the pairs of points that differ in one parameter); ``S1`` by
+    RBD-FAST on every point as given data (``SALib.analyze.rbd_fast``: each output sorted by one
+    parameter, its spectrum's low harmonics, bias-corrected), which uses all ``N (D + 2)``
+    points where Saltelli's ``S1`` estimator uses ``N`` pairs: at the same points its intervals
+    are 2–3 times narrower (docs/user_guide/sensitivity.md, "Measured"). Below
+    :data:`RBD_FAST_MIN_POINTS` points (a smoke test) ``S1`` is Saltelli's (``SALib.analyze.sobol``):
+    RBD-FAST's ten harmonics need many more points than that.
 
     Variables (output, parameter): ``S1``, ``S1_conf``, ``ST``, ``ST_conf`` (``conf``: half-width
-    of the 95 % bootstrap interval); per output: ``noise_share`` (:func:`noise_share`),
-    ``variance``, ``mean``, ``n_undefined`` (points where the output is undefined, e.g. no stall
-    within the loads asked for: then no indices, NaN).
+    of the 95 % bootstrap interval), ``resolved`` (both half-widths at most :data:`RESOLVED`);
+    per output: ``noise_share`` (:func:`noise_share`), ``variance``, ``mean``, ``n_undefined``
+    (points where the output is undefined, e.g. no stall within the loads asked for: then no
+    indices, NaN).
     """
-    from SALib.analyze import sobol
+    from SALib.analyze import rbd_fast, sobol
 
     prob = problem(ranges)
     outputs = [o for o in str(points.attrs["outputs"]).split(",") if o]
+    x = points["x"].values
     d = len(prob["names"])
     res = {k: np.full((len(outputs), d), np.nan) for k in ("S1", "S1_conf", "ST", "ST_conf")}
     per = {k: np.full(len(outputs), np.nan) for k in ("noise_share", "variance", "mean")}
@@ -396,49 +457,22 @@ def analyse(points: xr.Dataset, ranges: Mapping, resamples: int, seed: int) -> x
             continue
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            si = sobol.analyze(
+            total = sobol.analyze(
                 prob, y, calc_second_order=False, num_resamples=resamples,
                 conf_level=LEVEL, seed=seed,
             )  # fmt: skip
-        for k in res:
-            res[k][i] = si[k]
+            first = total
+            if len(y) >= RBD_FAST_MIN_POINTS:
+                first = rbd_fast.analyze(
+                    prob, x, y, num_resamples=resamples, conf_level=LEVEL, seed=seed
+                )
+        for k in ("S1", "S1_conf"):
+            res[k][i] = first[k]
+        for k in ("ST", "ST_conf"):
+            res[k][i] = total[k]
         per["noise_share"][i] = noise_share(y, points[f"{o}_se"].values)
         per["variance"][i], per["mean"][i] = float(np.var(y, ddof=1)), float(np.mean(y))
-    dims = ("output", "parameter")
-    data = {
-        "S1": (dims, res["S1"], {"long_name": "first-order Sobol' index", "units": "1"}),
-        "S1_conf": (
-            dims,
-            res["S1_conf"],
-            {"long_name": "half-width of the 95% bootstrap interval of S1", "units": "1"},
-        ),  # fmt: skip
-        "ST": (dims, res["ST"], {"long_name": "total Sobol' index", "units": "1"}),
-        "ST_conf": (
-            dims,
-            res["ST_conf"],
-            {"long_name": "half-width of the 95% bootstrap interval of ST", "units": "1"},
-        ),  # fmt: skip
-        "noise_share": (
-            "output",
-            per["noise_share"],
-            {"long_name": "share of the output's variance that is ensemble noise", "units": "1"},
-        ),  # fmt: skip
-        "variance": (
-            "output",
-            per["variance"],
-            {"long_name": "variance of the output over the sample", "units": "1"},
-        ),  # fmt: skip
-        "mean": (
-            "output",
-            per["mean"],
-            {"long_name": "mean of the output over the sample", "units": "1"},
-        ),  # fmt: skip
-        "n_undefined": (
-            "output",
-            undefined,
-            {"long_name": "points where the output is undefined", "units": "1"},
-        ),  # fmt: skip
-    }
+    data = _index_variables(res, per, undefined)
     coords = {"output": ("output", np.array(outputs, dtype=str)), "parameter": ("parameter", np.array(prob["names"], dtype=str))}  # fmt: skip
     ds = xr.Dataset(data, coords=coords)
     ds.attrs.update(base_attrs("bouncedisk global sensitivity: Sobol' indices (SALib)"))
@@ -448,12 +482,52 @@ def analyse(points: xr.Dataset, ranges: Mapping, resamples: int, seed: int) -> x
             "resamples": resamples,
             "seed": seed,
             "confidence_level": LEVEL,
+            "resolved_half_width": RESOLVED,
+            "estimators": (
+                "S1: RBD-FAST on every point (SALib rbd_fast); ST: Jansen (SALib sobol)"
+                if int(points.sizes["point"]) >= RBD_FAST_MIN_POINTS
+                else "S1: Saltelli 2010, ST: Jansen (SALib sobol)"
+            ),
             "cpu_time_s": float(points.attrs.get("cpu_time_s", math.nan)),
             "cpu_s_per_point": float(points.attrs.get("cpu_time_s", math.nan))
             / max(1, int(points.sizes["point"])),
         }
     )
     return ds
+
+
+#: The indices file's per-output variables: name -> long name.
+_PER_OUTPUT = {
+    "noise_share": "share of the output's variance that is ensemble noise",
+    "variance": "variance of the output over the sample",
+    "mean": "mean of the output over the sample",
+}
+
+
+def _index_variables(res: dict, per: dict, undefined: np.ndarray) -> dict:
+    """The variables of :func:`analyse`'s dataset from its arrays: the indices with their
+    half-widths, ``resolved``, and the per-output figures."""
+    dims = ("output", "parameter")
+    resolved = (res["S1_conf"] <= RESOLVED) & (res["ST_conf"] <= RESOLVED)
+    names = {"S1": "first-order Sobol' index (RBD-FAST)", "ST": "total Sobol' index (Jansen)"}
+    data = {}
+    for k, long_name in names.items():
+        data[k] = (dims, res[k], {"long_name": long_name, "units": "1"})
+        half = f"half-width of the 95% bootstrap interval of {k}"
+        data[f"{k}_conf"] = (dims, res[f"{k}_conf"], {"long_name": half, "units": "1"})
+    data["resolved"] = (
+        dims,
+        resolved.astype(np.int8),
+        {"long_name": f"1 where both half-widths are at most {RESOLVED:g}", "units": "1"},
+    )
+    for k, long_name in _PER_OUTPUT.items():
+        data[k] = ("output", per[k], {"long_name": long_name, "units": "1"})
+    data["n_undefined"] = (
+        "output",
+        undefined,
+        {"long_name": "points where the output is undefined", "units": "1"},
+    )
+    return data
 
 
 def best_point(ds: xr.Dataset, output: str) -> dict:

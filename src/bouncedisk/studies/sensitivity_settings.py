@@ -63,7 +63,7 @@ class StudySettings:
     duration, discard : float
         Averaging time and transient, in units of ``1/R_φ``.
     loads : tuple of float
-        Load torques of each point's torque–speed curve (empty: no load figures).
+        Load torques of each point's torque–speed curve, from 0 (empty: no load figures).
     seed : int
         Seed of the Sobol' sequence's scrambling, the ensembles and the bootstrap.
     e_sigma : float
@@ -168,6 +168,9 @@ def _size_settings(size: str, sizes: Mapping) -> dict:
     for k in ("duration", "discard"):
         out[k] = _within(f"{where}.{k}", number(SOURCE, f"{where}.{k}", s[k]), *LIMITS[k])
     out["loads"] = _numbers(f"{where}.loads", s["loads"], *LIMITS["load"])
+    if out["loads"] and out["loads"][0] != 0.0:
+        # the curve's first load is the point's no-load run (MotorModel)
+        raise InputError(SOURCE, f"{where}.loads", f"must start at 0, got {list(out['loads'])}")
     mp = s.get("map_points")
     if not isinstance(mp, Sequence) or isinstance(mp, str) or len(mp) != 2:
         raise InputError(SOURCE, f"{where}.map_points", f"must be [n_psi, n_r_phi], got {mp!r}")
