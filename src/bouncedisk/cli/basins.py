@@ -9,7 +9,7 @@ import time
 from ..io.history import write_with_history
 from ..model.errors import InputError
 from ..run.cores import available_cores
-from .common import _add_set_option, command_line
+from .common import _add_set_option, command_line, named_override
 from .tracking_options import _add_track_options, _track, _tracking_store
 
 
@@ -74,7 +74,10 @@ def basins_command(args: argparse.Namespace) -> dict:
             if req.signum is not None:
                 raise KeyboardInterrupt
 
-        ds = basins(scene, grid, cores=cores, settle=args.settle, progress=progress)
+        try:
+            ds = basins(scene, grid, cores=cores, settle=args.settle, progress=progress)
+        except InputError as ex:  # a capped start: name the --set that set the cap
+            raise named_override(ex, args.set) from None
         wall = time.perf_counter() - start
         ds.attrs["wall_time_s"] = round(wall, 6)
         if args.output:

@@ -19,9 +19,12 @@ the mean of its two halves' means and its regime that of the window's end:
    chatter reinjection: one class, the tail's naming may flip between them), ``rest``;
    ``unresolved`` is not a class: the start has **not settled**;
 2. a start has **settled** when its two halves' mean speeds differ by at most the class's
-   tolerance: ``settle x scale`` (``scale``: the largest absolute mean speed of all starts, at
-   least 1), ten times that for the chaotic class, whose finite-time means fluctuate; a start
-   that has not settled is labelled ``-1`` (a drifting speed: run longer);
+   tolerance: ``settle x scale x min(1, 10 T_s / h)`` (``scale``: the largest absolute mean
+   speed of all starts, at least 1; ``h`` the half-window, ``T_s`` the stator period: a periodic
+   orbit's halves differ by its ripple over part of a cycle, which falls as ``1/h``, a drifting
+   start's by its drift rate times ``h``), ``10 x settle x scale`` for the chaotic class, whose
+   finite-time means fluctuate; a start that has not settled is labelled ``-1`` (a drifting
+   speed: run longer);
 3. settled starts of one class (and, for periodic classes, one cycle of impact phases within
    :data:`PHASE_TOL`) belong to one attractor when a chain of them joins their mean speeds with
    steps of at most the class's tolerance. A chaotic attractor is not split by its finite-time
@@ -47,7 +50,8 @@ import numpy as np
 import xarray as xr
 
 from ..analysis import observables as ob
-from ..analysis.statistics import confidence_interval, ensemble_window
+from ..analysis.ensembles import CappedRun
+from ..analysis.statistics import capped_error, confidence_interval, ensemble_window
 from ..analysis.sweeps import _ordered_runs, shard_slice, with_params
 from ..engine import InitialState
 from ..io.provenance import base_attrs, new_run_id
@@ -60,6 +64,14 @@ from ..run.runner import scene_attrs
 SETTLE = 1e-2
 #: The chaotic class's tolerance, in units of the others' (rule 2).
 CHAOTIC_FACTOR = 10.0
+#: Half-window, in stator periods, below which a periodic class's tolerance stops shrinking: the
+#: tolerance is ``settle x scale x min(1, HALF_PERIODS T_s / h)`` for halves of length ``h``
+#: (rule 2). A periodic orbit's half-window means differ by its ripple over a part of a cycle,
+#: which falls as ``1/h``; a start still drifting towards its attractor differs by its drift
+#: rate times ``h``: the shrinking tolerance keeps a short window from calling a drift settled.
+HALF_PERIODS = 10.0
+#: Fewest stator periods in each half-window (:func:`check_scene`).
+MIN_HALF_PERIODS = 10.0
 #: Largest difference of two cycles' impact phases (rad) of one periodic attractor (rule 3).
 PHASE_TOL = 1e-4
 #: Impact phases of one cycle kept per start (a cycle of up to 32 events, the regime search's).
@@ -70,8 +82,9 @@ MAX_STARTS = 100_000
 Z95 = 1.959963984540054
 #: The grouping rule, as the files and ``--json`` state it.
 RULE = (
-    "start settled when its two half-window mean speeds differ by <= settle * scale "
-    "(chaotic class: 10x; scale = max |mean speed|, >= 1); settled starts of one class "
+    "start settled when its two half-window mean speeds differ by <= settle * scale * "
+    "min(1, 10 T_s / h) (h: the half-window, T_s: the stator period; chaotic class: "
+    "10 settle * scale; scale = max |mean speed|, >= 1); settled starts of one class "
     "(regime + period + cycle phases; chaotic and chaotic-reinjection one class) form one "
     "attractor when chained by mean-speed steps <= that tolerance; unresolved or unsettled: -1"
 )
@@ -125,14 +138,15 @@ def start_grid(
     Raises
     ------
     InputError
-        No phase, a negative or non-finite height or speed, or more than :data:`MAX_STARTS`.
+        No phase, a negative or non-finite height, a non-finite speed, or more than :data:`MAX_STARTS`.
     """
     if isinstance(n_phases, bool) or not isinstance(n_phases, int | np.integer) or n_phases < 1:
         raise InputError(source, "--phases", f"must be a whole number >= 1, got {n_phases!r}")
-    for name, values in (("--speeds", speeds), ("--heights", heights)):
+    for name, values, low in (("--speeds", speeds, -math.inf), ("--heights", heights, 0.0)):
         arr = np.asarray(values, float)
-        if arr.size == 0 or not np.all(np.isfinite(arr)) or np.any(arr < 0.0):
-            raise InputError(source, name, f"must be finite values >= 0, got {list(values)}")
+        if arr.size == 0 or not np.all(np.isfinite(arr)) or np.any(arr < low):
+            what = "finite values" if low == -math.inf else f"finite values >= {low:g}"
+            raise InputError(source, name, f"must be {what}, got {list(values)}")
     grid = StartGrid(
         2.0 * math.pi * np.arange(n_phases) / n_phases,
         np.asarray(speeds, float),
@@ -167,6 +181,16 @@ def check_scene(scene: Scene) -> tuple[float, float]:
         raise InputError(scene.source, "effects", "basins compare rotor speeds: add 'torsion'")
     if scene.solver.method != "exact" or scene.model != "bouncing":
         raise InputError(scene.source, "solver.method", "basins run the exact bouncing model only")
+    half = 0.5 * (t_end - t_from)
+    periods = half * scene.params.omega_s / (2.0 * math.pi)
+    if periods < MIN_HALF_PERIODS:
+        raise InputError(
+            scene.source,
+            "stop.time",
+            f"each half of the window [stats.discard, stop.time] must span at least "
+            f"{MIN_HALF_PERIODS:g} stator periods to tell a settled start from a drifting one; "
+            f"it spans {periods:.3g}",
+        )
     return t_from - scene.initial.t, t_end - scene.initial.t
 
 
@@ -198,6 +222,16 @@ def _orbit(stats, tail: dict) -> np.ndarray:
     return out
 
 
+def _capped_named(scene: Scene, runs: Iterator) -> Iterator:
+    """``runs``, a start that stops at ``stop.max_events`` before its window ends an input error
+    naming the field (:func:`~bouncedisk.analysis.statistics.capped_error`; "member" is the
+    start's index)."""
+    try:
+        yield from runs
+    except CappedRun as ex:
+        raise capped_error(scene, ex, " (a start of the basins)") from None
+
+
 def run_starts(
     scene: Scene,
     grid: StartGrid,
@@ -219,7 +253,9 @@ def run_starts(
     orbit = np.full((n, ORBIT_SLOTS), np.nan)
     pool = ThreadPoolExecutor(max_workers=max(1, cores))
     try:
-        runs = _ordered_runs(pool, _tasks(scene, grid, index), ahead=4 * max(1, cores))
+        runs = _capped_named(
+            scene, _ordered_runs(pool, _tasks(scene, grid, index), 4 * max(1, cores))
+        )
         for j in range(n):
             first, _, _ = next(runs)
             second, _, tail = next(runs)
@@ -351,6 +387,19 @@ def _same_cycle(a: np.ndarray, b: np.ndarray) -> bool:
     return bool(np.all(d.min(axis=1) <= PHASE_TOL) and np.all(d.min(axis=0) <= PHASE_TOL))
 
 
+def _tolerances(ds: xr.Dataset, settle: float, scale: float) -> Callable[[tuple], float]:
+    """The settle tolerance of a class (rule 2), from the file's window and stator period."""
+    discard, duration = (float(x) for x in np.ravel(ds.attrs["window"]))
+    half = 0.5 * (duration - discard)
+    period = 2.0 * math.pi / float(ds.attrs["omega_s"])
+    shrink = min(1.0, HALF_PERIODS * period / half)
+
+    def tolerance(cls: tuple) -> float:
+        return settle * scale * (CHAOTIC_FACTOR if cls[0] == "chaotic" else shrink)
+
+    return tolerance
+
+
 def labels(ds: xr.Dataset, settle: float = SETTLE) -> tuple[np.ndarray, float]:
     """Every start's attractor label by the module's rule (:data:`RULE`), ``-1`` when it has not
     settled, and the speed scale; attractors numbered by decreasing mean speed."""
@@ -358,13 +407,13 @@ def labels(ds: xr.Dataset, settle: float = SETTLE) -> tuple[np.ndarray, float]:
     d_half = np.abs(ds["mean_omega_second_half"].values - ds["mean_omega_first_half"].values)
     finite = mean[np.isfinite(mean)]
     scale = max(1.0, float(np.max(np.abs(finite)))) if finite.size else 1.0
+    tolerance = _tolerances(ds, settle, scale)
     groups: dict[tuple, list[list[int]]] = {}  # class -> cycles -> starts
     for i in range(len(mean)):
         cls = _class_of(ds["regime"].values[i], ds["period_p"].values[i], ds["period_q"].values[i])
         if cls is None or not math.isfinite(mean[i]):
             continue
-        tol = settle * scale * (CHAOTIC_FACTOR if cls[0] == "chaotic" else 1.0)
-        if not d_half[i] <= tol:
+        if not d_half[i] <= tolerance(cls):
             continue
         cycles = groups.setdefault(cls, [])
         orbit = ds["orbit_phases"].values[i]
@@ -377,7 +426,7 @@ def labels(ds: xr.Dataset, settle: float = SETTLE) -> tuple[np.ndarray, float]:
             home.append(i)
     found: list[list[int]] = []
     for cls, cycles in groups.items():
-        tol = settle * scale * (CHAOTIC_FACTOR if cls[0] == "chaotic" else 1.0)
+        tol = tolerance(cls)
         for members in cycles:
             order = sorted(members, key=lambda i: (mean[i], i))
             chain = [order[0]]
