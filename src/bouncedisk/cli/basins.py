@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import json
 import time
 
 from ..io.history import write_with_history
 from ..model.errors import InputError
 from ..run.cores import available_cores
-from .common import _add_set_option, command_line, named_override
+from .common import _add_set_option, command_line, named_override, print_result
 from .tracking_options import _add_track_options, _track, _tracking_store
 
 
@@ -83,12 +82,8 @@ def basins_command(args: argparse.Namespace) -> dict:
         if args.output:
             write_with_history(ds, args.output, command_line(args))
     out = summary(ds)
-    if args.json:
-        print(json.dumps(out))
-    else:
-        print(format_basins(out))
-        if args.output:
-            print(f"{args.output}: per start and per attractor ({wall:.2f} s on {cores} cores)")
+    saved = f"per start and per attractor ({wall:.2f} s on {cores} cores)"
+    print_result(args, out, format_basins(out), saved)
     return out
 
 

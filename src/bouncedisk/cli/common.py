@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import shlex
 import sys
 
@@ -48,3 +49,14 @@ def flush_stdout() -> None:
         raise
     except OSError as ex:
         raise OSError(ex.errno, ex.strerror or str(ex), "<stdout>") from None
+
+
+def print_result(args: argparse.Namespace, summary: dict, table: str, saved: str) -> None:
+    """A command's result on standard output: ``summary`` as one JSON object (``--json``, no
+    NaN or infinity), else ``table`` and, when ``-o`` wrote a file, what it holds (``saved``)."""
+    if args.json:
+        print(json.dumps(summary, allow_nan=False))
+    else:
+        print(table)
+        if args.output:
+            print(f"{args.output}: {saved}")

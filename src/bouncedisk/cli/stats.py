@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 
 from ..io.history import write_with_history
 from ..model.errors import InputError
 from ..run.cores import available_cores
-from .common import _add_set_option, command_line, named_override
+from .common import _add_set_option, command_line, named_override, print_result
 from .tracking_options import _add_track_options, _track, _tracking_store
 from .window_warnings import print_window_warnings
 
@@ -108,12 +107,8 @@ def stats_command(args: argparse.Namespace) -> dict:
             write_with_history(to_dataset(scene, result, wall), args.output, command_line(args))
     summary = result.summary()
     print_window_warnings(scene, [summary["regime"]])
-    if args.json:
-        print(json.dumps(summary))
-    else:
-        print(format_summary(summary))
-        if args.output:
-            print(f"{args.output}: per-member values ({wall:.2f} s on {cores} cores)")
+    saved = f"per-member values ({wall:.2f} s on {cores} cores)"
+    print_result(args, summary, format_summary(summary), saved)
     return summary
 
 

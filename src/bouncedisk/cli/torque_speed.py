@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import time
 
 from ..io.history import write_with_history
 from ..model.errors import InputError
 from ..run.cores import available_cores
-from .common import _add_set_option, command_line, named_override
+from .common import _add_set_option, command_line, named_override, print_result
 from .stats import _progress
 from .tracking_options import _add_track_options, _track, _tracking_store
 from .window_warnings import print_window_warnings
@@ -131,12 +130,8 @@ def torque_speed_command(args: argparse.Namespace) -> dict:
             )
     regimes = summary["regime"] + (summary.get("down") or {}).get("regime", [])
     print_window_warnings(scene, regimes)
-    if args.json:
-        print(json.dumps(summary, allow_nan=False))
-    else:
-        print(format_curve(summary, scene.physical is not None))
-        if args.output:
-            print(f"{args.output}: the curve ({wall:.2f} s on {cores} cores)")
+    table = format_curve(summary, scene.physical is not None)
+    print_result(args, summary, table, f"the curve ({wall:.2f} s on {cores} cores)")
     return summary
 
 
