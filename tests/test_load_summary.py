@@ -241,6 +241,24 @@ def test_design_map_and_torque_speed_stall_torques_agree_at_the_fig3_point():
     assert plain["stall_torque_ci95"][1] == 1.3 and plain["stall_torque"] < 1.0
 
 
+def test_the_design_maps_stall_torque_agrees_with_the_curves_at_the_fig3_point():
+    """What the design maps compute (studies/sensitivity.py ``load_figures`` on the map's loads,
+    every 0.05 up to 1.1, plus 2) against the refined torque–speed curve at e = 0.3, psi = 0:
+    the map's root lies past the bound by the window's resolution, its interval reaches down
+    to the bound, and the two intervals overlap (before: the map's [1.06, 1.07] against the
+    curve's [1.0, 1.009])."""
+    from bouncedisk.studies import sensitivity as sens
+
+    scene = small_load_scene(0.3, 2, time=3000.0, discard=500.0)
+    loads = [*(0.05 * np.arange(23)), 2.0]
+    fig = sens.load_figures(torque_speed(scene, loads, branches=("up",)), 1.0)["stall_torque"]
+    value, low, high, _ = fig
+    curve = refined_torque_speed(scene, np.linspace(0.0, 1.05, 8), 0.005).summary()
+    lo, hi = curve["stall_torque_ci95"]
+    assert 1.0 < value and low == 1.0 and value <= high
+    assert low <= hi and lo <= high  # equal within their intervals
+
+
 def test_refinement_sweeps_the_down_branch_from_the_load_above():
     def both(loads):
         c = _Curve(loads)

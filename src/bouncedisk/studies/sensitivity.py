@@ -214,9 +214,12 @@ def load_figures(curve, r: float) -> dict[str, tuple[float, float, float, float]
     :func:`bouncedisk.studies.torque_speed.peak`: the largest power over the curve's loads; the
     efficiency is 0 where that power is not positive);
     their standard errors are the jackknife's over members (``K`` re-evaluations, where the
-    summary's bootstrap takes thousands), their intervals Student's. The power is scaled by
+    summary's bootstrap takes thousands), their intervals Student's; a stall torque found past
+    the momentum bound 1 has its interval reach down to it, as the curve's summary does (past
+    the bound no speed is stationary: a finite run's mean speed stays positive a little longer). The power is scaled by
     ``R_φ`` (``R_φ τ_L Ω̄``, units of ``Φ0/t_c``).
     """
+    from .load_summary import MOMENTUM_BOUND
     from .torque_speed import first_zero, peak
 
     order = np.argsort(np.asarray(curve.loads, float), kind="stable")
@@ -244,6 +247,9 @@ def load_figures(curve, r: float) -> dict[str, tuple[float, float, float, float]
     for n, name in enumerate(("stall_torque", "max_power", "efficiency_at_max_power")):
         se = _jackknife_se(jack[:, n])
         out[name] = (float(full[n]), full[n] - q * se, full[n] + q * se, se)
+    value, low, high, se = out["stall_torque"]
+    if low > MOMENTUM_BOUND:  # a root past the bound: the motor stalls at it (as the curve says)
+        out["stall_torque"] = (value, MOMENTUM_BOUND, high, se)
     return out
 
 
