@@ -1,5 +1,6 @@
 """The global sensitivity study (SALib): sampling, sharded evaluation, joining, analysis, config."""
 
+import copy
 import dataclasses
 import math
 import re
@@ -290,3 +291,17 @@ def test_the_indices_figure_greys_out_what_is_not_resolved_and_states_the_sample
     title = fig._suptitle.get_text()
     assert f"{256 * 5} points" in title and "N = 256" in title
     assert "noise: 0.0 %" in ax.get_title()
+
+
+def test_an_unknown_key_of_the_study_is_one_line_naming_it():
+    """Before: the config schema's error, 89 lines of the schema."""
+    from bouncedisk.model.errors import InputError
+
+    config = copy.deepcopy(CONFIG)
+    config["sensitivity_study"]["bogus"] = 1
+    with pytest.raises(InputError, match="sensitivity_study.bogus: unknown key"):
+        sc.study_settings(config)
+    config["sensitivity_study"].pop("bogus")
+    config["sensitivity_study"]["design_map"]["psi"] = 0.0
+    with pytest.raises(InputError, match="sensitivity_study.design_map.psi"):
+        sc.study_settings(config)

@@ -114,9 +114,19 @@ def _size(field: str, value: object, name: str) -> int:
     return int(_within(field, whole_number(SOURCE, field, value, minimum=int(lo)), lo, hi))
 
 
-def _mapping(field: str, value: object) -> Mapping:
+#: The keys of the config's ``sensitivity_study`` mapping.
+STUDY_KEYS = ("ranges", "seed", "e_sigma", "design_map", "sizes")
+
+
+def _mapping(field: str, value: object, keys: Sequence[str] | None = None) -> Mapping:
+    """``value`` as a mapping; with ``keys``, one whose every key is one of them."""
     if not isinstance(value, Mapping):
         raise InputError(SOURCE, field, f"must be a mapping, got {value!r}")
+    unknown = [k for k in value if keys is not None and k not in keys]
+    if unknown:
+        raise InputError(
+            SOURCE, f"{field}.{unknown[0]}", f"unknown key; expected one of {list(keys)}"
+        )
     return value
 
 
@@ -190,7 +200,7 @@ def study_settings(config: Mapping) -> StudySettings:
     size = config.get("sensitivity", "small")
     if size not in SIZES:
         raise InputError(SOURCE, "sensitivity", f"must be small or full, got {size!r}")
-    study = _mapping("sensitivity_study", config.get("sensitivity_study"))
+    study = _mapping("sensitivity_study", config.get("sensitivity_study"), STUDY_KEYS)
     ranges = _ranges(study.get("ranges"))
     sizes = _mapping("sensitivity_study.sizes", study.get("sizes"))
     s = _size_settings(size, sizes)
@@ -201,7 +211,7 @@ def study_settings(config: Mapping) -> StudySettings:
             f"sensitivity_study.sizes.{size}.shards",
             f"{s['shards']} shards for only {n_points} points",
         )
-    dm = _mapping("sensitivity_study.design_map", study.get("design_map"))
+    dm = _mapping("sensitivity_study.design_map", study.get("design_map"), ("e", "omega_s"))
     map_e = _numbers("sensitivity_study.design_map.e", dm.get("e"), *DOMAIN["e"])
     if not map_e:
         raise InputError(SOURCE, "sensitivity_study.design_map.e", "must name at least one e")
