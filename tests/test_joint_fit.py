@@ -408,3 +408,70 @@ def test_joint_recovery_of_the_chaotic_case_holds_the_truth_in_every_interval(tm
         low, high = BOUNDS[name]
         assert low < lo[2, j] <= t <= hi[2, j] < high, (name, lo[2, j], hi[2, j], t)
         assert hi[2, j] - lo[2, j] < hi[0, j] - lo[0, j], name  # both narrower than run-ups alone
+
+
+@pytest.mark.xdist_group("tiny_joint_fit")  # one worker fits, not both
+def test_an_inadequate_fit_reports_no_interval(tiny_fit, tmp_path):
+    """The same fit with a ``χ²`` the data reject (p < 0.001): every interval of the file is NaN,
+    ``identified = "no"`` with the reason, and the summary and figures say so; the fit as it
+    came (its own ``χ²``) keeps its intervals under ``identified = "yes"`` exactly when adequate."""
+    import dataclasses
+
+    from scipy.stats import chi2 as chi2_dist
+
+    from bouncedisk.figures.drawing import FIGURES
+
+    n = 11 + tiny_fit.load.n
+    ok = chi2_dist.sf(tiny_fit.chi2, n) > 1e-3
+    as_is = fit_dataset(tiny_fit)
+    assert as_is.attrs["identified"] == ("yes" if ok else "no")
+    bad = dataclasses.replace(tiny_fit, chi2=float(chi2_dist.isf(1e-4, n)))
+    ds = fit_dataset(bad)
+    assert ds.attrs["identified"] == "no" and "p = 0.0001 < 0.001" in ds.attrs["identified_reason"]
+    for name in NAMES:
+        assert math.isnan(ds[name].attrs["ci_low"]) and math.isnan(ds[name].attrs["ci_high"])
+        assert ds[name].attrs["identified"] == 0 and np.isfinite(float(ds[name]))
+    assert np.isnan(ds["interval_low"].values).all() and np.isnan(ds["interval_high"].values).all()
+    assert not ds["interval_identified"].values.any()
+    assert ds.attrs["not_identified"] == ",".join(NAMES)
+    text = summary_text(ds)
+    assert "NOT IDENTIFIED: inadequate fit" in text and "95% [" not in text
+    assert "95% intervals by data set: none (inadequate fit)" in text
+    for name in ("fit_profiles", "fit_identifiability", "fit_load"):
+        fig = FIGURES[name].draw(ds)
+        fig.savefig(tmp_path / f"{name}.png", dpi=40)
+    titles = [ax.get_title() for ax in FIGURES["fit_profiles"].draw(ds).axes]
+    assert all("no interval: inadequate fit" in t for t in titles), titles
+    assert "NO INTERVALS" in FIGURES["fit_identifiability"].draw(ds).axes[0].get_title()
+
+
+@pytest.mark.xdist_group("tiny_joint_fit")  # one worker fits, not both
+def test_the_figures_say_synthetic_and_zoom_on_the_intervals(tiny_fit):
+    """Synthetic data are labelled "synthetic", never "measured"; each profile panel spans its
+    interval plus half its width on either side (within the search range); the
+    identifiability legend names the three data sets, the estimate and the generating value."""
+    from bouncedisk.figures.drawing import FIGURES
+
+    ds = fit_dataset(tiny_fit)
+    assert ds.attrs["load_curve_synthetic"] == 1
+    ax = FIGURES["fit_load"].draw(ds).axes[0]
+    labels = ax.get_legend_handles_labels()[1]
+    assert any(lab.startswith("synthetic") for lab in labels)
+    assert not any("measured" in lab for lab in labels), labels
+    fig = FIGURES["fit_identifiability"].draw(ds)
+    legend = [t.get_text() for t in fig.legends[0].get_texts()]
+    for want in ("95% interval: run-ups", "95% interval: load curve", "95% interval: both",
+                 "estimate", "generating value"):  # fmt: skip
+        assert want in legend, legend
+    if ds.attrs["identified"] == "yes":
+        for ax in FIGURES["fit_profiles"].draw(ds).axes:
+            name = ax.get_xlabel().split()[0]
+            a = ds[name].attrs
+            lo, hi = ax.get_xlim()
+            if name in ("r_phi", "speed_scale"):
+                lo, hi, c0, c1 = (math.log10(v) for v in (lo, hi, a["ci_low"], a["ci_high"]))
+                s0, s1 = math.log10(a["search_low"]), math.log10(a["search_high"])
+            else:
+                c0, c1, s0, s1 = a["ci_low"], a["ci_high"], a["search_low"], a["search_high"]
+            pad = 0.5 * (c1 - c0)
+            assert lo == pytest.approx(max(s0, c0 - pad)) and hi == pytest.approx(min(s1, c1 + pad))

@@ -8,7 +8,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from .common import COLORS
-from .joint_fit import fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
+from .joint_fit import data_word, fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
 from .load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
 
 
@@ -42,10 +42,10 @@ def fig5_motor(
     runs = int(fitted.attrs.get("runs", 1)) if fitted is not None else 1
     if runs > 1:  # run-ups fitted together: the data the fit compares with is their mean
         ax.plot(fitted["time"], fitted["omega_measured"], color=COLORS["data"], lw=0.6,
-                label=f"measured: mean of {runs} run-ups")  # fmt: skip
+                label=f"{data_word(fitted)}: mean of {runs} run-ups")  # fmt: skip
     else:
         ax.plot(curve["time_s"], curve["omega_rad_s"], color=COLORS["data"], lw=0.6,
-                label="measured (prototype curve)")  # fmt: skip
+                label=f"{data_word(fitted)} (prototype curve)")  # fmt: skip
     if fitted is not None:
         _fig5_fitted(ax, axr, fitted)
     elif simulated is not None:
@@ -110,7 +110,9 @@ def fig_fit_profiles(fitted: xr.Dataset) -> Figure:
 
     The dashed line is the 95 % threshold ``χ²₁(0.95) = 3.84``; the shaded span is the reported
     interval, the marker the estimate. A profile that stays under the line over the whole search
-    range is "not identified".
+    range is "not identified". Each panel is zoomed on its interval (half its width beyond either
+    end, within the search range) so that the profile's curvature shows; an inadequate fit (the
+    file's ``identified = "no"``) has no interval: the panel shows the profiled range and says so.
     """
     names = [n for n in ("e", "r_phi", "psi", "omega_s", "speed_scale")
              if f"profile_chi2_{n}" in fitted]  # fmt: skip
@@ -120,16 +122,36 @@ def fig_fit_profiles(fitted: xr.Dataset) -> Figure:
         x = fitted[f"profile_{n}"].values
         y = fitted[f"profile_chi2_{n}"].values
         a = fitted[n].attrs
-        ax.axvspan(a["ci_low"], a["ci_high"], color=COLORS["fit"], alpha=0.2, lw=0)
+        log = n in ("r_phi", "speed_scale")
+        has_ci = bool(np.isfinite(a["ci_low"]) and np.isfinite(a["ci_high"]))
+        if has_ci:
+            ax.axvspan(a["ci_low"], a["ci_high"], color=COLORS["fit"], alpha=0.2, lw=0)
         ax.plot(x, y, "o-", color=COLORS["fit"], ms=3, lw=1)
         ax.axhline(3.841, ls="--", color="k", lw=0.8)
         ax.plot([float(fitted[n])], [0.0], "k*", ms=8)
-        ax.set_xlim(a["search_low"], a["search_high"])
-        if n in ("r_phi", "speed_scale"):
+        lo, hi = (a["ci_low"], a["ci_high"]) if has_ci else (np.nanmin(x), np.nanmax(x))
+        ax.set_xlim(*_zoom(lo, hi, a["search_low"], a["search_high"], log))
+        if log:
             ax.set_xscale("log")
-        ax.set_ylim(-0.5, max(10.0, min(float(np.nanmax(y)) * 1.05, 50.0)))
+        shown = (x >= ax.get_xlim()[0]) & (x <= ax.get_xlim()[1])
+        top = float(np.nanmax(y[shown])) if shown.any() else 10.0
+        ax.set_ylim(-0.5, max(10.0, min(top * 1.05, 50.0)))
         ax.set_xlabel(f"{n} [{a['units']}]")
         tag = "" if a.get("identified", 1) else " (not identified)"
-        ax.set_title(f"{n}: 95% [{a['ci_low']:.3g}, {a['ci_high']:.3g}]{tag}", fontsize=8)
+        ci = (
+            f"95% [{a['ci_low']:.3g}, {a['ci_high']:.3g}]"
+            if has_ci
+            else "no interval: inadequate fit"
+        )
+        ax.set_title(f"{n}: {ci}{tag}", fontsize=8)
     axes[0].set_ylabel("Δχ² (profile)")
     return fig
+
+
+def _zoom(lo: float, hi: float, low: float, high: float, log: bool) -> tuple[float, float]:
+    """The axis range of a profile panel: ``[lo, hi]`` widened by half its width on each side
+    (in log for a log axis), within the search range ``[low, high]``."""
+    f, g = (np.log10, lambda v: 10.0**v) if log else (lambda v: v, lambda v: v)
+    a, b = f(lo), f(hi)
+    pad = 0.5 * (b - a) if b > a else 0.05 * (f(high) - f(low))
+    return float(g(max(f(low), a - pad))), float(g(min(f(high), b + pad)))
