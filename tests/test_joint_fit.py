@@ -475,3 +475,28 @@ def test_the_figures_say_synthetic_and_zoom_on_the_intervals(tiny_fit):
                 c0, c1, s0, s1 = a["ci_low"], a["ci_high"], a["search_low"], a["search_high"]
             pad = 0.5 * (c1 - c0)
             assert lo == pytest.approx(max(s0, c0 - pad)) and hi == pytest.approx(min(s1, c1 + pad))
+
+
+def test_a_window_the_run_did_not_reach_is_an_error_never_a_number(tmp_path, capsys, monkeypatch):
+    """A member stopped by the event budget before the window's end reads NaN (not the part it
+    reached divided by the whole window: 0.445 rad/s instead of about 20.5 for the shipped
+    curve over [0.06, 1e5] s), and a window beyond the budget is refused before any work."""
+    theta = {"e": 0.55, "log10_r_phi": math.log10(0.002), "psi": 0.4, "omega_s": 1.7}
+    data = _fake_load_data((0.01, 0.02))
+    assert np.isfinite(lp.curve_readings(theta, data, 0, 0.03, 17)).all()
+    monkeypatch.setattr(lp, "MAX_EVENTS", 50)  # the run stops at 50 impacts, before t0
+    assert np.isnan(lp.curve_readings(theta, data, 0, 0.03, 17)).all()
+    monkeypatch.undo()
+    import yaml
+
+    shipped = Path(__file__).parents[1] / "data" / "prototype"
+    load = _copy_load(shipped / "synthetic_motor_load.csv", tmp_path / "load.csv",
+                      lambda s: s.update(window_s=[0.06, 1e5]))  # fmt: skip
+    assert yaml.safe_load(load.with_suffix(".yaml").read_text())["window_s"] == [0.06, 1e5]
+    out = tmp_path / "fit.nc"
+    code = main(["fit", str(shipped / "synthetic_motor.csv"), "--load", str(load), "-o", str(out),
+                 "--scan", "8", "--zoom", "0", "-q"])  # fmt: skip
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1, err
+    assert err[0].startswith(f"bouncedisk: error: {load.with_suffix('.yaml')}: window_s: ends at")
+    assert not out.exists()

@@ -16,7 +16,7 @@ from scipy import stats as _sps
 from ..io.load_curves import LoadCurveData, check_same_setup
 from ..io.runup_curves import MotorCurve
 from ..model.errors import InputError
-from .loadpart import LoadPart
+from .loadpart import LoadPart, check_window
 from .loadpart import band as load_band
 from .model import EnsembleSpec
 from .objective import Objective, snap
@@ -95,6 +95,7 @@ def load_part(
         return None
     for d in curves:
         check_same_setup(d, fitted.drive_frequency_hz, fitted.phi0_rad)
+        check_window(d)
         if fitted.phi0_rad is None:
             raise InputError(d.path, "motor.Phi0_rad", "the run-ups' sidecar must state Phi0_rad "
                              "for a joint fit with a load curve (its torque scale needs it)")  # fmt: skip

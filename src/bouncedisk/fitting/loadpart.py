@@ -30,12 +30,14 @@ from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from ..engine import EngineConfig, InitialState
 from ..engine.loads import omega_integrals
 from ..io.load_curves import LoadCurveData
+from ..model.errors import InputError
 from ..model.params import Parameters, PhysicalParameters
 from . import detlinalg
 
@@ -85,8 +87,28 @@ def curve_readings(
         psi=theta["psi"], contact=True, torsion=True, t_end=t1, max_events=MAX_EVENTS,
         e_sigma=e_sigma, seed=seed, member=LOAD_STREAM + member, stats_from=t0,
     )  # fmt: skip
-    integrals = omega_integrals(cfg, data.torque / torque, InitialState(t=0.0, omega=0.0))
+    # a run stopped by the event budget before t1 has not read the window: NaN, never the part
+    # it reached divided by the whole window (the objective rejects the point)
+    integrals = omega_integrals(
+        cfg, data.torque / torque, InitialState(t=0.0, omega=0.0), reached_only=True
+    )
     return integrals / (t1 - t0) * speed
+
+
+def check_window(data: LoadCurveData) -> None:
+    """Refuse a window the members cannot reach within their event budget (before any work).
+
+    A member runs from rest to ``t1``: ``t1 f`` drive periods, of which a bouncing rotor impacts
+    about once each. A window of more periods than :data:`MAX_EVENTS` would stop at the budget
+    on any such motor, and its reading would not be the mean over the window.
+    """
+    t1 = data.window_s[1]
+    periods = t1 * data.drive_frequency_hz
+    if periods > MAX_EVENTS:
+        side = str(Path(data.path).with_suffix(".yaml"))
+        raise InputError(side, "window_s", f"ends at {t1:g} s = {periods:.3g} drive periods "
+                         f"after the start; a reading can follow at most {MAX_EVENTS:.3g} "
+                         "impacts, so the model cannot read that window")  # fmt: skip
 
 
 @dataclass

@@ -176,7 +176,8 @@ class Objective:
         """``Σ log(1 + r²)``: the global search's loss, insensitive to far-off statistics."""
         r = self.residuals(x, members)
         self.chi2(x, members)
-        return float(np.sum(np.log1p(r * r)))
+        value = float(np.sum(np.log1p(r * r)))
+        return value if math.isfinite(value) else 1e300  # a reading the run did not reach
 
     def map(self, fn: Callable, items) -> list:
         """``[fn(item) …]`` with items on ``spec.cores`` threads (members of each run serially)."""
