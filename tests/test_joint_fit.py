@@ -500,3 +500,76 @@ def test_a_window_the_run_did_not_reach_is_an_error_never_a_number(tmp_path, cap
     assert code == 2 and len(err) == 1, err
     assert err[0].startswith(f"bouncedisk: error: {load.with_suffix('.yaml')}: window_s: ends at")
     assert not out.exists()
+
+
+# ------------------------------------------------------------------ the restitution noise, fitted
+
+
+def test_a_fitted_restitution_noise_is_the_points_own_and_zero_is_deterministic():
+    """With ``e_sigma`` a search coordinate the members use the point's own value, not the stated
+    one; at 0 (the deterministic limit) every member runs the same orbit, so the members differ
+    only by their measurement noise and the load readings of all members coincide."""
+    from bouncedisk.fitting.model import (
+        EnsembleSpec,
+        member_records,
+        param_names,
+        restitution_noise,
+    )
+
+    curve = read_curve_like()
+    assert param_names(curve) == ["e", "log10_r_phi", "psi", "omega_s"]
+    assert param_names(curve, fit_e_sigma=True)[-1] == "e_sigma"
+    assert BOUNDS["e_sigma"] == (0.0, 0.1)
+    theta = {"e": 0.55, "log10_r_phi": math.log10(0.002), "psi": 0.4, "omega_s": 1.7}
+    assert restitution_noise(theta, 0.03) == 0.03
+    assert restitution_noise({**theta, "e_sigma": 0.0}, 0.03) == 0.0
+    spec = EnsembleSpec(e_sigma=0.03, seed=4)
+    quiet = dataclass_replace(curve, sigma=0.0)
+    det = member_records({**theta, "e_sigma": 0.0}, quiet, range(2), spec)
+    np.testing.assert_array_equal(det[0], det[1])
+    noisy = member_records(theta, quiet, range(2), spec)
+    assert np.max(np.abs(noisy[0] - noisy[1])) > 0.1  # the stated 3 % parts the members
+    np.testing.assert_array_equal(member_records({**theta, "e_sigma": 0.03}, quiet, range(2), spec)[1],
+                                  noisy[1])  # fmt: skip
+    data = _fake_load_data((0.01, 0.02))
+    r0, r1 = (lp.curve_readings({**theta, "e_sigma": 0.0}, data, m, 0.03, 17) for m in (0, 1))
+    np.testing.assert_array_equal(r0, r1)
+    assert not np.array_equal(*(lp.curve_readings(theta, data, m, 0.03, 17) for m in (0, 1)))
+
+
+def read_curve_like():
+    """A 0.02 s curve of the test motor (for the grid and scales only)."""
+    from bouncedisk.io.runup_curves import MotorCurve
+
+    t = DT * np.arange(int(0.02 / DT) + 1)
+    return MotorCurve(time=t, omega=np.zeros(len(t)), sigma=SIGMA, drive_frequency_hz=F_HZ,
+                      phi0_rad=PHI0, source="", synthetic=True, path="")  # fmt: skip
+
+
+def dataclass_replace(obj, **kw):
+    import dataclasses
+
+    return dataclasses.replace(obj, **kw)
+
+
+@pytest.mark.slow  # a tiny joint fit with five coordinates
+def test_a_fitted_restitution_noise_is_a_variable_with_its_interval_and_table_row(data_dir):
+    """``FitSettings(e_sigma=None)`` (``--e-sigma fit``): ``e_sigma`` is a fifth search coordinate
+    over [0, 0.1]; the file carries it as a variable with ``ci_low``/``ci_high`` like ``e``, a
+    fifth row of the identifiability table, and the generating value the sidecar states."""
+    import dataclasses
+
+    fit = fit_curve(read_curve(data_dir / "run.csv"), dataclasses.replace(TINY, e_sigma=None),
+                    load=[read_load_curve(data_dir / "load.csv")])  # fmt: skip
+    ds = fit_dataset(fit)
+    assert list(ds["parameter"].values)[-1] == "e_sigma" and ds["interval_low"].shape == (3, 5)
+    a = ds["e_sigma"].attrs
+    assert {"ci_low", "ci_high", "identified", "search_low", "search_high"} <= set(a)
+    assert (a["search_low"], a["search_high"]) == (0.0, 0.1)
+    assert 0.0 <= float(ds["e_sigma"]) <= 0.1 and ds.attrs["e_sigma_fitted"] == 1
+    assert ds.attrs["e_sigma"] == float(ds["e_sigma"])
+    assert float(ds["generating_value"].values[-1]) == 0.03
+    if ds.attrs["identified"] == "yes":
+        assert a["ci_low"] <= float(ds["e_sigma"]) <= a["ci_high"]
+        assert ds["interval_low"].values[2, -1] == a["ci_low"]
+    assert "e_sigma" in summary_text(ds)

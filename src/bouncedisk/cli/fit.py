@@ -67,8 +67,8 @@ def _add_fit(sub) -> None:
     p.add_argument(
         "--e-sigma",
         default=None,
-        help="restitution noise of the model's members, in (0, 0.5] (default: 0.03; README, "
-        "'Fitting': a curve and the model fitted to it share it)",
+        help="restitution noise of the model's members: a number in [0, 0.5] states it (default: "
+        "0.03; 0: the deterministic limit), 'fit' fits it over [0, 0.1] (docs/user_guide/fitting.md)",
     )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress or summary")
     _add_track_options(p)

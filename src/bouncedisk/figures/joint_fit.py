@@ -19,6 +19,7 @@ COORDINATES = {
     "psi": (r"$\psi$ [rad]", lambda v: v),
     "omega_s": (r"$\omega_s$", lambda v: v),
     "log10_speed_scale": ("log10 speed scale", lambda v: v),
+    "e_sigma": (r"$\sigma_e$ (restitution noise)", lambda v: v),
 }
 
 

@@ -114,7 +114,7 @@ def fig_fit_profiles(fitted: xr.Dataset) -> Figure:
     end, within the search range) so that the profile's curvature shows; an inadequate fit (the
     file's ``identified = "no"``) has no interval: the panel shows the profiled range and says so.
     """
-    names = [n for n in ("e", "r_phi", "psi", "omega_s", "speed_scale")
+    names = [n for n in ("e", "r_phi", "psi", "omega_s", "speed_scale", "e_sigma")
              if f"profile_chi2_{n}" in fitted]  # fmt: skip
     fig = Figure(figsize=(3.0 * max(1, len(names)), 3.2), layout="constrained")
     axes = np.atleast_1d(fig.subplots(1, max(1, len(names)), squeeze=False)[0])

@@ -82,11 +82,14 @@ def validate(args) -> dict:
     return {**opts, "cores": cores}
 
 
-def _e_sigma_option(text) -> float:
-    """``--e-sigma``: the members' restitution noise ``σ_e`` (docs/model.md), in ``(0, 0.5]``."""
+def _e_sigma_option(text) -> float | None:
+    """``--e-sigma``: the members' restitution noise ``σ_e`` (docs/model.md), stated in
+    ``[0, 0.5]`` (0: the deterministic limit), or ``fit`` (``None``: a fifth search coordinate)."""
     from ..model.params import number
 
-    value = number(ARG, "--e-sigma", text, positive=True)
+    if str(text).strip().lower() == "fit":
+        return None
+    value = number(ARG, "--e-sigma", text, nonneg=True)
     if value > 0.5:
         raise InputError(ARG, "--e-sigma", f"must be at most 0.5, got {value}")
     return value

@@ -69,7 +69,10 @@ class FitSettings:
     zoom_centres: int = 6
     local_nfev: int = 12
     joint_zoom: int = SearchSettings.joint_zoom  # points around each joint candidate (search)
-    e_sigma: float = MODEL_E_SIGMA  # restitution noise of the members (docs/model.md), stated
+    # restitution noise of the members (docs/model.md): a number states it; None fits it (search
+    # coordinate ``e_sigma`` over [0, 0.1], the scan at MODEL_E_SIGMA; ``bouncedisk fit --e-sigma
+    # fit``)
+    e_sigma: float | None = MODEL_E_SIGMA
     cores: int = 1
     profile: tuple[str, ...] | None = None  # coordinates to profile (None: all)
 
@@ -285,9 +288,11 @@ def fit_curve(
         progress(f"work bounded: {note}")
     layout, records, target = data_layout(runs)
     boot = bootstrap_stats(layout, records, s.bootstrap, s.seed)
-    spec = EnsembleSpec(e_sigma=s.e_sigma, seed=s.seed, cores=max(1, s.cores))
+    stated = MODEL_E_SIGMA if s.e_sigma is None else s.e_sigma
+    spec = EnsembleSpec(e_sigma=stated, seed=s.seed, cores=max(1, s.cores))
     part = load_part(list(load or []), fitted, spec)
-    obj = Objective(fitted, param_names(fitted), layout, target, spec, s.members,
+    names = param_names(fitted, fit_e_sigma=s.e_sigma is None)
+    obj = Objective(fitted, names, layout, target, spec, s.members,
                     cov=provisional_cov(target, boot), runs=len(runs), load=part,
                     parts="both" if part is not None else "runup")  # fmt: skip
     best = search(obj, s.search_settings(), progress)

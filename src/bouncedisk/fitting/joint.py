@@ -46,7 +46,8 @@ def stated_truth(curves: list[LoadCurveData]) -> dict[str, float]:
     for d in curves:
         gen = d.sidecar.get("generating_parameters") if d.synthetic else None
         if isinstance(gen, dict) and all(k in gen for k in TRUTH_KEYS):
-            return {k: float(gen[k]) for k in TRUTH_KEYS}
+            # the restitution noise too, when stated (a fitted coordinate)
+            return {k: float(gen[k]) for k in (*TRUTH_KEYS, "e_sigma") if k in gen}
     return {}
 
 

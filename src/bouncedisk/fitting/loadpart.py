@@ -40,6 +40,7 @@ from ..io.load_curves import LoadCurveData
 from ..model.errors import InputError
 from ..model.params import Parameters, PhysicalParameters
 from . import detlinalg
+from .model import restitution_noise
 
 #: Load members per evaluation of the load part (local search, profiles).
 LOAD_MEMBERS = 8
@@ -85,7 +86,8 @@ def curve_readings(
     cfg = EngineConfig(
         e=theta["e"], omega_s=theta["omega_s"], r_phi=10.0 ** theta["log10_r_phi"],
         psi=theta["psi"], contact=True, torsion=True, t_end=t1, max_events=MAX_EVENTS,
-        e_sigma=e_sigma, seed=seed, member=LOAD_STREAM + member, stats_from=t0,
+        e_sigma=restitution_noise(theta, e_sigma), seed=seed, member=LOAD_STREAM + member,
+        stats_from=t0,
     )  # fmt: skip
     # a run stopped by the event budget before t1 has not read the window: NaN, never the part
     # it reached divided by the whole window (the objective rejects the point)

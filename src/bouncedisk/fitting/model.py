@@ -33,6 +33,8 @@ BOUNDS: dict[str, tuple[float, float]] = {
     "psi": (-math.pi, math.pi),
     "omega_s": (1.05, 4.0),
     "log10_speed_scale": (-4.0, 3.0),
+    # the restitution noise, when fitted: from the deterministic limit (members coincide) to 10 %
+    "e_sigma": (0.0, 0.1),
 }
 
 #: Noise stream offset of the measurement noise added to members (independent of the engine's).
@@ -51,12 +53,20 @@ MODEL_E_SIGMA = 0.03
 RESTITUTION_SEED_OFFSET = 1_000_000
 
 
-def param_names(curve: MotorCurve) -> list[str]:
-    """Search coordinates: ``e, log10 R_φ, ψ, omega_s`` (+ ``log10`` speed scale if Φ0 is unknown)."""
+def param_names(curve: MotorCurve, fit_e_sigma: bool = False) -> list[str]:
+    """Search coordinates: ``e, log10 R_φ, ψ, omega_s`` (+ ``log10`` speed scale if Φ0 is unknown,
+    + the restitution noise ``e_sigma`` when it is fitted rather than stated)."""
     names = ["e", "log10_r_phi", "psi", "omega_s"]
     if curve.phi0_rad is None:
         names.append("log10_speed_scale")
+    if fit_e_sigma:
+        names.append("e_sigma")
     return names
+
+
+def restitution_noise(theta: dict[str, float], stated: float) -> float:
+    """``σ_e`` of a parameter point: its own when fitted (``theta["e_sigma"]``), else ``stated``."""
+    return float(theta.get("e_sigma", stated))
 
 
 def physical(theta: dict[str, float], curve: MotorCurve) -> dict[str, float]:
@@ -87,7 +97,7 @@ def uniform_grid(curve: MotorCurve) -> np.ndarray:
 class EnsembleSpec:
     """How model members are made: restitution noise, seed and the measurement noise added."""
 
-    e_sigma: float = MODEL_E_SIGMA
+    e_sigma: float = MODEL_E_SIGMA  # stated; a fitted point's own ``e_sigma`` overrides it
     seed: int = 0
     cores: int = 1
 
@@ -152,7 +162,7 @@ def member_records(
     n = len(uniform_grid(curve))
 
     def one(m: int):
-        om = simulate_curve(theta, curve, m, spec.e_sigma, spec.seed)
+        om = simulate_curve(theta, curve, m, restitution_noise(theta, spec.e_sigma), spec.seed)
         rec = om + measurement_noise(n, curve.sigma, spec.seed, m)
         return reduce(rec) if reduce is not None else rec
 

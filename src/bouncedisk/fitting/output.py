@@ -30,6 +30,8 @@ PUBLIC = {
     "omega_s": ("omega_s", lambda v: v, "1", "nondimensional stator frequency"),
     "speed_scale": ("log10_speed_scale", lambda v: 10.0**v, "rad/s",
                     "rad/s per unit of nondimensional rotor angular velocity"),
+    "e_sigma": ("e_sigma", lambda v: v, "1", "restitution noise: standard deviation of an "
+                "impact's coefficient of restitution about e"),
 }  # fmt: skip
 
 
@@ -289,7 +291,8 @@ def _global_attrs(fit: FitResult, paths: list[str], not_identified: list[str]) -
         "chi2_p_value": float(chi2_dist.sf(fit.chi2, n_stats)),
         "fit_adequate": int(adequate(fit.chi2, n_stats)), "evaluations": fit.evaluations,
         "ensemble_members": fit.settings.members, "band_members": fit.settings.band_members,
-        "e_sigma": fit.settings.e_sigma, "seed": fit.settings.seed,
+        "e_sigma": fit.theta.get("e_sigma", fit.settings.e_sigma),
+        "e_sigma_fitted": int("e_sigma" in fit.names), "seed": fit.settings.seed,
         "n_bootstrap": fit.settings.bootstrap, "scan_points": fit.settings.scan,
         "zoom_points": fit.settings.zoom, "joint_zoom_points": fit.settings.joint_zoom,
         "work_note": fit.note or "none",

@@ -172,6 +172,8 @@ def global_stage(
     base = 0.5 * (obj.lo + obj.hi)
     if "log10_r_phi" in names:
         base[names.index("log10_r_phi")] = -2.5
+    if "e_sigma" in names:  # fitted: the scan at the stated value, the local search moves it
+        base[names.index("e_sigma")] = obj.spec.e_sigma
 
     def at(units: np.ndarray) -> list[np.ndarray]:
         pts = []
