@@ -573,3 +573,29 @@ def test_a_fitted_restitution_noise_is_a_variable_with_its_interval_and_table_ro
         assert a["ci_low"] <= float(ds["e_sigma"]) <= a["ci_high"]
         assert ds["interval_low"].values[2, -1] == a["ci_low"]
     assert "e_sigma" in summary_text(ds)
+
+
+@pytest.mark.slow  # two tiny fits
+def test_an_uninformative_load_curve_does_not_narrow_the_intervals(data_dir, tmp_path):
+    """Data without information must not change an interval: the load curve of ``data_dir`` with
+    ``speed_sd_rad_s`` 1000 (its readings say nothing at this spread) leaves every joint interval
+    at least as wide as the run-up alone's fit, and its own row of the table is the search range.
+    Before: the joint intervals were the joint candidates' only, and e.g. ``e`` shrank from
+    [0.058, 0.863] to [0.058, 0.406] and ``R_phi`` from [0.00215, 0.0131] to [0.00495, 0.0101]."""
+    import pandas as pd
+
+    flat = _copy_load(data_dir / "load.csv", tmp_path / "flat.csv")
+    df = pd.read_csv(flat)
+    df["speed_sd_rad_s"] = 1000.0
+    df.to_csv(flat, index=False)
+    curve = read_curve(data_dir / "run.csv")
+    alone = fit_dataset(fit_curve(curve, TINY))
+    joint = fit_dataset(fit_curve(curve, TINY, load=[read_load_curve(flat)]))
+    assert joint.attrs["chi2_load"] < 0.01  # the readings carry no weight
+    for j, name in enumerate(joint["parameter"].values):
+        pub = "r_phi" if name == "log10_r_phi" else str(name)
+        f = math.log10 if name == "log10_r_phi" else (lambda v: v)
+        lo, hi = joint["interval_low"].values[:, j], joint["interval_high"].values[:, j]
+        assert lo[2] <= f(alone[pub].attrs["ci_low"]) + 1e-12, name
+        assert hi[2] >= f(alone[pub].attrs["ci_high"]) - 1e-12, name
+        assert (lo[1], hi[1]) == BOUNDS[str(name)], name  # the load curve alone: nothing

@@ -16,7 +16,8 @@ from scipy import stats as _sps
 from ..io.load_curves import LoadCurveData, check_same_setup
 from ..io.runup_curves import MotorCurve
 from ..model.errors import InputError
-from .loadpart import LoadPart, check_window
+from . import detlinalg
+from .loadpart import LoadPart, check_window, members_for
 from .loadpart import band as load_band
 from .model import EnsembleSpec
 from .objective import Objective, snap
@@ -88,8 +89,9 @@ def chi2_at_truth(obj: Objective, members: int) -> dict[str, float] | None:
 
 
 def load_part(
-    curves: list[LoadCurveData], fitted: MotorCurve, spec: EnsembleSpec
-) -> LoadPart | None:
+    curves: list[LoadCurveData], fitted: MotorCurve, spec: EnsembleSpec,
+    progress: Callable[[str], None] | None = None,
+) -> LoadPart | None:  # fmt: skip
     """The load curves' part of the likelihood (``None`` without load curves), after checking
     that they share the run-ups' drive and state ``Φ0`` (the torque scale needs it)."""
     if not curves:
@@ -100,7 +102,7 @@ def load_part(
         if fitted.phi0_rad is None:
             raise InputError(d.path, "motor.Phi0_rad", "the run-ups' sidecar must state Phi0_rad "
                              "for a joint fit with a load curve (its torque scale needs it)")  # fmt: skip
-    return LoadPart(curves, spec.e_sigma, spec.seed, cores=spec.cores)
+    return LoadPart(curves, spec.e_sigma, spec.seed, cores=spec.cores, progress=progress)
 
 
 def joint_consistent(obj: Objective, members: int, best_chi2: float) -> np.ndarray:
@@ -116,6 +118,33 @@ def joint_consistent(obj: Objective, members: int, best_chi2: float) -> np.ndarr
     pts = {tuple(ev.x): ev.x for ev in obj.log
            if ev.members == members and ev.parts == "both" and ev.chi2 <= limit}  # fmt: skip
     return np.array(list(pts.values())).reshape(-1, len(obj.names))
+
+
+def load_consistent(
+    obj: Objective, runup_ok: np.ndarray, members: int, best_chi2: float
+) -> np.ndarray:
+    """The run-ups' acceptable scan points (``runup_ok``, :func:`.uncertainty.scan_acceptable`)
+    that the load curves do not reject: the load part's ``χ²`` on the scan's load members below
+    its 95 % point (Birge-scaled by the best fit's ``χ²/n``).
+
+    A joint interval is widened to them, so that data without information cannot narrow it: with
+    an uninformative load curve (readings of huge spread) every such point stays, and the joint
+    intervals hold the run-ups' own. Read on the load part alone, neither logged nor counted
+    (the scan's points are the run-ups' own, ``R_φ`` as the scan matched it to their trend).
+    """
+    part = obj.load
+    if part is None or len(runup_ok) == 0:
+        return np.empty((0, len(obj.names)))
+    scale = max(1.0, best_chi2 / obj.n_stats)
+    limit = scale * float(_sps.chi2.ppf(0.95, part.n))
+    k = members_for(members)
+    keep = []
+    for x in runup_ok:
+        xs = snap(x)
+        r = part.residuals(obj.theta(xs), xs, k)
+        if math.isfinite(value := detlinalg.dot(r, r)) and value <= limit:
+            keep.append(xs)
+    return np.array(keep).reshape(-1, len(obj.names))
 
 
 def identifiability(

@@ -23,7 +23,7 @@ from .core import FitResult
 from .joint import stated_truth, truth_coordinate
 from .loadpart import LOAD_BAND, LOAD_MEMBERS
 from .model import BOUNDS
-from .output import identified
+from .uncertainty import identified
 
 #: Data sets of the identifiability table, in order: (key of ``LoadFit.intervals``, label).
 DATA_SETS = (("runup", "run-ups"), ("load", "load curve"), ("both", "both"))
@@ -72,7 +72,7 @@ def _intervals(fit: FitResult) -> dict:
 
     dims = ("data_set", "parameter")
     low, high, ident = table("ci_low"), table("ci_high"), table("identified")
-    if not identified(fit)[0]:  # an inadequate fit reports no interval (output.identified)
+    if not identified(fit.chi2, fit.n_statistics)[0]:  # an inadequate fit reports no interval
         low[:], high[:], ident[:] = np.nan, np.nan, 0
     gen = truth(fit)
     truth_x = [truth_coordinate({f"generating_{k}": v for k, v in gen.items()}, n) for n in names]

@@ -28,7 +28,8 @@ experiments: block-diagonal covariance).
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
+import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -40,7 +41,7 @@ from ..io.load_curves import LoadCurveData
 from ..model.errors import InputError
 from ..model.params import Parameters, PhysicalParameters
 from . import detlinalg
-from .model import restitution_noise
+from .model import restitution_noise, thread_map
 
 #: Load members per evaluation of the load part (local search, profiles).
 LOAD_MEMBERS = 8
@@ -56,6 +57,8 @@ LOAD_STREAM = 1_000_000
 #: periodic motor's readings repeat exactly (members and repeats identical), and a reading is not
 #: known better than a tachometer resolves it.
 LOAD_FLOOR = 1e-2
+#: An evaluation of the load part that runs longer than this (s) reports its progress.
+PROGRESS_S = 10.0
 #: Event budget of one reading (a start from rest to the window's end).
 MAX_EVENTS = 50_000_000
 
@@ -127,6 +130,8 @@ class LoadPart:
         Members per evaluation ``K`` (the scan evaluates with one).
     cores : int
         Threads running the readings of one evaluation.
+    progress : callable or None
+        Receives a line every :data:`PROGRESS_S` seconds of a long evaluation.
     """
 
     curves: list[LoadCurveData]
@@ -134,6 +139,7 @@ class LoadPart:
     seed: int
     members: int = LOAD_MEMBERS
     cores: int = 1
+    progress: Callable[[str], None] | None = None  # long evaluations report through it
     cache: dict = field(default_factory=dict)
     cov_model: np.ndarray | None = None
     _white: dict = field(default_factory=dict)
@@ -173,11 +179,23 @@ class LoadPart:
             def one(task):
                 return curve_readings(theta, task[1], task[0], self.e_sigma, self.seed)
 
+            started = time.perf_counter()
+            last = [started]
+
+            def done(j: int) -> None:  # a long curve reports its progress (PROGRESS_S)
+                now = time.perf_counter()
+                if self.progress is not None and now - last[0] >= PROGRESS_S:
+                    last[0] = now
+                    self.progress(f"load curve: {j}/{len(tasks)} member curves read at this "
+                                  f"point ({now - started:.0f} s)")  # fmt: skip
+
             if serial or self.cores <= 1 or len(tasks) < 2:
-                flat = [one(t) for t in tasks]
+                flat = []
+                for t in tasks:
+                    flat.append(one(t))
+                    done(len(flat))
             else:
-                with ThreadPoolExecutor(max_workers=self.cores) as pool:
-                    flat = list(pool.map(one, tasks))
+                flat = thread_map(one, tasks, self.cores, done)
             new = np.concatenate(flat).reshape(k - start, self.n)
             have = new if have is None else np.vstack([have, new])
             self.cache[key] = have

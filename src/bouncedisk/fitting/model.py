@@ -16,6 +16,7 @@ ensemble mean is).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -102,6 +103,31 @@ class EnsembleSpec:
     cores: int = 1
 
 
+def thread_map(
+    fn: Callable, items: Sequence, cores: int, on_done: Callable[[int], None] | None = None
+) -> list:
+    """``[fn(item) …]`` on ``cores`` threads, in order; stops promptly when interrupted.
+
+    On any exception in the caller's thread (a SIGINT or SIGTERM arrives as
+    ``KeyboardInterrupt``, or an item's error) the items not started are cancelled and the
+    pool is not waited for, so a stopped fit ends after the members already running, not after
+    every member queued. ``on_done(k)`` is called in the caller's thread after the ``k``-th
+    result (progress of a long evaluation).
+    """
+    pool = ThreadPoolExecutor(max_workers=cores)
+    out = []
+    try:
+        for k, value in enumerate(pool.map(fn, items), start=1):
+            out.append(value)
+            if on_done is not None:
+                on_done(k)
+    except BaseException:
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
+    return out
+
+
 def simulate_curve(
     theta: dict[str, float],
     curve: MotorCurve,
@@ -168,8 +194,7 @@ def member_records(
 
     if spec.cores <= 1 or len(members) == 1:
         return [one(m) for m in members]
-    with ThreadPoolExecutor(max_workers=spec.cores) as pool:
-        return list(pool.map(one, members))
+    return thread_map(one, members, spec.cores)
 
 
 def synthesize_curve(

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -37,7 +36,7 @@ from ..io.runup_curves import MotorCurve
 from . import detlinalg
 from .basins import rank_key
 from .loadpart import LoadPart, members_for
-from .model import BOUNDS, EnsembleSpec, member_records
+from .model import BOUNDS, EnsembleSpec, member_records, thread_map
 from .statistics import EnsembleStats, Layout, records_stats
 
 #: Decimals of the lattice every evaluated point is put on (:func:`snap`): far finer than any step
@@ -186,8 +185,7 @@ class Objective:
             return [fn(i) for i in items]
         self.points_parallel = True
         try:
-            with ThreadPoolExecutor(max_workers=self.spec.cores) as pool:
-                return list(pool.map(fn, items))
+            return thread_map(fn, items, self.spec.cores)
         finally:
             self.points_parallel = False
 

@@ -20,7 +20,7 @@ from ..io.provenance import base_attrs, new_run_id, sha256_file
 from .core import FitResult
 from .model import BOUNDS
 from .statistics import STAT_LONG_NAMES, STAT_UNITS, STATS
-from .uncertainty import ADEQUATE_P, THRESHOLD, adequate
+from .uncertainty import THRESHOLD, adequate, identified
 
 #: Public name: (search coordinate, transform, units, long name).
 PUBLIC = {
@@ -123,33 +123,12 @@ def residual_check(ds: xr.Dataset) -> dict[str, float]:
             "passed": bool(passed)}  # fmt: skip
 
 
-def n_statistics(fit: FitResult) -> int:
-    """Statistics the fit's ``χ²`` is on: the run-ups' and every load reading (joint fit)."""
-    return len(STATS) + (fit.load.n if fit.load is not None else 0)
-
-
-def identified(fit: FitResult) -> tuple[bool, str]:
-    """Whether the fit may report intervals at all (the file's ``identified`` attribute) and why.
-
-    An inadequate fit (the best point's ``χ²`` has ``p <`` :data:`.uncertainty.ADEQUATE_P`) does
-    not reproduce the data: its profiles are about a point the data reject, so its intervals are
-    not reported (NaN), whatever their widths.
-    """
-    n = n_statistics(fit)
-    if adequate(fit.chi2, n):
-        return True, (f"the best point reproduces the data (chi2 {fit.chi2:.4g} on {n} "
-                      f"statistics, p >= {ADEQUATE_P:g})")  # fmt: skip
-    return False, (f"inadequate fit: chi2 {fit.chi2:.4g} on {n} statistics (p = "
-                   f"{float(chi2_dist.sf(fit.chi2, n)):.2g} < {ADEQUATE_P:g}); the best point "
-                   "found does not reproduce the data, so no interval is reported")  # fmt: skip
-
-
 def _parameters(fit: FitResult) -> tuple[dict, list[str]]:
     """Scalar parameter variables with intervals, and the names not identified (an inadequate
-    fit, :func:`identified`: every interval NaN, every parameter not identified)."""
+    fit, :func:`.uncertainty.identified`: every interval NaN, every parameter not identified)."""
     out, not_identified = {}, []
     prof = {p.name: p for p in fit.profiles}
-    ok, reason = identified(fit)
+    ok, reason = identified(fit.chi2, fit.n_statistics)
     for pub, (internal, fn, units, long_name) in PUBLIC.items():
         if internal not in fit.names:
             continue
@@ -266,8 +245,8 @@ def fit_dataset(fit: FitResult) -> xr.Dataset:
 def _global_attrs(fit: FitResult, paths: list[str], not_identified: list[str]) -> dict:
     th = fit.physical
     sha = ", ".join(sha256_file(p) for p in paths)
-    n_stats = n_statistics(fit)
-    ok, reason = identified(fit)
+    n_stats = fit.n_statistics
+    ok, reason = identified(fit.chi2, fit.n_statistics)
     return {
         "identified": "yes" if ok else "no", "identified_reason": reason,
         "run_id": new_run_id("fit", sha), "scene_name": "fit",
