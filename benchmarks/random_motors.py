@@ -30,6 +30,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -123,7 +124,13 @@ def recover(true: dict, k: int, args) -> dict:
         made = time.perf_counter() - start
         settings = FitSettings(seed=1, scan=args.scan, zoom=args.zoom, cores=args.cores,
                                e_sigma=None)  # fmt: skip
-        ds = fit_dataset(fit_curve(read_curve(run), settings, load=[read_load_curve(load)]))
+        progress = (
+            (lambda msg: print(f"motor {k}: {msg}", file=sys.stderr, flush=True))
+            if args.progress
+            else None
+        )
+        fit = fit_curve(read_curve(run), settings, progress, load=[read_load_curve(load)])
+        ds = fit_dataset(fit)
     row = {"motor": k, "true": true, "chi2": round(float(ds.attrs["chi2"]), 3),
            "n": int(ds.attrs["n_statistics"]), "adequate": ds.attrs["identified"] == "yes",
            "wall_s": round(time.perf_counter() - start - made, 1), "holds": {}, "widths": {}}  # fmt: skip
@@ -163,6 +170,7 @@ def main() -> None:
     ap.add_argument("--reading-noise", type=float, default=0.05, help="rad/s per reading")
     ap.add_argument("--cores", type=int, default=2)
     ap.add_argument("--json", help="append each row to this file (JSON lines)")
+    ap.add_argument("--progress", action="store_true", help="the fits' progress on stderr")
     args = ap.parse_args()
     sample = motors(args.motors)
     stop = len(sample) if args.count is None else min(len(sample), args.first + args.count)

@@ -77,3 +77,37 @@ def test_a_long_load_evaluation_reports_its_progress(monkeypatch):
         theta = {"e": 0.55, "log10_r_phi": math.log10(0.002), "psi": 0.4, "omega_s": 1.7}
         part.values(theta, np.array([0.55, math.log10(0.002), 0.4, 1.7]), 3)
         assert [ln.split(" member")[0] for ln in lines] == [f"load curve: {j}/3" for j in (1, 2, 3)]
+
+
+@pytest.mark.slow  # a subprocess that imports the package and starts a fit
+def test_sigterm_stops_a_running_fit_promptly(tmp_path):
+    """``bouncedisk fit`` receiving SIGTERM in its scan: exit 130 within seconds (a fit of the
+    shipped curve runs for minutes), one line on stderr, no output file."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).parents[1]
+    out = tmp_path / "fit.nc"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "bouncedisk.cli", "fit", str(root / "data/prototype/synthetic_motor.csv"),
+         "-o", str(out), "--cores", "2"],
+        stderr=subprocess.PIPE, text=True, env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )  # fmt: skip
+    lines = []
+    for line in proc.stderr:  # wait until the fit has started its work
+        lines.append(line)
+        if "samples over" in line:
+            break
+    time.sleep(3.0)
+    sent = time.perf_counter()
+    proc.send_signal(signal.SIGTERM)
+    rest = proc.stderr.read()
+    code = proc.wait(timeout=120)
+    waited = time.perf_counter() - sent
+    assert code == 130, (code, lines, rest)
+    assert waited < 30.0, waited
+    assert rest.strip().splitlines()[-1] == "bouncedisk: interrupted; no output written"
+    assert not out.exists()

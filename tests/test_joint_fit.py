@@ -368,13 +368,12 @@ def test_the_joint_stage_finds_the_valley_near_the_period_doubling(tmp_path):
     spec = EnsembleSpec(e_sigma=s.e_sigma, seed=s.seed, cores=1)
     part = load_part([read_load_curve(load)], fitted, spec)
     obj = Objective(fitted, param_names(fitted), layout, target, spec, s.members,
-                    cov=core.provisional_cov(target, boot), load=part, parts="runup")  # fmt: skip
+                    cov=core.provisional_cov(target, boot), load=part, parts="both")  # fmt: skip
     # the scan, as the search leaves it: the run-ups' chi2 of its points, on one member
     scan = [np.array(x) for x in NEAR_SCAN]
     for x in scan:
-        obj.chi2(x, 1)
+        obj.seeing("runup").chi2(x, 1)
     ranked = sorted((ev for ev in obj.log), key=lambda ev: ev.chi2)
-    obj.parts = "both"
     obj.set_cov(se.measure_cov(obj, ranked[0].x, s.pilot_members))
     cands = se.joint_candidates(obj, ranked, s.search_settings())
     chis = se.rerank(obj, cands, s.search_settings())  # as the search does next
@@ -599,3 +598,20 @@ def test_an_uninformative_load_curve_does_not_narrow_the_intervals(data_dir, tmp
         assert lo[2] <= f(alone[pub].attrs["ci_low"]) + 1e-12, name
         assert hi[2] >= f(alone[pub].attrs["ci_high"]) - 1e-12, name
         assert (lo[1], hi[1]) == BOUNDS[str(name)], name  # the load curve alone: nothing
+
+
+def test_a_view_of_one_part_shares_the_evaluations(tmp_path):
+    """:meth:`Objective.seeing`: the view's ``parts`` is its own (the objective's is unchanged),
+    its evaluations land in the shared log and cache, and an unknown part is refused."""
+    from bouncedisk.fitting.objective import Objective
+
+    curve = read_curve_like()
+    obj = Objective(curve, ["e", "log10_r_phi", "psi", "omega_s"], None, np.zeros(3),
+                    None, 4, cov=np.eye(3), parts="both")  # fmt: skip
+    view = obj.seeing("runup")
+    assert view.parts == "runup" and obj.parts == "both"
+    assert view.log is obj.log and view.cache is obj.cache and view.load is obj.load
+    view.log.append("x")
+    assert obj.log == ["x"]
+    with pytest.raises(ValueError, match="parts must be one of"):
+        obj.seeing("all")

@@ -76,13 +76,11 @@ def chi2_at_truth(obj: Objective, members: int) -> dict[str, float] | None:
     if any(v is None for v in x):
         return None
     x = snap(np.array(x, float))
-    saved, cached, out = obj.parts, set(obj.cache), {}
+    cached, out = set(obj.cache), {}
     try:
         for part in ("runup", "load", "both"):
-            obj.parts = part
-            out[part] = obj.chi2_now(x, members)
+            out[part] = obj.seeing(part).chi2_now(x, members)
     finally:
-        obj.parts = saved
         for key in set(obj.cache) - cached:
             del obj.cache[key]
     return out
@@ -155,14 +153,10 @@ def identifiability(
     evaluations, widened to that part's acceptable points (the scan's for the run-ups: it fitted
     them). A flat profile is "not identified", as in the joint fit."""
     out = {}
-    saved = obj.parts
-    try:
-        for part, extra in (("runup", extra_runup), ("load", None)):
-            obj.parts = part
-            thr = birge(obj.best(members).chi2, obj.n_stats, len(obj.names))
-            out[part] = all_profiles(obj, x, members, which, None, thr, extra)[0]
-    finally:
-        obj.parts = saved
+    for part, extra in (("runup", extra_runup), ("load", None)):
+        view = obj.seeing(part)
+        thr = birge(view.best(members).chi2, view.n_stats, len(view.names))
+        out[part] = all_profiles(view, x, members, which, None, thr, extra)[0]
     return out
 
 
@@ -182,11 +176,7 @@ def load_result(
             progress(f"identifiability {name}: " + "; ".join(cells))
     xs = snap(x)
     theta = obj.theta(xs)
-    saved, obj.parts = obj.parts, "load"
-    try:
-        chi2_load = obj.chi2_now(xs, members)
-    finally:
-        obj.parts = saved
+    chi2_load = obj.seeing("load").chi2_now(xs, members)
     return LoadFit(curves=part.curves, band=load_band(part, theta, xs), chi2=chi2_load, n=part.n,
                    intervals=intervals, data_var=part.data_var(),
                    chi2_generating=chi2_at_truth(obj, members))  # fmt: skip

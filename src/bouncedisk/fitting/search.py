@@ -539,9 +539,7 @@ def search(
     obj: Objective, s: SearchSettings, progress: Callable[[str], None] | None = None
 ) -> Evaluation:
     """The whole search (module docstring); returns the best logged point at ``s.members``."""
-    parts, obj.parts = obj.parts, "runup"  # the scan fits the run-ups (module docstring)
-    ranked = global_stage(obj, s, progress)
-    obj.parts = parts
+    ranked = global_stage(obj.seeing("runup"), s, progress)  # the scan fits the run-ups
     obj.set_cov(measure_cov(obj, ranked[0].x, s.pilot_members))
     # one member per scan point is noisy where the model is chaotic: re-rank the best distinct
     # scan points on `members` members under the model's covariance, measured at the best of them
