@@ -1,5 +1,5 @@
-"""A stopped fit stops promptly, and a long load curve reports its progress (hardening: the fit's
-part of "long runs print progress and stop on SIGTERM/SIGINT")."""
+"""A stopped fit stops promptly, and a long load curve reports its progress (the fit's part of
+"long runs print progress and stop on SIGTERM/SIGINT")."""
 
 from __future__ import annotations
 

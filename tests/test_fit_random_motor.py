@@ -49,7 +49,7 @@ def test_the_sample_is_seeded_spans_the_box_and_has_deterministic_motors():
 @pytest.mark.slow  # one small joint fit with five coordinates
 @pytest.mark.xfail(
     strict=True,
-    reason="a known defect (issue 35): motor 0 is fitted adequately but its e_sigma interval "
+    reason="a known defect: motor 0 is fitted adequately but its e_sigma interval "
     "[0.030, 0.064] misses the generating 0.0665 (before the noise sweep [0.028, 0.032]); "
     "the search with a fitted e_sigma does not reach the truth's basin yet",
 )
