@@ -457,6 +457,14 @@ def test_the_figures_say_synthetic_and_zoom_on_the_intervals(tiny_fit):
     labels = ax.get_legend_handles_labels()[1]
     assert any(lab.startswith("synthetic") for lab in labels)
     assert not any("measured" in lab for lab in labels), labels
+    import pandas as pd
+
+    from bouncedisk.figures.motor import fig5_motor
+
+    curve = pd.DataFrame({"time_s": ds["time"].values, "omega_rad_s": ds["omega_measured"].values})
+    labels = fig5_motor(curve, fitted=ds).axes[0].get_legend_handles_labels()[1]
+    assert ds.attrs["curve_synthetic"] == 1 and "synthetic (prototype curve)" in labels
+    assert not any("measured" in lab for lab in labels), labels
     fig = FIGURES["fit_identifiability"].draw(ds)
     legend = [t.get_text() for t in fig.legends[0].get_texts()]
     for want in ("95% interval: run-ups", "95% interval: load curve", "95% interval: both",
