@@ -105,7 +105,11 @@ def make_motor_data(folder: Path, true: dict, k: int, loads: int, repeats: int,
             "Phi0_rad": PHI0, "rotor": ROTOR, "preload_N": PRELOAD,
             "load_curve": {"loads_Nm": list(np.linspace(0.0, 1.25 * stall, loads)),
                            "repeats": repeats, "window_s": list(WINDOW), "seed": 2000 + k}}  # fmt: skip
+    if true["e_sigma"] == 0.0:  # deterministic: the repeats are one run, read `repeats` times
+        spec["load_curve"]["repeats"] = 1
     ldf, side = synthetic_load_curve(spec)
+    side["repeats"] = repeats
+    ldf["speed_sd_rad_s"] = ldf["speed_sd_rad_s"].fillna(0.0)
     # independent reading noise: each of the `repeats` readings gets its own draw, so the mean
     # moves by noise/sqrt(repeats) and the spread adds the noise in quadrature (its expectation)
     ldf["speed_rad_s"] += rng.normal(0.0, reading_noise / math.sqrt(repeats), len(ldf))
