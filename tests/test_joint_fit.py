@@ -368,13 +368,12 @@ def test_the_joint_stage_finds_the_valley_near_the_period_doubling(tmp_path):
     spec = EnsembleSpec(e_sigma=s.e_sigma, seed=s.seed, cores=1)
     part = load_part([read_load_curve(load)], fitted, spec)
     obj = Objective(fitted, param_names(fitted), layout, target, spec, s.members,
-                    cov=core.provisional_cov(target, boot), load=part, parts="runup")  # fmt: skip
+                    cov=core.provisional_cov(target, boot), load=part, parts="both")  # fmt: skip
     # the scan, as the search leaves it: the run-ups' chi2 of its points, on one member
     scan = [np.array(x) for x in NEAR_SCAN]
     for x in scan:
-        obj.chi2(x, 1)
+        obj.seeing("runup").chi2(x, 1)
     ranked = sorted((ev for ev in obj.log), key=lambda ev: ev.chi2)
-    obj.parts = "both"
     obj.set_cov(se.measure_cov(obj, ranked[0].x, s.pilot_members))
     cands = se.joint_candidates(obj, ranked, s.search_settings())
     chis = se.rerank(obj, cands, s.search_settings())  # as the search does next
@@ -408,3 +407,219 @@ def test_joint_recovery_of_the_chaotic_case_holds_the_truth_in_every_interval(tm
         low, high = BOUNDS[name]
         assert low < lo[2, j] <= t <= hi[2, j] < high, (name, lo[2, j], hi[2, j], t)
         assert hi[2, j] - lo[2, j] < hi[0, j] - lo[0, j], name  # both narrower than run-ups alone
+
+
+@pytest.mark.xdist_group("tiny_joint_fit")  # one worker fits, not both
+def test_an_inadequate_fit_reports_no_interval(tiny_fit, tmp_path):
+    """The same fit with a ``χ²`` the data reject (p < 0.001): every interval of the file is NaN,
+    ``identified = "no"`` with the reason, and the summary and figures say so; the fit as it
+    came (its own ``χ²``) keeps its intervals under ``identified = "yes"`` exactly when adequate."""
+    import dataclasses
+
+    from scipy.stats import chi2 as chi2_dist
+
+    from bouncedisk.figures.drawing import FIGURES
+
+    n = 11 + tiny_fit.load.n
+    ok = chi2_dist.sf(tiny_fit.chi2, n) > 1e-3
+    as_is = fit_dataset(tiny_fit)
+    assert as_is.attrs["identified"] == ("yes" if ok else "no")
+    bad = dataclasses.replace(tiny_fit, chi2=float(chi2_dist.isf(1e-4, n)))
+    ds = fit_dataset(bad)
+    assert ds.attrs["identified"] == "no" and "p = 0.0001 < 0.001" in ds.attrs["identified_reason"]
+    for name in NAMES:
+        assert math.isnan(ds[name].attrs["ci_low"]) and math.isnan(ds[name].attrs["ci_high"])
+        assert ds[name].attrs["identified"] == 0 and np.isfinite(float(ds[name]))
+    assert np.isnan(ds["interval_low"].values).all() and np.isnan(ds["interval_high"].values).all()
+    assert not ds["interval_identified"].values.any()
+    assert ds.attrs["not_identified"] == ",".join(NAMES)
+    text = summary_text(ds)
+    assert "NOT IDENTIFIED: inadequate fit" in text and "95% [" not in text
+    assert "95% intervals by data set: none (inadequate fit)" in text
+    for name in ("fit_profiles", "fit_identifiability", "fit_load"):
+        fig = FIGURES[name].draw(ds)
+        fig.savefig(tmp_path / f"{name}.png", dpi=40)
+    titles = [ax.get_title() for ax in FIGURES["fit_profiles"].draw(ds).axes]
+    assert all("no interval: inadequate fit" in t for t in titles), titles
+    assert "NO INTERVALS" in FIGURES["fit_identifiability"].draw(ds).axes[0].get_title()
+
+
+@pytest.mark.xdist_group("tiny_joint_fit")  # one worker fits, not both
+def test_the_figures_say_synthetic_and_zoom_on_the_intervals(tiny_fit):
+    """Synthetic data are labelled "synthetic", never "measured"; each profile panel spans its
+    interval plus half its width on either side (within the search range); the
+    identifiability legend names the three data sets, the estimate and the generating value."""
+    from bouncedisk.figures.drawing import FIGURES
+
+    ds = fit_dataset(tiny_fit)
+    assert ds.attrs["load_curve_synthetic"] == 1
+    ax = FIGURES["fit_load"].draw(ds).axes[0]
+    labels = ax.get_legend_handles_labels()[1]
+    assert any(lab.startswith("synthetic") for lab in labels)
+    assert not any("measured" in lab for lab in labels), labels
+    import pandas as pd
+
+    from bouncedisk.figures.motor import fig5_motor
+
+    curve = pd.DataFrame({"time_s": ds["time"].values, "omega_rad_s": ds["omega_measured"].values})
+    labels = fig5_motor(curve, fitted=ds).axes[0].get_legend_handles_labels()[1]
+    assert ds.attrs["curve_synthetic"] == 1 and "synthetic (prototype curve)" in labels
+    assert not any("measured" in lab for lab in labels), labels
+    fig = FIGURES["fit_identifiability"].draw(ds)
+    legend = [t.get_text() for t in fig.legends[0].get_texts()]
+    for want in ("95% interval: run-ups", "95% interval: load curve", "95% interval: both",
+                 "estimate", "generating value"):  # fmt: skip
+        assert want in legend, legend
+    if ds.attrs["identified"] == "yes":
+        for ax in FIGURES["fit_profiles"].draw(ds).axes:
+            name = ax.get_xlabel().split()[0]
+            a = ds[name].attrs
+            lo, hi = ax.get_xlim()
+            if name in ("r_phi", "speed_scale"):
+                lo, hi, c0, c1 = (math.log10(v) for v in (lo, hi, a["ci_low"], a["ci_high"]))
+                s0, s1 = math.log10(a["search_low"]), math.log10(a["search_high"])
+            else:
+                c0, c1, s0, s1 = a["ci_low"], a["ci_high"], a["search_low"], a["search_high"]
+            pad = 0.5 * (c1 - c0)
+            assert lo == pytest.approx(max(s0, c0 - pad)) and hi == pytest.approx(min(s1, c1 + pad))
+
+
+def test_a_window_the_run_did_not_reach_is_an_error_never_a_number(tmp_path, capsys, monkeypatch):
+    """A member stopped by the event budget before the window's end reads NaN (not the part it
+    reached divided by the whole window: 0.445 rad/s instead of about 20.5 for the shipped
+    curve over [0.06, 1e5] s), and a window beyond the budget is refused before any work."""
+    theta = {"e": 0.55, "log10_r_phi": math.log10(0.002), "psi": 0.4, "omega_s": 1.7}
+    data = _fake_load_data((0.01, 0.02))
+    assert np.isfinite(lp.curve_readings(theta, data, 0, 0.03, 17)).all()
+    monkeypatch.setattr(lp, "MAX_EVENTS", 50)  # the run stops at 50 impacts, before t0
+    assert np.isnan(lp.curve_readings(theta, data, 0, 0.03, 17)).all()
+    monkeypatch.undo()
+    import yaml
+
+    shipped = Path(__file__).parents[1] / "data" / "prototype"
+    load = _copy_load(shipped / "synthetic_motor_load.csv", tmp_path / "load.csv",
+                      lambda s: s.update(window_s=[0.06, 1e5]))  # fmt: skip
+    assert yaml.safe_load(load.with_suffix(".yaml").read_text())["window_s"] == [0.06, 1e5]
+    out = tmp_path / "fit.nc"
+    code = main(["fit", str(shipped / "synthetic_motor.csv"), "--load", str(load), "-o", str(out),
+                 "--scan", "8", "--zoom", "0", "-q"])  # fmt: skip
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1, err
+    assert err[0].startswith(f"bouncedisk: error: {load.with_suffix('.yaml')}: window_s: ends at")
+    assert not out.exists()
+
+
+# ------------------------------------------------------------------ the restitution noise, fitted
+
+
+def test_a_fitted_restitution_noise_is_the_points_own_and_zero_is_deterministic():
+    """With ``e_sigma`` a search coordinate the members use the point's own value, not the stated
+    one; at 0 (the deterministic limit) every member runs the same orbit, so the members differ
+    only by their measurement noise and the load readings of all members coincide."""
+    from bouncedisk.fitting.model import (
+        EnsembleSpec,
+        member_records,
+        param_names,
+        restitution_noise,
+    )
+
+    curve = read_curve_like()
+    assert param_names(curve) == ["e", "log10_r_phi", "psi", "omega_s"]
+    assert param_names(curve, fit_e_sigma=True)[-1] == "e_sigma"
+    assert BOUNDS["e_sigma"] == (0.0, 0.1)
+    theta = {"e": 0.55, "log10_r_phi": math.log10(0.002), "psi": 0.4, "omega_s": 1.7}
+    assert restitution_noise(theta, 0.03) == 0.03
+    assert restitution_noise({**theta, "e_sigma": 0.0}, 0.03) == 0.0
+    spec = EnsembleSpec(e_sigma=0.03, seed=4)
+    quiet = dataclass_replace(curve, sigma=0.0)
+    det = member_records({**theta, "e_sigma": 0.0}, quiet, range(2), spec)
+    np.testing.assert_array_equal(det[0], det[1])
+    noisy = member_records(theta, quiet, range(2), spec)
+    assert np.max(np.abs(noisy[0] - noisy[1])) > 0.1  # the stated 3 % parts the members
+    np.testing.assert_array_equal(member_records({**theta, "e_sigma": 0.03}, quiet, range(2), spec)[1],
+                                  noisy[1])  # fmt: skip
+    data = _fake_load_data((0.01, 0.02))
+    r0, r1 = (lp.curve_readings({**theta, "e_sigma": 0.0}, data, m, 0.03, 17) for m in (0, 1))
+    np.testing.assert_array_equal(r0, r1)
+    assert not np.array_equal(*(lp.curve_readings(theta, data, m, 0.03, 17) for m in (0, 1)))
+
+
+def read_curve_like():
+    """A 0.02 s curve of the test motor (for the grid and scales only)."""
+    from bouncedisk.io.runup_curves import MotorCurve
+
+    t = DT * np.arange(int(0.02 / DT) + 1)
+    return MotorCurve(time=t, omega=np.zeros(len(t)), sigma=SIGMA, drive_frequency_hz=F_HZ,
+                      phi0_rad=PHI0, source="", synthetic=True, path="")  # fmt: skip
+
+
+def dataclass_replace(obj, **kw):
+    import dataclasses
+
+    return dataclasses.replace(obj, **kw)
+
+
+@pytest.mark.slow  # a tiny joint fit with five coordinates
+def test_a_fitted_restitution_noise_is_a_variable_with_its_interval_and_table_row(data_dir):
+    """``FitSettings(e_sigma=None)`` (``--e-sigma fit``): ``e_sigma`` is a fifth search coordinate
+    over [0, 0.1]; the file carries it as a variable with ``ci_low``/``ci_high`` like ``e``, a
+    fifth row of the identifiability table, and the generating value the sidecar states."""
+    import dataclasses
+
+    fit = fit_curve(read_curve(data_dir / "run.csv"), dataclasses.replace(TINY, e_sigma=None),
+                    load=[read_load_curve(data_dir / "load.csv")])  # fmt: skip
+    ds = fit_dataset(fit)
+    assert list(ds["parameter"].values)[-1] == "e_sigma" and ds["interval_low"].shape == (3, 5)
+    a = ds["e_sigma"].attrs
+    assert {"ci_low", "ci_high", "identified", "search_low", "search_high"} <= set(a)
+    assert (a["search_low"], a["search_high"]) == (0.0, 0.1)
+    assert 0.0 <= float(ds["e_sigma"]) <= 0.1 and ds.attrs["e_sigma_fitted"] == 1
+    assert ds.attrs["e_sigma"] == float(ds["e_sigma"])
+    assert float(ds["generating_value"].values[-1]) == 0.03
+    if ds.attrs["identified"] == "yes":
+        assert a["ci_low"] <= float(ds["e_sigma"]) <= a["ci_high"]
+        assert ds["interval_low"].values[2, -1] == a["ci_low"]
+    assert "e_sigma" in summary_text(ds)
+
+
+@pytest.mark.slow  # two tiny fits
+def test_an_uninformative_load_curve_does_not_narrow_the_intervals(data_dir, tmp_path):
+    """Data without information must not change an interval: the load curve of ``data_dir`` with
+    ``speed_sd_rad_s`` 1000 (its readings say nothing at this spread) leaves every joint interval
+    at least as wide as the run-up alone's fit, and its own row of the table is the search range.
+    Before: the joint intervals were the joint candidates' only, and e.g. ``e`` shrank from
+    [0.058, 0.863] to [0.058, 0.406] and ``R_phi`` from [0.00215, 0.0131] to [0.00495, 0.0101]."""
+    import pandas as pd
+
+    flat = _copy_load(data_dir / "load.csv", tmp_path / "flat.csv")
+    df = pd.read_csv(flat)
+    df["speed_sd_rad_s"] = 1000.0
+    df.to_csv(flat, index=False)
+    curve = read_curve(data_dir / "run.csv")
+    alone = fit_dataset(fit_curve(curve, TINY))
+    joint = fit_dataset(fit_curve(curve, TINY, load=[read_load_curve(flat)]))
+    assert joint.attrs["chi2_load"] < 0.01  # the readings carry no weight
+    for j, name in enumerate(joint["parameter"].values):
+        pub = "r_phi" if name == "log10_r_phi" else str(name)
+        f = math.log10 if name == "log10_r_phi" else (lambda v: v)
+        lo, hi = joint["interval_low"].values[:, j], joint["interval_high"].values[:, j]
+        assert lo[2] <= f(alone[pub].attrs["ci_low"]) + 1e-12, name
+        assert hi[2] >= f(alone[pub].attrs["ci_high"]) - 1e-12, name
+        assert (lo[1], hi[1]) == BOUNDS[str(name)], name  # the load curve alone: nothing
+
+
+def test_a_view_of_one_part_shares_the_evaluations(tmp_path):
+    """:meth:`Objective.seeing`: the view's ``parts`` is its own (the objective's is unchanged),
+    its evaluations land in the shared log and cache, and an unknown part is refused."""
+    from bouncedisk.fitting.objective import Objective
+
+    curve = read_curve_like()
+    obj = Objective(curve, ["e", "log10_r_phi", "psi", "omega_s"], None, np.zeros(3),
+                    None, 4, cov=np.eye(3), parts="both")  # fmt: skip
+    view = obj.seeing("runup")
+    assert view.parts == "runup" and obj.parts == "both"
+    assert view.log is obj.log and view.cache is obj.cache and view.load is obj.load
+    view.log.append("x")
+    assert obj.log == ["x"]
+    with pytest.raises(ValueError, match="parts must be one of"):
+        obj.seeing("all")

@@ -1,24 +1,87 @@
-"""``bouncedisk fit CURVE.csv ... -o FIT.nc``: the options of the fit command."""
+"""``bouncedisk fit CURVE.csv ... -o FIT.nc``: the options of the fit command, parsed and checked
+here (before any work), progress and the summary printed here; the fit itself takes values
+(:func:`bouncedisk.fitting.command.run_fit`)."""
 
 from __future__ import annotations
 
 import argparse
+import sys
+import time
 
+from ..model.errors import InputError
 from .tracking_options import _add_track_options, _track, _tracking_store
+
+ARG = "<arguments>"
+
+
+def _int_option(text, name: str, low: int, high: int) -> int:
+    """An integer option in ``[low, high]`` (given as text so argparse never prints usage)."""
+    try:
+        value = int(str(text), 10)
+    except ValueError:
+        raise InputError(ARG, name, f"must be an integer, got {text!r}") from None
+    if not low <= value <= high:
+        raise InputError(ARG, name, f"must be between {low} and {high}, got {value}")
+    return value
+
+
+def fit_settings(args: argparse.Namespace):
+    """Every option of the fit as a value (before any work): its
+    :class:`~bouncedisk.fitting.core.FitSettings`."""
+    from ..fitting import core
+    from ..fitting.search import SIZE_LIMITS
+    from ..run.cores import available_cores
+
+    opts = {
+        "seed": _int_option(args.seed, "--seed", 0, 2**63 - 1),
+        "bootstrap": _int_option(args.bootstrap, "--bootstrap", core.MIN_BOOTSTRAP, 10_000),
+        "members": _int_option(args.members, "--members", 4, 1024) if args.members is not None else None,
+    }  # fmt: skip
+    for name in ("scan", "zoom"):
+        if (text := getattr(args, name, None)) is not None:
+            opts[name] = _int_option(text, f"--{name}", *SIZE_LIMITS[name])
+    cores = _int_option(args.cores, "--cores", 1, 1024) if args.cores is not None else None
+    if getattr(args, "e_sigma", None) is not None:
+        opts["e_sigma"] = _e_sigma_option(args.e_sigma)
+    return core.FitSettings(**opts, cores=cores if cores is not None else available_cores())
+
+
+def _e_sigma_option(text) -> float | None:
+    """``--e-sigma``: the members' restitution noise ``σ_e`` (docs/model.md), stated in
+    ``[0, 0.5]`` (0: the deterministic limit), or ``fit`` (``None``: a fifth search coordinate)."""
+    from ..model.params import number
+
+    if str(text).strip().lower() == "fit":
+        return None
+    value = number(ARG, "--e-sigma", text, nonneg=True)
+    if value > 0.5:
+        raise InputError(ARG, "--e-sigma", f"must be at most 0.5, got {value}")
+    return value
 
 
 def _cmd_fit(args: argparse.Namespace) -> int:
-    from .. import fitting
+    from ..fitting.command import run_fit
+    from ..fitting.output import summary_text
 
     store = _tracking_store(args)
-    fitting.fit_command(args)
+    settings = fit_settings(args)
+    start = time.perf_counter()
+
+    def progress(msg: str) -> None:
+        print(f"fit: [{time.perf_counter() - start:6.1f} s] {msg}", file=sys.stderr, flush=True)
+
+    ds = run_fit(list(args.curve), args.output, settings, list(args.load or []), args.sidecar,
+                 None if args.quiet else progress)  # fmt: skip
+    if not args.quiet:
+        print(summary_text(ds))
     _track(
         args,
         store,
         "fit",
         [args.output],
-        params={"curve": ", ".join(args.curve), "seed": args.seed},
-    )
+        params={"curve": ", ".join(args.curve), "seed": args.seed,
+                "identified": ds.attrs["identified"]},
+    )  # fmt: skip
     return 0
 
 
@@ -67,8 +130,8 @@ def _add_fit(sub) -> None:
     p.add_argument(
         "--e-sigma",
         default=None,
-        help="restitution noise of the model's members, in (0, 0.5] (default: 0.03; README, "
-        "'Fitting': a curve and the model fitted to it share it)",
+        help="restitution noise of the model's members: a number in [0, 0.5] states it (default: "
+        "0.03; 0: the deterministic limit), 'fit' fits it over [0, 0.1] (docs/user_guide/fitting.md)",
     )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress or summary")
     _add_track_options(p)

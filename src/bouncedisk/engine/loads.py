@@ -156,7 +156,10 @@ def _check_config(cfg: EngineConfig) -> None:
 
 
 def omega_integrals(
-    cfg: EngineConfig, loads: np.ndarray, init: InitialState | None = None
+    cfg: EngineConfig,
+    loads: np.ndarray,
+    init: InitialState | None = None,
+    reached_only: bool = False,
 ) -> np.ndarray:
     """``∫Ω dt`` over ``[cfg.stats_from, cfg.t_end]`` of one member under each load torque.
 
@@ -173,6 +176,10 @@ def omega_integrals(
         Nondimensional load torques ``τ_L`` (docs/model.md "The motor under load").
     init : InitialState, optional
         The common initial state (default: the kernel's default).
+    reached_only : bool
+        NaN for a load whose run ended before ``t_end`` (the event budget ``max_events``): its
+        integral covers part of the window only (default: that partial integral, as
+        :func:`~.driver.iterate` returns it).
 
     Returns
     -------
@@ -205,7 +212,10 @@ def omega_integrals(
         return np.array([_one_load(cfg, x, init) for x in loads])
     if status in (K.ST_NEED_CONTACT, K.ST_NUMERICAL):
         raise EngineError(f"{STATUS_TEXT[status]} (after {ist[0, K.I_EVENTS]} events)", status)
-    return st[:, K.S_OMEGA_INTEGRAL].copy()
+    out = st[:, K.S_OMEGA_INTEGRAL].copy()
+    if reached_only:
+        out[ist[:, K.I_STATUS] != K.ST_TIME] = np.nan
+    return out
 
 
 def _one_load(cfg: EngineConfig, load: float, init: InitialState) -> float:

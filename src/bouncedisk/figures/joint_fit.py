@@ -19,7 +19,14 @@ COORDINATES = {
     "psi": (r"$\psi$ [rad]", lambda v: v),
     "omega_s": (r"$\omega_s$", lambda v: v),
     "log10_speed_scale": ("log10 speed scale", lambda v: v),
+    "e_sigma": (r"$\sigma_e$ (restitution noise)", lambda v: v),
 }
+
+
+def data_word(fitted: xr.Dataset | None, attr: str = "curve_synthetic") -> str:
+    """ "synthetic" when the fit file says its data were made by the model (the sidecar's
+    ``synthetic: true``, recorded as ``attr``), else "measured"."""
+    return "synthetic" if fitted is not None and int(fitted.attrs.get(attr, 0)) else "measured"
 
 
 def _need_load(fit: xr.Dataset, what: str) -> None:
@@ -51,8 +58,9 @@ def fig_fit_load(fit: xr.Dataset) -> Figure:
     ax.fill_between(t, v("load_speed_fitted_low"), v("load_speed_fitted_high"), color="C0",
                     alpha=0.45, lw=0, label="fitted model: 95% interval of the mean")  # fmt: skip
     ax.plot(t, mean, color="C0", lw=1.2)
+    word = data_word(fit, "load_curve_synthetic")
     ax.errorbar(t, v("load_speed_measured"), yerr=v("load_speed_sigma"), fmt="o", ms=4, color="k",
-                capsize=2, label="measured (±1 sd in the likelihood)")  # fmt: skip
+                capsize=2, label=f"{word} (±1 sd in the likelihood)")  # fmt: skip
     ax.axhline(0.0, color="0.6", lw=0.6)
     ax.set_ylabel("mean speed [rad/s]")
     ax.legend(fontsize=8, loc="upper right")
@@ -65,7 +73,7 @@ def fig_fit_load(fit: xr.Dataset) -> Figure:
                  color="k", capsize=2)  # fmt: skip
     rax.axhline(0.0, color="C0", lw=1.0)
     rax.set_xlabel("load torque [mN·m]")
-    rax.set_ylabel("measured − fitted [rad/s]")
+    rax.set_ylabel(f"{word} − fitted [rad/s]")
     return fig
 
 
@@ -73,20 +81,28 @@ def fig_fit_identifiability(fit: xr.Dataset) -> Figure:
     """Which data pins which parameter: per search coordinate, its 95 % interval from the
     run-ups alone, the load curves alone and both (bars over the search range), the estimate
     (dot) and, for synthetic data, the generating value (dashed line). A hatched bar is a flat
-    profile: not identified by that data set.
+    profile: not identified by that data set. An inadequate fit (``identified = "no"``) has no
+    intervals: no bars, and the title says so. The legend names every mark drawn.
     """
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
     _need_load(fit, "fit_identifiability")
     names = [str(n) for n in fit["parameter"].values]
     sets = [str(s) for s in fit["data_set"].values]
-    fig = Figure(figsize=(6.4, 1.0 + 1.15 * len(names)), layout="constrained")
+    fig = Figure(figsize=(6.4, 1.6 + 1.15 * len(names)), layout="constrained")
     axes = np.atleast_1d(fig.subplots(len(names), 1))
+    drawn = {"hatched": False, "truth": False}
     for j, (ax, name) in enumerate(zip(axes, names, strict=True)):
         label, fn = COORDINATES.get(name, (name, lambda x: x))
         lo_b, hi_b = float(fit["search_low"].values[j]), float(fit["search_high"].values[j])
         for k, ds_name in enumerate(sets):
             lo = fn(float(fit["interval_low"].values[k, j]))
             hi = fn(float(fit["interval_high"].values[k, j]))
+            if not (math.isfinite(lo) and math.isfinite(hi)):
+                continue
             ok = bool(fit["interval_identified"].values[k, j])
+            drawn["hatched"] |= not ok
             y = len(sets) - 1 - k
             ax.barh(y, hi - lo, left=lo, height=0.6, color=DATA_SET_STYLE.get(ds_name, "0.5"),
                     alpha=0.8 if ok else 0.3, hatch=None if ok else "//", edgecolor="k", lw=0.5)  # fmt: skip
@@ -97,14 +113,23 @@ def fig_fit_identifiability(fit: xr.Dataset) -> Figure:
             )
         truth = float(fit["generating_value"].values[j])
         if math.isfinite(truth):
-            ax.axvline(fn(truth), color="C3", ls="--", lw=1.2, label="generating value")
+            drawn["truth"] = True
+            ax.axvline(fn(truth), color="C3", ls="--", lw=1.2)
         ax.set_xlim(fn(lo_b), fn(hi_b))
         ax.set_yticks(range(len(sets)), sets[::-1], fontsize=8)
         ax.set_xlabel(label, labelpad=1)
-        if j == 0 and math.isfinite(truth):
-            ax.legend(fontsize=8, loc="upper right")
-    axes[0].set_title("95% intervals by data set (hatched: not identified); the search range "
-                      "is the axis", fontsize=9)  # fmt: skip
+    handles = [Patch(color=DATA_SET_STYLE.get(s, "0.5"), alpha=0.8, label=f"95% interval: {s}")
+               for s in sets]  # fmt: skip
+    if drawn["hatched"]:
+        handles.append(Patch(facecolor="w", edgecolor="k", hatch="//", label="not identified"))
+    handles.append(Line2D([], [], ls="", marker="o", color="w", mec="k", ms=4, label="estimate"))
+    if drawn["truth"]:
+        handles.append(Line2D([], [], color="C3", ls="--", lw=1.2, label="generating value"))
+    fig.legend(handles=handles, loc="outside lower center", ncols=3, fontsize=7)
+    title = "95% intervals by data set; the search range is the axis"
+    if fit.attrs.get("identified", "yes") == "no":
+        title = "NO INTERVALS: the fit is inadequate (the best point does not reproduce the data)"
+    axes[0].set_title(title, fontsize=9)
     return fig
 
 

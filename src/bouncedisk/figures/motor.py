@@ -9,7 +9,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import FixedLocator, FormatStrFormatter, NullLocator
 
 from .common import COLORS
-from .joint_fit import fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
+from .joint_fit import data_word, fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
 from .load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
 
 
@@ -43,10 +43,10 @@ def fig5_motor(
     runs = int(fitted.attrs.get("runs", 1)) if fitted is not None else 1
     if runs > 1:  # run-ups fitted together: the data the fit compares with is their mean
         ax.plot(fitted["time"], fitted["omega_measured"], color=COLORS["data"], lw=0.6,
-                label=f"measured: mean of {runs} run-ups")  # fmt: skip
+                label=f"{data_word(fitted)}: mean of {runs} run-ups")  # fmt: skip
     else:
         ax.plot(curve["time_s"], curve["omega_rad_s"], color=COLORS["data"], lw=0.6,
-                label="measured (prototype curve)")  # fmt: skip
+                label=f"{data_word(fitted)} (prototype curve)")  # fmt: skip
     if fitted is not None:
         _fig5_fitted(ax, axr, fitted)
     elif simulated is not None:
@@ -114,6 +114,7 @@ PARAM_LABELS = {
     "psi": r"$\psi$",
     "omega_s": r"$\omega_s$",
     "speed_scale": "speed scale",
+    "e_sigma": r"$\sigma_e$",
 }
 
 
@@ -122,38 +123,61 @@ def fig_fit_profiles(fitted: xr.Dataset) -> Figure:
 
     The dashed line is the 95 % threshold ``χ²₁(0.95) = 3.84``; the shaded span is the reported
     interval, the star the estimate. A profile that stays under the line over the whole search
-    range is "not identified". The axis is linear up to 10 and logarithmic above, so that it
-    holds every profile point and still shows the threshold.
+    range is "not identified". Each panel is zoomed on its interval (half its width beyond either
+    end, within the search range) so that the profile's curvature shows; an inadequate fit (the
+    file's ``identified = "no"``) has no interval: the panel shows the profiled range and says so.
+    The axis is linear up to 10 and logarithmic above, so that it holds every profile point shown
+    and still shows the threshold.
     """
-    names = [n for n in ("e", "r_phi", "psi", "omega_s", "speed_scale")
+    names = [n for n in ("e", "r_phi", "psi", "omega_s", "speed_scale", "e_sigma")
              if f"profile_chi2_{n}" in fitted]  # fmt: skip
     fig = Figure(figsize=(3.0 * max(1, len(names)), 3.6), layout="constrained")
     axes = np.atleast_1d(fig.subplots(1, max(1, len(names)), squeeze=False)[0])
     for ax, n in zip(axes, names, strict=False):
-        x = fitted[f"profile_{n}"].values
-        y = fitted[f"profile_chi2_{n}"].values
-        a = fitted[n].attrs
-        ax.axvspan(a["ci_low"], a["ci_high"], color=COLORS["fit"], alpha=0.2, lw=0,
-                   label="95% interval")  # fmt: skip
-        ax.plot(x, y, "o-", color=COLORS["fit"], ms=3, lw=1, label="profile")
-        ax.axhline(3.841, ls="--", color="k", lw=0.8, label=r"95% threshold $\chi^2_1$ = 3.84")
-        ax.plot([float(fitted[n])], [0.0], "k*", ms=8, label="estimate")
-        ax.set_xlim(a["search_low"], a["search_high"])
-        if n in ("r_phi", "speed_scale"):
-            ax.set_xscale("log")
-        ax.set_yscale("symlog", linthresh=10.0)
-        top = float(np.nanmax(y)) if np.isfinite(y).any() else 10.0
-        ax.set_ylim(-0.5, max(10.0, top * 1.3))
-        ticks = [t for t in (0, 2, 4, 6, 8, 10, 20, 50, 100, 200, 500, 1000) if t <= top * 1.3]
-        ax.yaxis.set_major_locator(FixedLocator(ticks))
-        ax.yaxis.set_major_formatter(FormatStrFormatter("%g"))
-        ax.yaxis.set_minor_locator(NullLocator())
-        label = PARAM_LABELS.get(n, n)
-        ax.set_xlabel(f"{label} [{a['units']}]")
-        tag = "" if a.get("identified", 1) else " (not identified)"
-        ax.set_title(f"{label}: 95% [{a['ci_low']:.3g}, {a['ci_high']:.3g}]{tag}", fontsize=8)
+        _profile_panel(ax, fitted, n)
     axes[0].set_ylabel("Δχ² (profile)")
     if names:
         fig.legend(*axes[0].get_legend_handles_labels(), loc="outside upper center", ncol=4,
                    fontsize=7)  # fmt: skip
     return fig
+
+
+def _profile_panel(ax, fitted: xr.Dataset, n: str) -> None:
+    """One parameter's profile in :func:`fig_fit_profiles`."""
+    x = fitted[f"profile_{n}"].values
+    y = fitted[f"profile_chi2_{n}"].values
+    a = fitted[n].attrs
+    log = n in ("r_phi", "speed_scale")
+    has_ci = bool(np.isfinite(a["ci_low"]) and np.isfinite(a["ci_high"]))
+    if has_ci:
+        ax.axvspan(a["ci_low"], a["ci_high"], color=COLORS["fit"], alpha=0.2, lw=0,
+                   label="95% interval")  # fmt: skip
+    ax.plot(x, y, "o-", color=COLORS["fit"], ms=3, lw=1, label="profile")
+    ax.axhline(3.841, ls="--", color="k", lw=0.8, label=r"95% threshold $\chi^2_1$ = 3.84")
+    ax.plot([float(fitted[n])], [0.0], "k*", ms=8, label="estimate")
+    lo, hi = (a["ci_low"], a["ci_high"]) if has_ci else (np.nanmin(x), np.nanmax(x))
+    ax.set_xlim(*_zoom(lo, hi, a["search_low"], a["search_high"], log))
+    if log:
+        ax.set_xscale("log")
+    shown = (x >= ax.get_xlim()[0]) & (x <= ax.get_xlim()[1]) & np.isfinite(y)
+    top = float(np.max(y[shown])) if shown.any() else 10.0
+    ax.set_yscale("symlog", linthresh=10.0)
+    ax.set_ylim(-0.5, max(10.0, top * 1.3))
+    ticks = [t for t in (0, 2, 4, 6, 8, 10, 20, 50, 100, 200, 500, 1000) if t <= top * 1.3]
+    ax.yaxis.set_major_locator(FixedLocator(ticks))
+    ax.yaxis.set_major_formatter(FormatStrFormatter("%g"))
+    ax.yaxis.set_minor_locator(NullLocator())
+    label = PARAM_LABELS.get(n, n)
+    ax.set_xlabel(f"{label} [{a['units']}]")
+    tag = "" if a.get("identified", 1) else " (not identified)"
+    ci = f"95% [{a['ci_low']:.3g}, {a['ci_high']:.3g}]" if has_ci else "no interval: inadequate fit"
+    ax.set_title(f"{label}: {ci}{tag}", fontsize=8)
+
+
+def _zoom(lo: float, hi: float, low: float, high: float, log: bool) -> tuple[float, float]:
+    """The axis range of a profile panel: ``[lo, hi]`` widened by half its width on each side
+    (in log for a log axis), within the search range ``[low, high]``."""
+    f, g = (np.log10, lambda v: 10.0**v) if log else (lambda v: v, lambda v: v)
+    a, b = f(lo), f(hi)
+    pad = 0.5 * (b - a) if b > a else 0.05 * (f(high) - f(low))
+    return float(g(max(f(low), a - pad))), float(g(min(f(high), b + pad)))

@@ -6,12 +6,13 @@ trend and the ripple (:mod:`~bouncedisk.fitting.statistics`), compared by a synt
 model's across-member spread (:mod:`.objective`), searched globally then locally
 (:mod:`.search`), and profiled for every parameter (:mod:`.uncertainty`). :mod:`.model` holds the
 physical conversion (docs/model.md "Physical conversion"), :mod:`.output` the fit file, and
-:mod:`.command` the ``bouncedisk fit`` command. Round-off chooses nothing (README,
+:mod:`.command` the fit as one call on values (``bouncedisk fit`` parses its options in
+:mod:`bouncedisk.cli.fit`). Round-off chooses nothing (README,
 "Reproducible"): :mod:`.detlinalg` does the small linear algebra in a fixed order (no BLAS), and
 :mod:`.basins` lists the acceptable basins and holds the rule that picks the reported one.
 """
 
-from .command import fit_command
+from .command import run_fit
 from .core import FitResult, FitSettings, fit_curve, prepare_curve
 from .model import param_names, physical, simulate_curve, synthesize_curve, uniform_grid
 from .output import PUBLIC, fit_dataset, summary_text
@@ -20,12 +21,12 @@ __all__ = [
     "PUBLIC",
     "FitResult",
     "FitSettings",
-    "fit_command",
     "fit_curve",
     "fit_dataset",
     "param_names",
     "physical",
     "prepare_curve",
+    "run_fit",
     "simulate_curve",
     "summary_text",
     "synthesize_curve",

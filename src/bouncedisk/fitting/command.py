@@ -1,31 +1,22 @@
-"""``bouncedisk fit CURVE.csv [CURVE.csv ...] -o FIT.nc``: options checked before any work,
-progress, output (several curves: run-ups of one motor fitted together, :mod:`~bouncedisk.fitting.runs`).
+"""The fit as one call on values: read the run-ups and load curves, fit, write the fit file
+(several curves: run-ups of one motor fitted together, :mod:`~bouncedisk.fitting.runs`).
 
-Every option a user can get wrong is checked before the curve is fitted (docs/formats.md: exit 2,
-one line ``bouncedisk: error: FILE: FIELD: message``, no output file).
+:mod:`bouncedisk.cli.fit` parses the command line and prints; this module takes the parsed
+values and reports progress through a callback. Every defect a user can make is an
+:class:`~bouncedisk.model.errors.InputError` raised before the fit starts (docs/formats.md: exit
+2, one line ``bouncedisk: error: FILE: FIELD: message``, no output file).
 """
 
 from __future__ import annotations
 
 import os
-import sys
-import time
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
+import xarray as xr
+
 from ..model.errors import InputError
-
-ARG = "<arguments>"
-
-
-def _int_option(text, name: str, low: int, high: int) -> int:
-    """An integer option in ``[low, high]`` (given as text so argparse never prints usage)."""
-    try:
-        value = int(str(text), 10)
-    except ValueError:
-        raise InputError(ARG, name, f"must be an integer, got {text!r}") from None
-    if not low <= value <= high:
-        raise InputError(ARG, name, f"must be between {low} and {high}, got {value}")
-    return value
+from .core import FitSettings
 
 
 def check_output(
@@ -53,75 +44,43 @@ def check_output(
     return check_output_path(out, "-o", inputs=inputs)
 
 
-def validate(args) -> dict:
-    """Check every option (before any work); the fit's settings as a dictionary."""
-    seed = _int_option(args.seed, "--seed", 0, 2**63 - 1)
-    from .core import MIN_BOOTSTRAP
+def run_fit(
+    curves: list[str],
+    output: str,
+    settings: FitSettings,
+    loads: Sequence[str] = (),
+    sidecar: str | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> xr.Dataset:
+    """Read the run-ups (and load curves), fit them, write the fit file; returns its dataset.
 
-    boot = _int_option(args.bootstrap, "--bootstrap", MIN_BOOTSTRAP, 10_000)
-    members = _int_option(args.members, "--members", 4, 1024) if args.members is not None else None
-    from .search import SIZE_LIMITS
-
-    search = {
-        name: _int_option(text, f"--{name}", *SIZE_LIMITS[name])
-        for name in ("scan", "zoom")
-        if (text := getattr(args, name, None)) is not None
-    }
-    cores = _int_option(args.cores, "--cores", 1, 1024) if args.cores is not None else None
-    if args.sidecar is not None and not Path(args.sidecar).is_file():
-        raise InputError(str(args.sidecar), "--sidecar", "file not found")
-    opts = {"seed": seed, "bootstrap": boot, "members": members, **search}
-    if getattr(args, "e_sigma", None) is not None:
-        opts["e_sigma"] = _e_sigma_option(args.e_sigma)
-    loads = list(getattr(args, "load", None) or [])
-    check_output(args.output, list(args.curve), args.sidecar, loads)
-    if cores is None:
-        from ..run.cores import available_cores
-
-        cores = available_cores()
-    return {**opts, "cores": cores}
-
-
-def _e_sigma_option(text) -> float:
-    """``--e-sigma``: the members' restitution noise ``σ_e`` (docs/model.md), in ``(0, 0.5]``."""
-    from ..model.params import number
-
-    value = number(ARG, "--e-sigma", text, positive=True)
-    if value > 0.5:
-        raise InputError(ARG, "--e-sigma", f"must be at most 0.5, got {value}")
-    return value
-
-
-def fit_command(args) -> None:
-    """Run ``bouncedisk fit`` (see :mod:`bouncedisk.cli`)."""
+    Takes values, not options (:mod:`bouncedisk.cli.fit` parses and prints): ``settings`` is the
+    fit's, ``progress`` receives every progress line (``None``: silent). The output path is
+    checked before any work (:func:`check_output`); every defect of an input is an
+    :class:`~bouncedisk.model.errors.InputError` before the fit starts.
+    """
     from ..io.netcdf import write_dataset
     from ..io.runup_curves import read_curve
-    from .core import FitSettings, fit_curve
-    from .output import fit_dataset, summary_text
+    from . import core
+    from .output import fit_dataset
 
-    opts = validate(args)
-    start = time.perf_counter()
-
-    def progress(msg: str) -> None:
-        if not args.quiet:
-            print(f"fit: [{time.perf_counter() - start:6.1f} s] {msg}", file=sys.stderr, flush=True)
-
-    curves = []
-    seen = {}
-    for path in args.curve:
+    say = progress or (lambda msg: None)
+    if sidecar is not None and not Path(sidecar).is_file():
+        raise InputError(str(sidecar), "--sidecar", "file not found")
+    check_output(output, list(curves), sidecar, list(loads))
+    read, seen = [], {}
+    for path in curves:
         first_time(path, seen, "", "give each run-up once")
-        progress(f"reading {path}")
-        curves.append(read_curve(path, args.sidecar))
-    c = curves[0]
-    runs = f"{len(curves)} run-ups of " if len(curves) > 1 else ""
-    progress(f"{runs}{len(c.time)} samples over {c.time[-1] - c.time[0]:.6g} s")
-    loads = read_loads(getattr(args, "load", None) or [], seen, progress)
-    settings = FitSettings(**opts)
-    fit = fit_curve(curves, settings, progress, load=loads)
+        say(f"reading {path}")
+        read.append(read_curve(path, sidecar))
+    c = read[0]
+    runs = f"{len(read)} run-ups of " if len(read) > 1 else ""
+    say(f"{runs}{len(c.time)} samples over {c.time[-1] - c.time[0]:.6g} s")
+    load_data = read_loads(list(loads), seen, say)
+    fit = core.fit_curve(read, settings, progress, load=load_data)
     ds = fit_dataset(fit)
-    write_dataset(ds, args.output)
-    if not args.quiet:
-        print(summary_text(ds))
+    write_dataset(ds, output)
+    return ds
 
 
 def read_loads(paths: list[str], seen: dict, progress) -> list:

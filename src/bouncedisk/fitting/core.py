@@ -20,7 +20,7 @@ from ..io.load_curves import LoadCurveData
 from ..io.runup_curves import MotorCurve
 from ..model.errors import InputError
 from .basins import Basin, choose, list_basins
-from .joint import LoadFit, joint_consistent, load_part, load_result
+from .joint import LoadFit, joint_consistent, load_consistent, load_part, load_result
 from .model import MODEL_E_SIGMA, EnsembleSpec, member_records, param_names, physical, uniform_grid
 from .objective import Objective
 from .runs import check_runs, mean_curve
@@ -69,7 +69,10 @@ class FitSettings:
     zoom_centres: int = 6
     local_nfev: int = 12
     joint_zoom: int = SearchSettings.joint_zoom  # points around each joint candidate (search)
-    e_sigma: float = MODEL_E_SIGMA  # restitution noise of the members (docs/model.md), stated
+    # restitution noise of the members (docs/model.md): a number states it; None fits it (search
+    # coordinate ``e_sigma`` over [0, 0.1], the scan at MODEL_E_SIGMA; ``bouncedisk fit --e-sigma
+    # fit``)
+    e_sigma: float | None = MODEL_E_SIGMA
     cores: int = 1
     profile: tuple[str, ...] | None = None  # coordinates to profile (None: all)
 
@@ -227,6 +230,11 @@ class FitResult:
     load: LoadFit | None = None  # the load curves' part (joint fit), None for run-ups only
 
     @property
+    def n_statistics(self) -> int:
+        """Statistics the fit's ``χ²`` is on: the run-ups' and every load reading (joint fit)."""
+        return len(self.target) + (self.load.n if self.load is not None else 0)
+
+    @property
     def theta(self) -> dict[str, float]:
         """The estimate as a dictionary of search coordinates."""
         return dict(zip(self.names, (float(v) for v in self.x), strict=True))
@@ -285,9 +293,11 @@ def fit_curve(
         progress(f"work bounded: {note}")
     layout, records, target = data_layout(runs)
     boot = bootstrap_stats(layout, records, s.bootstrap, s.seed)
-    spec = EnsembleSpec(e_sigma=s.e_sigma, seed=s.seed, cores=max(1, s.cores))
-    part = load_part(list(load or []), fitted, spec)
-    obj = Objective(fitted, param_names(fitted), layout, target, spec, s.members,
+    stated = MODEL_E_SIGMA if s.e_sigma is None else s.e_sigma
+    spec = EnsembleSpec(e_sigma=stated, seed=s.seed, cores=max(1, s.cores))
+    part = load_part(list(load or []), fitted, spec, progress)
+    names = param_names(fitted, fit_e_sigma=s.e_sigma is None)
+    obj = Objective(fitted, names, layout, target, spec, s.members,
                     cov=provisional_cov(target, boot), runs=len(runs), load=part,
                     parts="both" if part is not None else "runup")  # fmt: skip
     best = search(obj, s.search_settings(), progress)
@@ -301,9 +311,12 @@ def fit_curve(
                  "bootstrap scales")  # fmt: skip
     if part is not None:
         extra = joint_consistent(obj, s.global_members, best.chi2)
+        quiet = load_consistent(obj, extra_runup, s.global_members, best.chi2)
         if progress is not None:
             progress(f"scan: {len(extra)} of the joint candidates reproduce the run-ups and the "
-                     "load curve together (chi2 below its 95 % point)")  # fmt: skip
+                     f"load curve together (chi2 below its 95 % point); {len(quiet)} of the "
+                     "run-ups' acceptable points are not rejected by the load curve")  # fmt: skip
+        extra = np.concatenate([extra, quiet])
     profiles, jac, corr, sd = all_profiles(obj, best.x, s.members, s.profile and list(s.profile),
                                            progress, thr, extra)  # fmt: skip
     final = obj.best(s.members)  # a profile may have found a better point

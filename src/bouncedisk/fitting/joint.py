@@ -16,7 +16,8 @@ from scipy import stats as _sps
 from ..io.load_curves import LoadCurveData, check_same_setup
 from ..io.runup_curves import MotorCurve
 from ..model.errors import InputError
-from .loadpart import LoadPart
+from . import detlinalg
+from .loadpart import LoadPart, check_window, members_for
 from .loadpart import band as load_band
 from .model import EnsembleSpec
 from .objective import Objective, snap
@@ -46,7 +47,8 @@ def stated_truth(curves: list[LoadCurveData]) -> dict[str, float]:
     for d in curves:
         gen = d.sidecar.get("generating_parameters") if d.synthetic else None
         if isinstance(gen, dict) and all(k in gen for k in TRUTH_KEYS):
-            return {k: float(gen[k]) for k in TRUTH_KEYS}
+            # the restitution noise too, when stated (a fitted coordinate)
+            return {k: float(gen[k]) for k in (*TRUTH_KEYS, "e_sigma") if k in gen}
     return {}
 
 
@@ -74,31 +76,31 @@ def chi2_at_truth(obj: Objective, members: int) -> dict[str, float] | None:
     if any(v is None for v in x):
         return None
     x = snap(np.array(x, float))
-    saved, cached, out = obj.parts, set(obj.cache), {}
+    cached, out = set(obj.cache), {}
     try:
         for part in ("runup", "load", "both"):
-            obj.parts = part
-            out[part] = obj.chi2_now(x, members)
+            out[part] = obj.seeing(part).chi2_now(x, members)
     finally:
-        obj.parts = saved
         for key in set(obj.cache) - cached:
             del obj.cache[key]
     return out
 
 
 def load_part(
-    curves: list[LoadCurveData], fitted: MotorCurve, spec: EnsembleSpec
-) -> LoadPart | None:
+    curves: list[LoadCurveData], fitted: MotorCurve, spec: EnsembleSpec,
+    progress: Callable[[str], None] | None = None,
+) -> LoadPart | None:  # fmt: skip
     """The load curves' part of the likelihood (``None`` without load curves), after checking
     that they share the run-ups' drive and state ``Φ0`` (the torque scale needs it)."""
     if not curves:
         return None
     for d in curves:
         check_same_setup(d, fitted.drive_frequency_hz, fitted.phi0_rad)
+        check_window(d)
         if fitted.phi0_rad is None:
             raise InputError(d.path, "motor.Phi0_rad", "the run-ups' sidecar must state Phi0_rad "
                              "for a joint fit with a load curve (its torque scale needs it)")  # fmt: skip
-    return LoadPart(curves, spec.e_sigma, spec.seed, cores=spec.cores)
+    return LoadPart(curves, spec.e_sigma, spec.seed, cores=spec.cores, progress=progress)
 
 
 def joint_consistent(obj: Objective, members: int, best_chi2: float) -> np.ndarray:
@@ -116,6 +118,33 @@ def joint_consistent(obj: Objective, members: int, best_chi2: float) -> np.ndarr
     return np.array(list(pts.values())).reshape(-1, len(obj.names))
 
 
+def load_consistent(
+    obj: Objective, runup_ok: np.ndarray, members: int, best_chi2: float
+) -> np.ndarray:
+    """The run-ups' acceptable scan points (``runup_ok``, :func:`.uncertainty.scan_acceptable`)
+    that the load curves do not reject: the load part's ``χ²`` on the scan's load members below
+    its 95 % point (Birge-scaled by the best fit's ``χ²/n``).
+
+    A joint interval is widened to them, so that data without information cannot narrow it: with
+    an uninformative load curve (readings of huge spread) every such point stays, and the joint
+    intervals hold the run-ups' own. Read on the load part alone, neither logged nor counted
+    (the scan's points are the run-ups' own, ``R_φ`` as the scan matched it to their trend).
+    """
+    part = obj.load
+    if part is None or len(runup_ok) == 0:
+        return np.empty((0, len(obj.names)))
+    scale = max(1.0, best_chi2 / obj.n_stats)
+    limit = scale * float(_sps.chi2.ppf(0.95, part.n))
+    k = members_for(members)
+    keep = []
+    for x in runup_ok:
+        xs = snap(x)
+        r = part.residuals(obj.theta(xs), xs, k)
+        if math.isfinite(value := detlinalg.dot(r, r)) and value <= limit:
+            keep.append(xs)
+    return np.array(keep).reshape(-1, len(obj.names))
+
+
 def identifiability(
     obj: Objective, x: np.ndarray, members: int, which: list[str] | None, extra_runup: np.ndarray
 ) -> dict[str, list[Profile]]:
@@ -124,14 +153,10 @@ def identifiability(
     evaluations, widened to that part's acceptable points (the scan's for the run-ups: it fitted
     them). A flat profile is "not identified", as in the joint fit."""
     out = {}
-    saved = obj.parts
-    try:
-        for part, extra in (("runup", extra_runup), ("load", None)):
-            obj.parts = part
-            thr = birge(obj.best(members).chi2, obj.n_stats, len(obj.names))
-            out[part] = all_profiles(obj, x, members, which, None, thr, extra)[0]
-    finally:
-        obj.parts = saved
+    for part, extra in (("runup", extra_runup), ("load", None)):
+        view = obj.seeing(part)
+        thr = birge(view.best(members).chi2, view.n_stats, len(view.names))
+        out[part] = all_profiles(view, x, members, which, None, thr, extra)[0]
     return out
 
 
@@ -151,11 +176,7 @@ def load_result(
             progress(f"identifiability {name}: " + "; ".join(cells))
     xs = snap(x)
     theta = obj.theta(xs)
-    saved, obj.parts = obj.parts, "load"
-    try:
-        chi2_load = obj.chi2_now(xs, members)
-    finally:
-        obj.parts = saved
+    chi2_load = obj.seeing("load").chi2_now(xs, members)
     return LoadFit(curves=part.curves, band=load_band(part, theta, xs), chi2=chi2_load, n=part.n,
                    intervals=intervals, data_var=part.data_var(),
                    chi2_generating=chi2_at_truth(obj, members))  # fmt: skip

@@ -23,6 +23,7 @@ from .core import FitResult
 from .joint import stated_truth, truth_coordinate
 from .loadpart import LOAD_BAND, LOAD_MEMBERS
 from .model import BOUNDS
+from .uncertainty import identified
 
 #: Data sets of the identifiability table, in order: (key of ``LoadFit.intervals``, label).
 DATA_SETS = (("runup", "run-ups"), ("load", "load curve"), ("both", "both"))
@@ -70,6 +71,9 @@ def _intervals(fit: FitResult) -> dict:
         return np.array(rows, dtype=float)
 
     dims = ("data_set", "parameter")
+    low, high, ident = table("ci_low"), table("ci_high"), table("identified")
+    if not identified(fit.chi2, fit.n_statistics)[0]:  # an inadequate fit reports no interval
+        low[:], high[:], ident[:] = np.nan, np.nan, 0
     gen = truth(fit)
     truth_x = [truth_coordinate({f"generating_{k}": v for k, v in gen.items()}, n) for n in names]
     return {
@@ -80,11 +84,11 @@ def _intervals(fit: FitResult) -> dict:
         "generating_value": ("parameter", np.array([np.nan if v is None else v for v in truth_x]),
                              {"units": "1", "long_name": "generating value of each search "
                               "coordinate stated by synthetic data (nan: not stated)"}),
-        "interval_low": (dims, table("ci_low"), {"units": "1", "long_name": "lower end of the "
+        "interval_low": (dims, low, {"units": "1", "long_name": "lower end of the "
                          "95% interval of each search coordinate from each data set"}),
-        "interval_high": (dims, table("ci_high"), {"units": "1", "long_name": "upper end of the "
+        "interval_high": (dims, high, {"units": "1", "long_name": "upper end of the "
                           "95% interval of each search coordinate from each data set"}),
-        "interval_identified": (dims, table("identified").astype(np.int8), {"units": "1",
+        "interval_identified": (dims, ident.astype(np.int8), {"units": "1",
                                 "long_name": "1: the profile is not flat over the search range"}),
     }  # fmt: skip
 
@@ -108,6 +112,7 @@ def load_dataset(fit: FitResult) -> xr.Dataset:
     ds.attrs.update(
         load_curve_file=", ".join(d.path for d in lf.curves),
         load_curve_sha256=", ".join(sha256_file(d.path) for d in lf.curves),
+        load_curve_synthetic=int(all(d.synthetic for d in lf.curves)),
         chi2_load=lf.chi2,
         n_load_readings=lf.n,
         load_window_s=", ".join(f"[{d.window_s[0]:g}, {d.window_s[1]:g}]" for d in lf.curves),
@@ -129,8 +134,10 @@ def identifiability_lines(ds: xr.Dataset) -> list[str]:
     table (search coordinates; ``*``: the profile is flat, not identified)."""
     a = ds.attrs
     lines = [f"  load curve: chi2 {a['chi2_load']:.4g} on {a['n_load_readings']} readings "
-             f"({a['load_curve_file']})",
-             "  95% intervals by data set (search coordinates; * not identified):"]  # fmt: skip
+             f"({a['load_curve_file']})"]  # fmt: skip
+    if a.get("identified", "yes") == "no":
+        return [*lines, "  95% intervals by data set: none (inadequate fit)", *_truth_lines(a)]
+    lines.append("  95% intervals by data set (search coordinates; * not identified):")
     names = [str(n) for n in ds["parameter"].values]
     for j, name in enumerate(names):
         cells = []

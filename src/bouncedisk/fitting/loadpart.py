@@ -28,16 +28,20 @@ experiments: block-diagonal covariance).
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
+import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from ..engine import EngineConfig, InitialState
 from ..engine.loads import omega_integrals
 from ..io.load_curves import LoadCurveData
+from ..model.errors import InputError
 from ..model.params import Parameters, PhysicalParameters
 from . import detlinalg
+from .model import restitution_noise, thread_map
 
 #: Load members per evaluation of the load part (local search, profiles).
 LOAD_MEMBERS = 8
@@ -53,6 +57,8 @@ LOAD_STREAM = 1_000_000
 #: periodic motor's readings repeat exactly (members and repeats identical), and a reading is not
 #: known better than a tachometer resolves it.
 LOAD_FLOOR = 1e-2
+#: An evaluation of the load part that runs longer than this (s) reports its progress.
+PROGRESS_S = 10.0
 #: Event budget of one reading (a start from rest to the window's end).
 MAX_EVENTS = 50_000_000
 
@@ -83,10 +89,31 @@ def curve_readings(
     cfg = EngineConfig(
         e=theta["e"], omega_s=theta["omega_s"], r_phi=10.0 ** theta["log10_r_phi"],
         psi=theta["psi"], contact=True, torsion=True, t_end=t1, max_events=MAX_EVENTS,
-        e_sigma=e_sigma, seed=seed, member=LOAD_STREAM + member, stats_from=t0,
+        e_sigma=restitution_noise(theta, e_sigma), seed=seed, member=LOAD_STREAM + member,
+        stats_from=t0,
     )  # fmt: skip
-    integrals = omega_integrals(cfg, data.torque / torque, InitialState(t=0.0, omega=0.0))
+    # a run stopped by the event budget before t1 has not read the window: NaN, never the part
+    # it reached divided by the whole window (the objective rejects the point)
+    integrals = omega_integrals(
+        cfg, data.torque / torque, InitialState(t=0.0, omega=0.0), reached_only=True
+    )
     return integrals / (t1 - t0) * speed
+
+
+def check_window(data: LoadCurveData) -> None:
+    """Refuse a window the members cannot reach within their event budget (before any work).
+
+    A member runs from rest to ``t1``: ``t1 f`` drive periods, of which a bouncing rotor impacts
+    about once each. A window of more periods than :data:`MAX_EVENTS` would stop at the budget
+    on any such motor, and its reading would not be the mean over the window.
+    """
+    t1 = data.window_s[1]
+    periods = t1 * data.drive_frequency_hz
+    if periods > MAX_EVENTS:
+        side = str(Path(data.path).with_suffix(".yaml"))
+        raise InputError(side, "window_s", f"ends at {t1:g} s = {periods:.3g} drive periods "
+                         f"after the start; a reading can follow at most {MAX_EVENTS:.3g} "
+                         "impacts, so the model cannot read that window")  # fmt: skip
 
 
 @dataclass
@@ -103,6 +130,8 @@ class LoadPart:
         Members per evaluation ``K`` (the scan evaluates with one).
     cores : int
         Threads running the readings of one evaluation.
+    progress : callable or None
+        Receives a line every :data:`PROGRESS_S` seconds of a long evaluation.
     """
 
     curves: list[LoadCurveData]
@@ -110,6 +139,7 @@ class LoadPart:
     seed: int
     members: int = LOAD_MEMBERS
     cores: int = 1
+    progress: Callable[[str], None] | None = None  # long evaluations report through it
     cache: dict = field(default_factory=dict)
     cov_model: np.ndarray | None = None
     _white: dict = field(default_factory=dict)
@@ -149,11 +179,23 @@ class LoadPart:
             def one(task):
                 return curve_readings(theta, task[1], task[0], self.e_sigma, self.seed)
 
+            started = time.perf_counter()
+            last = [started]
+
+            def done(j: int) -> None:  # a long curve reports its progress (PROGRESS_S)
+                now = time.perf_counter()
+                if self.progress is not None and now - last[0] >= PROGRESS_S:
+                    last[0] = now
+                    self.progress(f"load curve: {j}/{len(tasks)} member curves read at this "
+                                  f"point ({now - started:.0f} s)")  # fmt: skip
+
             if serial or self.cores <= 1 or len(tasks) < 2:
-                flat = [one(t) for t in tasks]
+                flat = []
+                for t in tasks:
+                    flat.append(one(t))
+                    done(len(flat))
             else:
-                with ThreadPoolExecutor(max_workers=self.cores) as pool:
-                    flat = list(pool.map(one, tasks))
+                flat = thread_map(one, tasks, self.cores, done)
             new = np.concatenate(flat).reshape(k - start, self.n)
             have = new if have is None else np.vstack([have, new])
             self.cache[key] = have

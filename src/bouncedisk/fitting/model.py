@@ -16,6 +16,7 @@ ensemble mean is).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -33,6 +34,8 @@ BOUNDS: dict[str, tuple[float, float]] = {
     "psi": (-math.pi, math.pi),
     "omega_s": (1.05, 4.0),
     "log10_speed_scale": (-4.0, 3.0),
+    # the restitution noise, when fitted: from the deterministic limit (members coincide) to 10 %
+    "e_sigma": (0.0, 0.1),
 }
 
 #: Noise stream offset of the measurement noise added to members (independent of the engine's).
@@ -51,12 +54,20 @@ MODEL_E_SIGMA = 0.03
 RESTITUTION_SEED_OFFSET = 1_000_000
 
 
-def param_names(curve: MotorCurve) -> list[str]:
-    """Search coordinates: ``e, log10 R_φ, ψ, omega_s`` (+ ``log10`` speed scale if Φ0 is unknown)."""
+def param_names(curve: MotorCurve, fit_e_sigma: bool = False) -> list[str]:
+    """Search coordinates: ``e, log10 R_φ, ψ, omega_s`` (+ ``log10`` speed scale if Φ0 is unknown,
+    + the restitution noise ``e_sigma`` when it is fitted rather than stated)."""
     names = ["e", "log10_r_phi", "psi", "omega_s"]
     if curve.phi0_rad is None:
         names.append("log10_speed_scale")
+    if fit_e_sigma:
+        names.append("e_sigma")
     return names
+
+
+def restitution_noise(theta: dict[str, float], stated: float) -> float:
+    """``σ_e`` of a parameter point: its own when fitted (``theta["e_sigma"]``), else ``stated``."""
+    return float(theta.get("e_sigma", stated))
 
 
 def physical(theta: dict[str, float], curve: MotorCurve) -> dict[str, float]:
@@ -87,9 +98,34 @@ def uniform_grid(curve: MotorCurve) -> np.ndarray:
 class EnsembleSpec:
     """How model members are made: restitution noise, seed and the measurement noise added."""
 
-    e_sigma: float = MODEL_E_SIGMA
+    e_sigma: float = MODEL_E_SIGMA  # stated; a fitted point's own ``e_sigma`` overrides it
     seed: int = 0
     cores: int = 1
+
+
+def thread_map(
+    fn: Callable, items: Sequence, cores: int, on_done: Callable[[int], None] | None = None
+) -> list:
+    """``[fn(item) …]`` on ``cores`` threads, in order; stops promptly when interrupted.
+
+    On any exception in the caller's thread (a SIGINT or SIGTERM arrives as
+    ``KeyboardInterrupt``, or an item's error) the items not started are cancelled and the
+    pool is not waited for, so a stopped fit ends after the members already running, not after
+    every member queued. ``on_done(k)`` is called in the caller's thread after the ``k``-th
+    result (progress of a long evaluation).
+    """
+    pool = ThreadPoolExecutor(max_workers=cores)
+    out = []
+    try:
+        for k, value in enumerate(pool.map(fn, items), start=1):
+            out.append(value)
+            if on_done is not None:
+                on_done(k)
+    except BaseException:
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
+    return out
 
 
 def simulate_curve(
@@ -152,14 +188,13 @@ def member_records(
     n = len(uniform_grid(curve))
 
     def one(m: int):
-        om = simulate_curve(theta, curve, m, spec.e_sigma, spec.seed)
+        om = simulate_curve(theta, curve, m, restitution_noise(theta, spec.e_sigma), spec.seed)
         rec = om + measurement_noise(n, curve.sigma, spec.seed, m)
         return reduce(rec) if reduce is not None else rec
 
     if spec.cores <= 1 or len(members) == 1:
         return [one(m) for m in members]
-    with ThreadPoolExecutor(max_workers=spec.cores) as pool:
-        return list(pool.map(one, members))
+    return thread_map(one, members, spec.cores)
 
 
 def synthesize_curve(

@@ -15,8 +15,9 @@ noise streams are fixed (common random numbers), so ``χ²`` is deterministic fo
 
 With load curves (:mod:`.loadpart`) the objective is the joint ``χ²`` of both experiments, the
 run-ups' plus the load curves' (independent: the covariance is block-diagonal). ``parts`` selects
-which data the objective sees — ``"runup"``, ``"load"`` or ``"both"`` — so the intervals from each
-data set alone come from the same cached evaluations (:func:`.core.identifiability`).
+which data the objective sees — ``"runup"``, ``"load"`` or ``"both"`` — fixed per objective;
+:meth:`Objective.seeing` gives a view of another part on the same cached evaluations, so the
+intervals from each data set alone come from them (:func:`.joint.identifiability`).
 
 Round-off cannot move it (README, "Reproducible"): every point is first put on a lattice of
 :data:`SNAP_DECIMALS` decimals (:func:`snap`; an optimizer's step that differs in the last bits
@@ -26,9 +27,9 @@ fixed order, and the whitening and ``χ²`` use :mod:`.detlinalg` (no BLAS).
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -37,9 +38,11 @@ from ..io.runup_curves import MotorCurve
 from . import detlinalg
 from .basins import rank_key
 from .loadpart import LoadPart, members_for
-from .model import BOUNDS, EnsembleSpec, member_records
+from .model import BOUNDS, EnsembleSpec, member_records, thread_map
 from .statistics import EnsembleStats, Layout, records_stats
 
+#: The data an objective can see (:meth:`Objective.seeing`).
+PARTS = ("runup", "load", "both")
 #: Decimals of the lattice every evaluated point is put on (:func:`snap`): far finer than any step
 #: of the search (the finest, a finite difference, is 1e-3 of a range), far coarser than round-off.
 SNAP_DECIMALS = 8
@@ -113,6 +116,16 @@ class Objective:
             self.cov = np.eye(len(self.target))
         self.set_cov(self.cov)
 
+    def seeing(self, parts: str) -> Objective:
+        """The same objective seeing only ``parts`` (``"runup"``, ``"load"`` or ``"both"``): a
+        view sharing the cache, the log, the covariance and the load part, its own ``parts`` fixed
+        (the mode is an argument, never a string saved and restored)."""
+        if parts not in PARTS:
+            raise ValueError(f"parts must be one of {PARTS}, got {parts!r}")
+        view = copy.copy(self)
+        view.parts = parts
+        return view
+
     @property
     def span(self) -> np.ndarray:
         """Width of the search range of every coordinate."""
@@ -176,7 +189,8 @@ class Objective:
         """``Σ log(1 + r²)``: the global search's loss, insensitive to far-off statistics."""
         r = self.residuals(x, members)
         self.chi2(x, members)
-        return float(np.sum(np.log1p(r * r)))
+        value = float(np.sum(np.log1p(r * r)))
+        return value if math.isfinite(value) else 1e300  # a reading the run did not reach
 
     def map(self, fn: Callable, items) -> list:
         """``[fn(item) …]`` with items on ``spec.cores`` threads (members of each run serially)."""
@@ -185,8 +199,7 @@ class Objective:
             return [fn(i) for i in items]
         self.points_parallel = True
         try:
-            with ThreadPoolExecutor(max_workers=self.spec.cores) as pool:
-                return list(pool.map(fn, items))
+            return thread_map(fn, items, self.spec.cores)
         finally:
             self.points_parallel = False
 

@@ -20,7 +20,7 @@ from ..io.provenance import base_attrs, new_run_id, sha256_file
 from .core import FitResult
 from .model import BOUNDS
 from .statistics import STAT_LONG_NAMES, STAT_UNITS, STATS
-from .uncertainty import THRESHOLD, adequate
+from .uncertainty import THRESHOLD, adequate, identified
 
 #: Public name: (search coordinate, transform, units, long name).
 PUBLIC = {
@@ -30,6 +30,8 @@ PUBLIC = {
     "omega_s": ("omega_s", lambda v: v, "1", "nondimensional stator frequency"),
     "speed_scale": ("log10_speed_scale", lambda v: 10.0**v, "rad/s",
                     "rad/s per unit of nondimensional rotor angular velocity"),
+    "e_sigma": ("e_sigma", lambda v: v, "1", "restitution noise: standard deviation of an "
+                "impact's coefficient of restitution about e"),
 }  # fmt: skip
 
 
@@ -122,9 +124,11 @@ def residual_check(ds: xr.Dataset) -> dict[str, float]:
 
 
 def _parameters(fit: FitResult) -> tuple[dict, list[str]]:
-    """Scalar parameter variables with intervals, and the names not identified."""
+    """Scalar parameter variables with intervals, and the names not identified (an inadequate
+    fit, :func:`.uncertainty.identified`: every interval NaN, every parameter not identified)."""
     out, not_identified = {}, []
     prof = {p.name: p for p in fit.profiles}
+    ok, reason = identified(fit.chi2, fit.n_statistics)
     for pub, (internal, fn, units, long_name) in PUBLIC.items():
         if internal not in fit.names:
             continue
@@ -147,6 +151,10 @@ def _parameters(fit: FitResult) -> tuple[dict, list[str]]:
                          multimodal=int(p.multimodal), delta_chi2=p.threshold,
                          open_low=int(p.open_low), open_high=int(p.open_high))  # fmt: skip
             if not p.identified:
+                not_identified.append(pub)
+        if not ok:
+            attrs.update(ci_low=np.nan, ci_high=np.nan, identified=0, interval=reason)
+            if pub not in not_identified:
                 not_identified.append(pub)
         out[pub] = xr.DataArray(fn(fit.x[j]), attrs=attrs)
     return out, not_identified
@@ -237,8 +245,10 @@ def fit_dataset(fit: FitResult) -> xr.Dataset:
 def _global_attrs(fit: FitResult, paths: list[str], not_identified: list[str]) -> dict:
     th = fit.physical
     sha = ", ".join(sha256_file(p) for p in paths)
-    n_stats = len(STATS) + (fit.load.n if fit.load is not None else 0)  # the joint fit's readings
+    n_stats = fit.n_statistics
+    ok, reason = identified(fit.chi2, fit.n_statistics)
     return {
+        "identified": "yes" if ok else "no", "identified_reason": reason,
         "run_id": new_run_id("fit", sha), "scene_name": "fit",
         "status": "completed", "e": th["e"], "omega_s": th["omega_s"], "r_phi": th["r_phi"],
         "psi": th["psi"], "effects": "contact,impacts,impulse_cap,restitution_noise,torsion",
@@ -260,7 +270,8 @@ def _global_attrs(fit: FitResult, paths: list[str], not_identified: list[str]) -
         "chi2_p_value": float(chi2_dist.sf(fit.chi2, n_stats)),
         "fit_adequate": int(adequate(fit.chi2, n_stats)), "evaluations": fit.evaluations,
         "ensemble_members": fit.settings.members, "band_members": fit.settings.band_members,
-        "e_sigma": fit.settings.e_sigma, "seed": fit.settings.seed,
+        "e_sigma": fit.theta.get("e_sigma", fit.settings.e_sigma),
+        "e_sigma_fitted": int("e_sigma" in fit.names), "seed": fit.settings.seed,
         "n_bootstrap": fit.settings.bootstrap, "scan_points": fit.settings.scan,
         "zoom_points": fit.settings.zoom, "joint_zoom_points": fit.settings.joint_zoom,
         "work_note": fit.note or "none",
@@ -280,12 +291,15 @@ def summary_text(ds: xr.Dataset) -> str:
     a = ds.attrs
     lines = [f"fit of {a.get('curve_file')} (seed {a.get('seed')}, {a.get('wall_time_s')} s, "
              f"chi2 {a.get('chi2', float('nan')):.4g} on {a.get('n_statistics')} statistics)"]  # fmt: skip
+    if a.get("identified", "yes") == "no":
+        lines.append(f"  NOT IDENTIFIED: {a.get('identified_reason', 'inadequate fit')}")
     for name in PUBLIC:
         if name in ds and "ci_low" in ds[name].attrs:
             v = ds[name].attrs
             flag = "" if v["identified"] else "   <- not identified"
-            lines.append(f"  {name:>12} = {float(ds[name]):.5g}   95% [{v['ci_low']:.5g}, "
-                         f"{v['ci_high']:.5g}] {v['units']}{flag}")  # fmt: skip
+            ci = (f"95% [{v['ci_low']:.5g}, {v['ci_high']:.5g}]"
+                  if np.isfinite(v["ci_low"]) else "no interval (inadequate fit)")  # fmt: skip
+            lines.append(f"  {name:>12} = {float(ds[name]):.5g}   {ci} {v['units']}{flag}")
     s_ci, t_ci = a["steady_speed_ci_rad_s"], a["time_constant_ci_s"]
     lines.append(f"  trend of the data: steady speed {a['steady_speed_rad_s']:.5g} rad/s "
                  f"[{s_ci[0]:.5g}, {s_ci[1]:.5g}], time constant {a['time_constant_s']:.4g} s "

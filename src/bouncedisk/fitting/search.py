@@ -172,6 +172,8 @@ def global_stage(
     base = 0.5 * (obj.lo + obj.hi)
     if "log10_r_phi" in names:
         base[names.index("log10_r_phi")] = -2.5
+    if "e_sigma" in names:  # fitted: the scan at the stated value, the local search moves it
+        base[names.index("e_sigma")] = obj.spec.e_sigma
 
     def at(units: np.ndarray) -> list[np.ndarray]:
         pts = []
@@ -537,9 +539,7 @@ def search(
     obj: Objective, s: SearchSettings, progress: Callable[[str], None] | None = None
 ) -> Evaluation:
     """The whole search (module docstring); returns the best logged point at ``s.members``."""
-    parts, obj.parts = obj.parts, "runup"  # the scan fits the run-ups (module docstring)
-    ranked = global_stage(obj, s, progress)
-    obj.parts = parts
+    ranked = global_stage(obj.seeing("runup"), s, progress)  # the scan fits the run-ups
     obj.set_cov(measure_cov(obj, ranked[0].x, s.pilot_members))
     # one member per scan point is noisy where the model is chaotic: re-rank the best distinct
     # scan points on `members` members under the model's covariance, measured at the best of them
@@ -559,9 +559,40 @@ def search(
     # joint: more starts (distinct in (e, omega_s)), each refined half as long, then polished
     nfev = s.local_nfev if obj.load is None else max(4, s.local_nfev // 2)
     best = local_stage(obj, starts, s.members, nfev, progress)
+    best = noise_sweep(obj, best, s.members, progress)
     obj.set_cov(measure_cov(obj, best.x, s.pilot_members))
     best = local_stage(obj, [best.x], s.members, max(8, s.local_nfev // 3), progress)
     return best
+
+
+#: Values of a fitted restitution noise tried at the local search's best point (:func:`noise_sweep`).
+NOISE_GRID = (0.0, 0.01, 0.02, 0.03, 0.045, 0.06, 0.08, 0.1)
+
+
+def noise_sweep(
+    obj: Objective, best: Evaluation, members: int, progress: Callable[[str], None] | None = None
+) -> Evaluation:
+    """With ``e_sigma`` fitted: its :data:`NOISE_GRID` at the best point, the other coordinates
+    held; the best logged point after it (the search never returns a worse one).
+
+    The scan runs at the stated noise and a local step in ``e_sigma`` sees the landscape only
+    near it, while the noise moves whole load curves (a few % at no load between 0 and 0.03): the
+    grid lets the final refinement start where the data put it, and its points, logged, widen
+    the profile interval of ``e_sigma`` wherever they are acceptable.
+    """
+    if "e_sigma" not in obj.names:
+        return best
+    j = obj.names.index("e_sigma")
+    pts = []
+    for v in NOISE_GRID:
+        x = best.x.copy()
+        x[j] = v
+        pts.append(x)
+    obj.map(lambda x: obj.chi2(x, members), pts)
+    out = obj.best(members)
+    _say(progress, f"noise sweep: e_sigma {out.x[j]:.4g}, chi2 {out.chi2:.4g} (before: "
+                   f"{best.x[j]:.4g}, {best.chi2:.4g})")  # fmt: skip
+    return out
 
 
 def rerank(obj: Objective, cands: list[np.ndarray], s: SearchSettings) -> list[float]:

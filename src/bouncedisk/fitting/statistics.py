@@ -249,11 +249,13 @@ def provisional_sd(measured: np.ndarray) -> np.ndarray:
 
 def member_band(values: np.ndarray) -> dict[str, np.ndarray]:
     """Ensemble mean of ``values`` ``(members, n)``, the 95 % interval of that mean (Student) and
-    the members' 2.5–97.5 % band: the fitted model's band of a run-up and of a load curve."""
-    from scipy.special import stdtrit  # Student's quantile, bit-identical to scipy.stats.t.ppf
+    the members' 2.5–97.5 % band: the fitted model's band of a run-up and of a load curve. The
+    interval of the mean is the project's one Student-t helper
+    (:func:`bouncedisk.analysis.statistics.confidence_interval`), column by column."""
+    from ..analysis.statistics import confidence_interval
 
-    k = len(values)
-    mean = values.mean(axis=0)
-    half = stdtrit(k - 1, 0.975) * values.std(axis=0, ddof=1) / np.sqrt(k)
+    ci = np.array([confidence_interval(values[:, j]) for j in range(values.shape[1])]).reshape(
+        -1, 3
+    )
     lo, hi = np.percentile(values, [2.5, 97.5], axis=0)
-    return {"mean": mean, "low": mean - half, "high": mean + half, "p025": lo, "p975": hi}
+    return {"mean": ci[:, 0], "low": ci[:, 1], "high": ci[:, 2], "p025": lo, "p975": hi}

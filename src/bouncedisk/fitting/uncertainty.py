@@ -295,3 +295,17 @@ ADEQUATE_P = 1e-3
 def adequate(chi2_min: float, n_stats: int) -> bool:
     """Whether the best point reproduces the data's statistics (p-value above :data:`ADEQUATE_P`)."""
     return bool(chi2_dist.sf(chi2_min, n_stats) > ADEQUATE_P)
+
+
+def identified(chi2_min: float, n_stats: int) -> tuple[bool, str]:
+    """Whether a fit may report intervals at all (the fit file's ``identified``) and why.
+
+    An inadequate fit (:func:`adequate` false) does not reproduce the data: its profiles are
+    about a point the data reject, so its intervals are not reported (NaN), whatever their widths.
+    """
+    if adequate(chi2_min, n_stats):
+        return True, (f"the best point reproduces the data (chi2 {chi2_min:.4g} on {n_stats} "
+                      f"statistics, p >= {ADEQUATE_P:g})")  # fmt: skip
+    return False, (f"inadequate fit: chi2 {chi2_min:.4g} on {n_stats} statistics (p = "
+                   f"{float(chi2_dist.sf(chi2_min, n_stats)):.2g} < {ADEQUATE_P:g}); the best "
+                   "point found does not reproduce the data, so no interval is reported")  # fmt: skip

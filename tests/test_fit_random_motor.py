@@ -1,0 +1,77 @@
+"""A small random-motor case of ``benchmarks/random_motors.py`` (the test of record is the
+benchmark's table): a motor of the seeded Sobol' sample the fit was never tuned on, its run-up and
+load curve made by the model with independent reading noise, fitted with the restitution noise
+free. Either the fit is adequate and every joint interval holds the generating value, or it says
+it identified nothing (NaN intervals)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import runpy
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pandas as pd
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _bench() -> SimpleNamespace:
+    """``benchmarks/random_motors.py``'s names (the benchmark is a script, not a module)."""
+    return SimpleNamespace(**runpy.run_path(str(ROOT / "benchmarks" / "random_motors.py")))
+
+
+def test_the_sample_is_seeded_spans_the_box_and_has_deterministic_motors():
+    """16 motors: the same every time, inside the search box, every fourth at ``e_sigma = 0``."""
+    from bouncedisk.fitting.model import BOUNDS
+
+    rm = _bench()
+    a, b = rm.motors(16), rm.motors(16)
+    assert a == b and len(a) == 16
+    assert [m["e_sigma"] for m in a[3::4]] == [0.0] * 4
+    assert sum(m["e_sigma"] > 0 for m in a) == 12
+    for m in a:
+        assert BOUNDS["e"][0] <= m["e"] <= BOUNDS["e"][1]
+        assert BOUNDS["omega_s"][0] <= m["omega_s"] <= BOUNDS["omega_s"][1]
+        assert BOUNDS["log10_r_phi"][0] <= math.log10(m["r_phi"]) <= BOUNDS["log10_r_phi"][1]
+        assert 0.0 <= m["e_sigma"] <= 0.1
+    # a Sobol' sample fills the box: each coordinate's 16 values spread over its range
+    es = sorted(m["e"] for m in a)
+    assert es[0] < 0.15 and es[-1] > 0.85
+
+
+@pytest.mark.slow  # one small joint fit with five coordinates
+@pytest.mark.xfail(
+    strict=True,
+    reason="a known defect: motor 0 is fitted adequately but its e_sigma interval "
+    "[0.030, 0.064] misses the generating 0.0665 (before the noise sweep [0.028, 0.032]); "
+    "the search with a fitted e_sigma does not reach the truth's basin yet",
+)
+def test_a_random_motor_is_identified_or_says_it_is_not(tmp_path):
+    from bouncedisk.fitting import fit_curve, fit_dataset
+    from bouncedisk.io.load_curves import read_load_curve
+    from bouncedisk.io.runup_curves import read_curve
+
+    rm = _bench()
+    k = 0
+    true = rm.motors(16)[k]
+    run, load = rm.make_motor_data(tmp_path, true, k, loads=10, repeats=5, reading_noise=0.05)
+    df = pd.read_csv(load)
+    assert len(df) == 10 and df["torque_Nm"].iloc[0] == 0.0
+    assert df["speed_rad_s"].iloc[-1] < 0.5 * df["speed_rad_s"].iloc[0]  # past stall
+    assert np.all(df["speed_sd_rad_s"] >= 0.05)  # the reading noise is in the spread
+    settings = dataclasses.replace(
+        rm.FitSettings(seed=1, scan=16, zoom=4, zoom_centres=2, members=4, pilot_members=8,
+                       band_members=8, local_nfev=4, cores=2, joint_zoom=8), e_sigma=None,
+    )  # fmt: skip
+    ds = fit_dataset(fit_curve(read_curve(run), settings, load=[read_load_curve(load)]))
+    lo, hi = ds["interval_low"].values[2], ds["interval_high"].values[2]
+    if ds.attrs["identified"] == "yes":
+        for j, name in enumerate(str(n) for n in ds["parameter"].values):
+            t = math.log10(true["r_phi"]) if name == "log10_r_phi" else true[name]
+            assert lo[j] <= t <= hi[j], (name, lo[j], t, hi[j])
+    else:
+        assert np.isnan(lo).all() and np.isnan(hi).all()
