@@ -22,6 +22,7 @@ from bouncedisk.fitting import (
 from bouncedisk.fitting.core import MAX_SAMPLES
 from bouncedisk.fitting.model import MODEL_E_SIGMA, EnsembleSpec, member_records, uniform_grid
 from bouncedisk.io.runup_curves import MotorCurve, read_curve, write_curve
+from bouncedisk.model.errors import InputError
 
 F_HZ, PHI0, SPAN, DT, SIGMA = 15000.0, 3.0e-4, 0.06, 2.5e-5, 0.05
 # generating parameters used nowhere else in the repository; every curve is one ensemble member
@@ -149,10 +150,29 @@ def test_output_equal_to_input(periodic_csv, capsys):
     assert periodic_csv.read_bytes() == before
 
 
-def test_output_in_missing_folder(periodic_csv, tmp_path, capsys):
+def test_output_checked_as_every_commands(periodic_csv, tmp_path):
+    """One rule for outputs (io.output_checks): a missing folder is created on writing, as for
+    every command (before, the fit alone refused it), an input is refused."""
+    from bouncedisk.fitting.command import check_output
+
     out = tmp_path / "nope" / "fit.nc"
-    code, err, _ = _run([str(periodic_csv), "-o", str(out)], capsys)
-    assert code == 2 and len(err) == 1 and "does not exist" in err[0] and not out.exists()
+    assert check_output(str(out), [str(periodic_csv)], None) == out
+    sidecar = periodic_csv.with_suffix(".yaml")
+    with pytest.raises(InputError, match="input file"):
+        check_output(str(sidecar), [str(periodic_csv)], None)
+
+
+@pytest.mark.parametrize("where", ["curve", "load"])
+def test_a_folder_as_a_curve_is_one_line(periodic_csv, tmp_path, capsys, where):
+    """Before: ValueError "PosixPath('.') has an empty name" (fit . -o x.nc, --load .)."""
+    out = tmp_path / "x.nc"
+    args = (
+        [".", "-o", str(out)]
+        if where == "curve"
+        else [str(periodic_csv), "--load", ".", "-o", str(out)]
+    )
+    code, err, _ = _run(args, capsys)
+    assert code == 2 and len(err) == 1 and "directory" in err[0] and not out.exists()
 
 
 @pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only folders")
@@ -165,14 +185,6 @@ def test_output_in_read_only_folder(periodic_csv, tmp_path, capsys):
     finally:
         ro.chmod(0o755)
     assert code == 2 and len(err) == 1 and "not writable" in err[0]
-
-
-def test_read_only_check_uses_access(periodic_csv, tmp_path, capsys, monkeypatch):
-    """The writability check itself (also when the tests run as root)."""
-    real = os.access
-    monkeypatch.setattr(os, "access", lambda p, m: False if str(p) == str(tmp_path) else real(p, m))
-    code, err, _ = _run([str(periodic_csv), "-o", str(tmp_path / "fit.nc")], capsys)
-    assert code == 2 and "not writable" in err[0]
 
 
 # ---------------------------------------------------------------- bounded work
@@ -375,7 +387,7 @@ def test_runs_must_share_one_setup(tmp_path, capsys, other, field):
 def test_output_may_not_be_any_run(tmp_path, capsys):
     a, b = _run_curve(tmp_path / "a.csv"), _run_curve(tmp_path / "b.csv", member=1)
     assert main(["fit", str(a), str(b), "-o", str(b.with_suffix(".yaml")), "-q"]) == 2
-    assert "is an input file" in capsys.readouterr().err
+    assert "is the input file" in capsys.readouterr().err
 
 
 def test_the_mean_of_runs_weighs_m_times_more(tmp_path):

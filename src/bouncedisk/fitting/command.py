@@ -9,12 +9,12 @@ values and reports progress through a callback. Every defect a user can make is 
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import xarray as xr
 
+from ..io.output_checks import check_output_path, sidecar_of
 from ..model.errors import InputError
 from .core import FitSettings
 
@@ -22,26 +22,13 @@ from .core import FitSettings
 def check_output(
     output: str, curves: list[str], sidecar: str | None, loads: list[str] = ()
 ) -> Path:
-    """The output path: a new or replaceable file in a writable folder, not an input (a curve,
-    a load curve or a sidecar)."""
-    out = Path(output)
-    if out.is_dir():
-        raise InputError(str(out), "-o", "is a directory; give a file name such as fit.nc")
-    parent = out.parent if str(out.parent) else Path(".")
-    if not parent.is_dir():
-        raise InputError(str(out), "-o", f"folder {str(parent)!r} does not exist")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise InputError(str(out), "-o", f"folder {str(parent)!r} is not writable")
-    inputs = [Path(c) for c in curves]
-    inputs += [Path(sidecar)] if sidecar else [Path(c).with_suffix(".yaml") for c in curves]
-    inputs += [q for c in loads for q in (Path(c), Path(c).with_suffix(".yaml"))]
-    for p in inputs:
-        if out.resolve() == p.resolve():
-            raise InputError(str(out), "-o", "is an input file; give another output name")
-    # a device, pipe or socket in the way; a read-only file system (os.access misjudges root)
-    from ..io.output_checks import check_output_path
-
-    return check_output_path(out, "-o", inputs=inputs)
+    """The output path, checked as every command's (:func:`~bouncedisk.io.output_checks.
+    check_output_path`): not a folder, not an input (a curve, a load curve or a sidecar), a place
+    where a file can be created. A curve that is a folder is one line (``fit . -o x.nc``)."""
+    inputs: list[str | Path] = [*curves, *loads]
+    inputs += [sidecar] if sidecar else [sidecar_of(c, "curve") for c in curves]
+    inputs += [sidecar_of(c, "--load") for c in loads]
+    return check_output_path(output, "-o", inputs=inputs)
 
 
 def run_fit(
