@@ -108,7 +108,8 @@ def _add_fit(sub) -> None:
     p.add_argument(
         "--bootstrap",
         default="40",
-        help="block-bootstrap resamples of the data, >= 2 (default: %(default)s)",
+        help="block-bootstrap resamples of the data (default: %(default)s, the fewest the fit "
+        "accepts)",
     )
     p.add_argument(
         "--members",
