@@ -25,7 +25,15 @@ from .model import MODEL_E_SIGMA, EnsembleSpec, member_records, param_names, phy
 from .objective import Objective
 from .runs import check_runs, mean_curve
 from .search import SearchSettings, search
-from .statistics import STATS, Layout, member_band, provisional_sd, records_stats, stat_floor
+from .statistics import (
+    STATS,
+    Layout,
+    member_band,
+    provisional_sd,
+    records_stats,
+    stat_floor,
+    trend_stride,
+)
 from .uncertainty import (
     ADEQUATE_P,
     THRESHOLD,
@@ -166,7 +174,7 @@ def data_layout(curves: Sequence[MotorCurve]) -> tuple[Layout, np.ndarray, np.nd
     mean statistics (the layout's time constant is the mean curve's)."""
     grid = uniform_grid(curves[0])
     records = np.array([np.interp(grid, c.time, c.omega) for c in curves])
-    step = max(1, len(grid) // 300)
+    step = trend_stride(len(grid))
     tau = first_order_trend(grid[::step], records.mean(axis=0)[::step]).tau
     tau = float(np.clip(tau, 2.0 * curves[0].dt, grid[-1] - grid[0]))
     layout = Layout(grid, tau, curves[0].drive_frequency_hz)
@@ -178,7 +186,7 @@ def bootstrap_stats(layout: Layout, records: np.ndarray, n: int, seed: int) -> n
     about its trend."""
     rng = np.random.default_rng([seed, 77])
     t = layout.t
-    step = max(1, len(t) // 300)
+    step = trend_stride(len(t))
     b = max(20, len(t) // 40)
     out = np.zeros((n, len(STATS)))
     for data in np.atleast_2d(records):
@@ -334,7 +342,7 @@ def fit_curve(
     ens = obj.ensemble(final.x, s.pilot_members)
     theta = obj.theta(final.x)
     band = fitted_band(theta, fitted, layout, s.band_members, spec)
-    step = max(1, len(layout.t) // 300)
+    step = trend_stride(len(layout.t))
     tm = first_order_trend(layout.t[::step], band["mean"][::step])
     td = first_order_trend(layout.t[::step], records.mean(axis=0)[::step])
     load_fit = None

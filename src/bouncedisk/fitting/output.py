@@ -19,7 +19,7 @@ from ..analysis.observables import first_order_trend
 from ..io.provenance import base_attrs, new_run_id, sha256_file
 from .core import FitResult
 from .model import BOUNDS
-from .statistics import STAT_LONG_NAMES, STAT_UNITS, STATS
+from .statistics import STAT_LONG_NAMES, STAT_UNITS, STATS, trend_stride
 from .uncertainty import THRESHOLD, adequate, identified
 
 #: Public name: (search coordinate, transform, units, long name).
@@ -43,7 +43,7 @@ def _curves(fit: FitResult, ds_time: np.ndarray) -> dict:
     def on_time(v):
         return np.interp(ds_time, g, v)
 
-    step = max(1, len(g) // 300)
+    step = trend_stride(len(g))
     tm = first_order_trend(g[::step], b["mean"][::step])
     td = first_order_trend(g[::step], np.interp(g, fit.curve.time, fit.curve.omega)[::step])
 

@@ -87,6 +87,12 @@ STAT_LONG_NAMES: tuple[str, ...] = tuple(st.long_name for st in STATISTICS)
 TREND_POINTS = 300
 
 
+def trend_stride(n: int) -> int:
+    """The stride that thins ``n`` samples to about :data:`TREND_POINTS` for a first-order
+    trend fit."""
+    return max(1, n // TREND_POINTS)
+
+
 @dataclass(frozen=True)
 class Layout:
     """Where the statistics are taken on a record: fixed once per fit from the data.
@@ -142,7 +148,7 @@ def records_stats(ys: np.ndarray, layout: Layout) -> np.ndarray:
     """
     ys = np.atleast_2d(np.asarray(ys, float))
     t = layout.t
-    step = max(1, len(t) // TREND_POINTS)
+    step = trend_stride(len(t))
     steady = layout.steady()
     windows = layout.windows()
     head, ripples = [], []
@@ -185,7 +191,7 @@ def dominant_frequency(y: np.ndarray, layout: Layout) -> float:
     Reported, not fitted: it jumps between spectral lines as the parameters move.
     """
     t = layout.t
-    step = max(1, len(t) // TREND_POINTS)
+    step = trend_stride(len(t))
     trend = first_order_trend(t[::step], y[::step])
     r = (y - trend(t))[layout.steady()]
     f, pxx = welch(r - r.mean(), fs=1.0 / float(t[1] - t[0]), nperseg=min(256, len(r)))
