@@ -35,9 +35,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..engine import EngineConfig, InitialState
+from ..engine import InitialState
 from ..engine.loads import omega_integrals
 from ..io.load_curves import LoadCurveData
+from ..model.engine_config import motor_config
 from ..model.errors import InputError
 from ..model.params import Parameters, PhysicalParameters
 from . import detlinalg
@@ -86,9 +87,9 @@ def curve_readings(
     (:func:`bouncedisk.engine.loads.omega_integrals`, bit-identical to a run per load)."""
     t_c, speed, torque = motor_scales(theta, data)
     t0, t1 = (w / t_c for w in data.window_s)
-    cfg = EngineConfig(
-        e=theta["e"], omega_s=theta["omega_s"], r_phi=10.0 ** theta["log10_r_phi"],
-        psi=theta["psi"], contact=True, torsion=True, t_end=t1, max_events=MAX_EVENTS,
+    cfg = motor_config(
+        theta["e"], theta["omega_s"], 10.0 ** theta["log10_r_phi"], theta["psi"],
+        t_end=t1, max_events=MAX_EVENTS,
         e_sigma=restitution_noise(theta, e_sigma), seed=seed, member=LOAD_STREAM + member,
         stats_from=t0,
     )  # fmt: skip

@@ -23,9 +23,10 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from ..engine import EngineConfig, InitialState, simulate_arrays
+from ..engine import InitialState, simulate_arrays
 from ..io.records import TrajColumn
 from ..io.runup_curves import MotorCurve
+from ..model.engine_config import motor_config
 
 #: Search range of every search coordinate.
 BOUNDS: dict[str, tuple[float, float]] = {
@@ -146,13 +147,11 @@ def simulate_curve(
     t_c = p["t_c"]
     dt_nd = curve.dt / t_c
     span_nd = (grid[-1] - grid[0]) / t_c
-    cfg = EngineConfig(
-        e=p["e"],
-        omega_s=p["omega_s"],
-        r_phi=p["r_phi"],
-        psi=p["psi"],
-        contact=True,
-        torsion=True,
+    cfg = motor_config(
+        p["e"],
+        p["omega_s"],
+        p["r_phi"],
+        p["psi"],
         t_end=span_nd + 0.5 * dt_nd,
         max_events=50_000_000,
         traj_dt=dt_nd,

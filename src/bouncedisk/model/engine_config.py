@@ -36,3 +36,12 @@ def engine_config(scene: Scene) -> EngineConfig:
         seed=scene.ensemble.seed,
         load_torque=p.load_torque if "load" in eff else 0.0,
     )
+
+
+def motor_config(e: float, omega_s: float, r_phi: float, psi: float, **run) -> EngineConfig:
+    """The engine's configuration of the motor the fit models: impacts, sticking contact and
+    torsion (docs/model.md "Phases of motion", "Events") at ``(e, omega_s, r_phi, psi)``, with
+    the run's own settings ``run`` (stop, samples, restitution noise, seed, member)."""
+    return EngineConfig(
+        e=e, omega_s=omega_s, r_phi=r_phi, psi=psi, contact=True, torsion=True, **run
+    )
