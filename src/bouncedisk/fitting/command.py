@@ -22,9 +22,10 @@ from .core import FitSettings
 def check_output(
     output: str, curves: list[str], sidecar: str | None, loads: list[str] = ()
 ) -> Path:
-    """The output path, checked as every command's (:func:`~bouncedisk.io.output_checks.
-    check_output_path`): not a folder, not an input (a curve, a load curve or a sidecar), a place
-    where a file can be created. A curve that is a folder is one line (``fit . -o x.nc``)."""
+    """The output path, checked by the rule every command uses
+    (:func:`~bouncedisk.io.output_checks.check_output_path`): not a folder, not an input (a curve,
+    a load curve or a sidecar), a place where a file can be created. A curve that is a folder is
+    one line (``fit . -o x.nc``)."""
     inputs: list[str | Path] = [*curves, *loads]
     inputs += [sidecar] if sidecar else [sidecar_of(c, "curve") for c in curves]
     inputs += [sidecar_of(c, "--load") for c in loads]
