@@ -24,12 +24,13 @@ Run:  nice -n 5 python benchmarks/random_motors.py [--motors 16] [--first 0] [--
 ``--first``/``--count`` run a slice of the sample (the same motors whatever the slice), so a
 table can be made in parts. One JSON line per motor, then the rates of the motors run.
 
-Measured 2026-11-25 with ``--scan 64 --zoom 0`` (the pipeline's search sizes; the full table and
-its command in docs/user_guide/fitting.md, "Random motors"): of 16 motors 13 adequate, each of
-``e``, ``R_phi``, ``omega_s`` held by 12, ``psi`` by 11, ``e_sigma`` by 6, ``R_phi`` to a factor
-below 2 on none; 34-338 s wall a motor. At the default sizes (``--scan 192 --zoom 16``): 15
-adequate, ``e`` held by 15, ``R_phi``, ``psi``, ``omega_s`` by 14, ``e_sigma`` by 11, ``R_phi``
-below a factor 2 on 1; 54-431 s a motor. Targets met: adequacy and ``e`` only.
+Measured 2026-11-25 with ``--scan 64 --zoom 0`` (the pipeline's search sizes; the command and
+the rates in docs/user_guide/fitting.md, "Random motors", the records in benchmarks/out/fit.json):
+of 16 motors 13 adequate, each of ``e``, ``R_phi``, ``omega_s`` held by 12, ``psi`` by 11,
+``e_sigma`` by 6, ``R_phi`` to a factor below 2 on none; 34-338 s wall a motor. At the default
+sizes (``--scan 192 --zoom 16``): 15 adequate, ``e`` held by 15, ``R_phi``, ``psi``, ``omega_s``
+by 14, ``e_sigma`` by 11, ``R_phi`` below a factor 2 on 1; 54-431 s a motor. Targets met:
+adequacy and ``e`` only.
 """
 
 from __future__ import annotations

@@ -208,6 +208,7 @@ TASK_PAGES = ["getting_started.md"] + [
     for p in (
         "scenes",
         "ensembles",
+        "fitting",
         "pipeline",
         "reproducible",
         "tracking",
