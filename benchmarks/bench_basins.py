@@ -34,6 +34,7 @@ def main() -> None:
     ap.add_argument("--speeds", default="0,50,100,150")
     ap.add_argument("--load", type=float, default=0.075)
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--record", action="store_true", help="write benchmarks/out/basins.json")
     ap.add_argument(
         "--set", action="append", default=[], help="scene override, e.g. stop.time=12000"
     )
@@ -70,6 +71,19 @@ def main() -> None:
         )
     u = out["unsettled"]
     print(f"  not settled: {u['fraction']:.3f} {u['fraction_ci95']}")
+    if args.record:
+        from record import write_record
+
+        what = f"{grid.size} starts, window {window:g}, e = {scene.params.e}, load {args.load}"
+        rows = [
+            (f"{what}, {c} core(s), best of {args.repeat}", f"{w:.2f} s") for c, w in best.items()
+        ]
+        rows += [(f"attractor {a['label']}: speed {a['mean_speed']:.6g}, {a['regime']}",
+                  f"fraction {a['fraction']:.3f} [{a['fraction_ci95'][0]:.3f}, "
+                  f"{a['fraction_ci95'][1]:.3f}]") for a in out["attractors"]]  # fmt: skip
+        rows.append(("not settled", f"fraction {u['fraction']:.3f} "
+                     f"[{u['fraction_ci95'][0]:.3f}, {u['fraction_ci95'][1]:.3f}]"))  # fmt: skip
+        print(write_record("basins", "Basins of the Fig. 3 motor under load", rows))
 
 
 if __name__ == "__main__":

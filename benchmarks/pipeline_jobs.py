@@ -89,8 +89,35 @@ def main() -> None:
     ap.add_argument("results", nargs="?", default="results", type=Path)
     ap.add_argument("--order", choices=("start", "rss", "wall"), default="start")
     ap.add_argument("--markdown", action="store_true", help="a Markdown table (for the docs)")
+    ap.add_argument(
+        "--record",
+        action="store_true",
+        help="write the totals to benchmarks/out/pipeline_jobs.json",
+    )
     args = ap.parse_args()
-    print(report(read_jobs(args.results), args.order, args.markdown))
+    jobs = read_jobs(args.results)
+    print(report(jobs, args.order, args.markdown))
+    if args.record:
+        print(write_totals(jobs))
+
+
+def write_totals(jobs: list[Job]):
+    """The run's totals and its five longest jobs as the performance page's record."""
+    from record import write_record
+
+    t0 = min(j.start for j in jobs)
+    peak = max(jobs, key=lambda j: j.rss_mb)
+    rows = [
+        (
+            f"{len(jobs)} jobs, first start to last end",
+            f"{max(j.start + j.wall for j in jobs) - t0:.1f} s",
+        ),
+        ("CPU time summed over the jobs", f"{sum(j.cpu for j in jobs):.1f} s"),
+        (f"largest peak RSS ({peak.name})", f"{peak.rss_mb:.0f} MB"),
+    ]
+    for j in sorted(jobs, key=lambda j: -j.wall)[:5]:
+        rows.append((f"job {j.name}: wall, CPU", f"{j.wall:.1f} s, {j.cpu:.1f} s"))
+    return write_record("pipeline_jobs", "The pipeline's jobs (Snakemake's benchmark files)", rows)
 
 
 if __name__ == "__main__":
