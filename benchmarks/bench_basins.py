@@ -34,7 +34,11 @@ def main() -> None:
     ap.add_argument("--speeds", default="0,50,100,150")
     ap.add_argument("--load", type=float, default=0.075)
     ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--record", action="store_true", help="write benchmarks/out/basins.json")
+    ap.add_argument(
+        "--record",
+        action="store_true",
+        help="write its record of the performance page (benchmarks/record.py)",
+    )
     ap.add_argument(
         "--set", action="append", default=[], help="scene override, e.g. stop.time=12000"
     )

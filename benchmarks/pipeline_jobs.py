@@ -117,7 +117,7 @@ def write_totals(jobs: list[Job]):
     ]
     for j in sorted(jobs, key=lambda j: -j.wall)[:5]:
         rows.append((f"job {j.name}: wall, CPU", f"{j.wall:.1f} s, {j.cpu:.1f} s"))
-    return write_record("pipeline_jobs", "The pipeline's jobs (Snakemake's benchmark files)", rows)
+    return write_record("pipeline_jobs", "Pipeline jobs (from the Snakemake benchmark files)", rows)
 
 
 if __name__ == "__main__":

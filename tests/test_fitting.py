@@ -439,11 +439,13 @@ def test_fit_of_two_runs_keeps_each_run(tmp_path, monkeypatch):
     # Fig. 5 draws what the fit compared with: the runs' mean, labelled as such
     import pandas as pd
 
+    from bouncedisk.figures.joint_fit import data_word
     from bouncedisk.figures.motor import fig5_motor
 
     fig = fig5_motor(pd.read_csv(a), fitted=ds)
-    line = next(ln for ln in fig.axes[0].lines if ln.get_label().startswith("measured"))
-    assert line.get_label() == "measured: mean of 2 run-ups"
+    word = data_word(ds)  # "synthetic" for these model-made runs, "measured" for a lab's
+    line = next(ln for ln in fig.axes[0].lines if ln.get_label().startswith(word))
+    assert line.get_label() == f"{word}: mean of 2 run-ups"
     np.testing.assert_allclose(line.get_ydata(), ds["omega_measured"])
 
 

@@ -284,7 +284,7 @@ def test_two_invocations_two_parent_runs_and_the_diff_names_the_change(two_runs)
     # fig4's simulation and its ensemble band (figure 4 draws it) depend on the scene
     changed = [f"{o}/fig4/{k}" for o in ("bands", "simulations") for k in ("r_phi", "scene_sha256")]
     assert rows[1]["changed"] == changed
-    assert rows[0]["checks_total"] == 13 and rows[0]["checks_passed"] == 13
+    assert rows[0]["checks_total"] == 14 and rows[0]["checks_passed"] == 14
     # the files can be gone: the store keeps what the diff needs
     shutil.rmtree(base / "results" / "simulations")
     # options in any position, run id prefixes
@@ -327,7 +327,7 @@ def test_first_run_keeps_its_metrics_artifacts_and_every_job_record(two_runs):
     a = client.get_run(rows[0]["run_id"])
     assert a.data.metrics["simulations/fig4/n_impacts"] == 300
     assert a.data.params["simulations/fig4/r_phi"] == "0.01"
-    assert a.data.metrics["checks.passed"] == a.data.metrics["checks.total"] == 13
+    assert a.data.metrics["checks.passed"] == a.data.metrics["checks.total"] == 14
     assert sum(k.startswith("reproduction/check.") for k in a.data.metrics) >= 12
     # --cores 2: every job that ran has its nested run, with its benchmark numbers
     for run, log in ((a, first), (client.get_run(rows[1]["run_id"]), second)):
