@@ -157,8 +157,11 @@ def _profile_panel(ax, fitted: xr.Dataset, n: str) -> None:
     ax.plot([float(fitted[n])], [0.0], "k*", ms=8, label="estimate")
     lo, hi = (a["ci_low"], a["ci_high"]) if has_ci else (np.nanmin(x), np.nanmax(x))
     ax.set_xlim(*_zoom(lo, hi, a["search_low"], a["search_high"], log))
-    if log:
+    if log:  # a zoom inside one decade: three labelled ticks, not every minor one
         ax.set_xscale("log")
+        ax.set_xticks(np.geomspace(*ax.get_xlim(), 5)[1:-1])
+        ax.xaxis.set_major_formatter(FormatStrFormatter("%.3g"))
+        ax.xaxis.set_minor_locator(NullLocator())
     shown = (x >= ax.get_xlim()[0]) & (x <= ax.get_xlim()[1]) & np.isfinite(y)
     top = float(np.max(y[shown])) if shown.any() else 10.0
     ax.set_yscale("symlog", linthresh=10.0)
