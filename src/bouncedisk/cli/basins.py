@@ -124,8 +124,9 @@ def _add_basins(sub) -> None:
         "--settle",
         type=float,
         default=0.01,
-        help="settle tolerance: the halves' mean speeds within this fraction of the largest "
-        "mean speed (default 0.01; chaotic: 10x)",
+        help="settle tolerance, as a fraction of the largest mean speed: a start has settled "
+        "when its halves' mean speeds differ by at most this, shrunk by 10 T_s / h for halves "
+        "h of more than 10 stator periods T_s (chaotic: 10x, not shrunk); default 0.01",
     )
     p.add_argument("-o", "--output", help="write the starts and the attractors to this netCDF file")
     _add_set_option(p, "parameters.load_torque=0.075")
