@@ -145,7 +145,9 @@ def recover(true: dict, k: int, args) -> dict:
         ds = fit_dataset(fit)
     row = {"motor": k, "true": true, "chi2": round(float(ds.attrs["chi2"]), 3),
            "n": int(ds.attrs["n_statistics"]), "adequate": ds.attrs["identified"] == "yes",
-           "wall_s": round(time.perf_counter() - start - made, 1), "holds": {}, "widths": {}}  # fmt: skip
+           "wall_s": round(time.perf_counter() - start - made, 1), "holds": {}, "widths": {},
+           "chi2_truth": {part: round(float(ds.attrs.get(f"chi2_generating_{part}", math.nan)), 3)
+                          for part in ("runup", "load", "both")}}  # fmt: skip
     for j, name in enumerate(str(n) for n in ds["parameter"].values):
         t = math.log10(true["r_phi"]) if name == "log10_r_phi" else true[name]
         lo, hi = float(ds["interval_low"].values[2, j]), float(ds["interval_high"].values[2, j])
