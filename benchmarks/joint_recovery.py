@@ -19,7 +19,10 @@ estimate's metric (run-ups 36.7): its intervals hold the truth through the widen
 consistent candidate, not the profiles; 90 s. The periodic and chaotic cases' chi2, chi2 at the
 generating point and interval widths are those measured before the refinement (which the periodic
 case runs, the chaotic one does not). At scan 64 the periodic case lands in a valley of chi2 76
-(measured once, not re-run).
+(measured once, not re-run). All of these predate the re-reading of the scan's candidates on
+the fit's members and the level from fresh members (docs/fitting_method.md, "The intervals");
+since then ``tests/test_joint_fit.py`` checks the chaotic case at these settings (every joint
+interval holds the generating value), the widths here are not re-measured.
 """
 
 from __future__ import annotations

@@ -144,6 +144,7 @@ def recover(true: dict, k: int, args) -> dict:
         fit = fit_curve(read_curve(run), settings, progress, load=[read_load_curve(load)])
         ds = fit_dataset(fit)
     row = {"motor": k, "true": true, "chi2": round(float(ds.attrs["chi2"]), 3),
+           "chi2_fresh": round(float(ds.attrs["chi2_fresh_members"]), 3),
            "n": int(ds.attrs["n_statistics"]), "adequate": ds.attrs["identified"] == "yes",
            "wall_s": round(time.perf_counter() - start - made, 1), "holds": {}, "widths": {},
            "chi2_truth": {part: round(float(ds.attrs.get(f"chi2_generating_{part}", math.nan)), 3)

@@ -478,8 +478,8 @@ RECOVERY_COST = {"periodic": 119, "chaotic_reinjection": 257, "near_boundary": 8
                                   for c in CASES])  # fmt: skip
 def test_recovery(tmp_path, case):
     true = CASES[case]
-    if RUNS[case] == 1:
-        curves = [read_curve(make_curve(tmp_path / f"{case}.csv", true, 3, member=0))]
+    if RUNS[case] == 1:  # 0.03 s: 25 time constants of the periodic case, half the fit's cost
+        curves = [read_curve(make_curve(tmp_path / f"{case}.csv", true, 3, member=0, span=0.03))]
     else:  # run-ups of one motor: independent realizations (members) and measurement noise
         curves = [read_curve(make_curve(tmp_path / f"{case}_{i}.csv", true, 300 + i, member=i))
                   for i in range(RUNS[case])]  # fmt: skip
@@ -660,9 +660,10 @@ def test_coverage_of_r_phi():
     The regression check of the interval (profile and widening): 0.03 s records (25 time
     constants of this case) and a 96-point scan with 8 zoom points per centre, the same fits as
     the coverage benchmark (``benchmarks/fit_coverage.py``, which measures the coverage on 20
-    seeds with its Wilson interval; its first five seeds are these). Each interval must be
-    two-sided (identified) and hold the generating value on at least 4 of the 5: an interval
-    over the whole range would cover vacuously. The default search is tested by the recovery and
+    seeds with its Wilson interval; its first five seeds are these). Every interval must be
+    identified, and at least 4 of the 5 two-sided (closed at both ends, inside the search range)
+    and holding the generating value: an interval open to a search bound covers vacuously (seed
+    0's is open below: 18 of the benchmark's 20 are two-sided). The default search is tested by the recovery and
     shipped-curve tests.
     """
     bench = _benchmark("fit_coverage")
@@ -670,4 +671,4 @@ def test_coverage_of_r_phi():
     for r in rows:
         print(f"\nCOVERAGE {r}")
     assert all(r["identified"] for r in rows), rows
-    assert sum(r["holds"] for r in rows) >= 4, rows
+    assert sum(r["holds"] and r["two_sided"] for r in rows) >= 4, rows

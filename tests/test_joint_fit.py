@@ -628,3 +628,94 @@ def test_a_view_of_one_part_shares_the_evaluations(tmp_path):
     assert obj.log == ["x"]
     with pytest.raises(ValueError, match="parts must be one of"):
         obj.seeing("all")
+
+
+def _small_objective(data_dir, joint: bool = True):
+    """The joint objective of ``data_dir``'s data as :func:`~bouncedisk.fitting.fit_curve` builds
+    it (the provisional metric), 4 members, one thread; ``joint=False``: the run-up's alone."""
+    from bouncedisk.fitting import core
+    from bouncedisk.fitting.joint import load_part
+    from bouncedisk.fitting.model import EnsembleSpec, param_names
+    from bouncedisk.fitting.objective import Objective
+
+    s = TINY.for_runs(1)
+    runs, fitted, _ = core.prepare_runs(read_curve(data_dir / "run.csv"))
+    layout, records, target = core.data_layout(runs)
+    boot = core.bootstrap_stats(layout, records, s.bootstrap, s.seed)
+    spec = EnsembleSpec(e_sigma=0.03, seed=s.seed, cores=1)
+    part = load_part([read_load_curve(data_dir / "load.csv")], fitted, spec) if joint else None
+    return Objective(fitted, param_names(fitted), layout, target, spec, 4,
+                     cov=core.provisional_cov(target, boot), load=part,
+                     parts="both" if joint else "runup")  # fmt: skip
+
+
+def test_fresh_members_are_other_members_and_the_level_is_their_mean(data_dir):
+    """:meth:`Objective.fresh_chi2`: block 0 is the very ``χ²`` the search reads (the same
+    members of the run-ups and of the load part, each data set alone too), a later block is
+    other members (another value); :func:`chi2_level` is the mean of blocks 1-3, never below
+    the point's own ``χ²``."""
+    from bouncedisk.fitting.uncertainty import LEVEL_BLOCKS, chi2_level
+
+    obj = _small_objective(data_dir)
+    x = np.array([0.6, math.log10(0.0027), -0.3, 1.5])
+    own = obj.chi2(x, 4)
+    assert obj.fresh_chi2(x, 4, 0) == pytest.approx(own, rel=1e-12)
+    for part in ("runup", "load"):
+        view = obj.seeing(part)
+        assert view.fresh_chi2(x, 4, 0) == pytest.approx(view.chi2_now(x, 4), rel=1e-12), part
+    blocks = [obj.fresh_chi2(x, 4, b) for b in range(1, LEVEL_BLOCKS + 1)]
+    assert len(set(blocks + [own])) == LEVEL_BLOCKS + 1  # four different member sets
+    assert chi2_level(obj, x, 4) == pytest.approx(max(float(np.mean(blocks)), own), rel=1e-12)
+    # the load part's first members are unchanged by reading later ones (one growing cache)
+    theta = obj.theta(x)
+    first = obj.load.values(theta, x, 8).copy()
+    obj.load.residuals(theta, x, 8, first=16)
+    np.testing.assert_array_equal(obj.load.values(theta, x, 8), first)
+
+
+def test_candidates_are_re_read_on_the_fit_members_with_their_nuisance_refined(data_dir):
+    """:func:`.search.confirm_points`: every candidate (at most the cap, the best read so far) is
+    logged on the fit's members, then its ``(ψ, R_φ)`` refined at the same ``(e, omega_s)`` to a
+    ``χ²`` no worse; a second objective re-reads the same ones."""
+    from bouncedisk.fitting import search as se
+    from bouncedisk.fitting.objective import snap
+
+    pts = snap(np.array([[0.3 + 0.01 * k, -2.5, 0.1 * k, 1.2 + 0.02 * k] for k in range(6)]))
+    obj = _small_objective(data_dir, joint=False)  # the run-up's members: the cheap part
+    monkey = pytest.MonkeyPatch()
+    monkey.setattr(se, "CONFIRM_CAP", 4)
+    try:
+        # once each (duplicates too), each with its polish on the held metric (none on its own)
+        assert len(se.confirm_points(obj, np.vstack([pts, pts]), 4, near_own=-1.0)) == 2 * 4
+        again = _small_objective(data_dir, joint=False)
+        se.confirm_points(again, pts, 4, near_own=-1.0)
+    finally:
+        monkey.undo()
+    read = {tuple(ev.x[[0, 3]]) for ev in obj.log if ev.members == 4}
+    assert len(read) == 4 and read <= {tuple(p[[0, 3]]) for p in pts}
+    assert read == {tuple(ev.x[[0, 3]]) for ev in again.log if ev.members == 4}
+    for ex in read:  # logged: the candidate, then its polish (a trust region never ends worse)
+        start, end = [ev.chi2 for ev in obj.log if tuple(ev.x[[0, 3]]) == ex]
+        assert end <= start * (1 + 1e-12), (ex, start, end)
+
+
+def test_own_covariance_chi2_is_the_held_one_where_the_covariance_was_measured(data_dir):
+    """:meth:`Objective.own_chi2` measures the run-ups' covariance at the point itself: where the
+    held covariance was measured (:func:`.search.measure_cov`, same members) it is the held
+    ``χ²``; elsewhere it differs, and :func:`consistent_points` keeps exactly the points whose
+    own ``χ²`` is below the 95 % point of ``χ²(n)``."""
+    from scipy.stats import chi2 as chi2_dist
+
+    from bouncedisk.fitting.search import measure_cov
+    from bouncedisk.fitting.uncertainty import consistent_points
+
+    obj = _small_objective(data_dir, joint=False)
+    x = np.array([0.6, math.log10(0.0027), -0.3, 1.5])
+    y = np.array([0.3, math.log10(0.004), 0.5, 2.5])  # another regime
+    obj.set_cov(measure_cov(obj, x, 4))
+    assert obj.own_chi2(x, 4) == pytest.approx(obj.chi2_now(x, 4), rel=1e-9)
+    assert obj.own_chi2(y, 4) != pytest.approx(obj.chi2_now(y, 4), rel=1e-3)
+    limit = float(chi2_dist.ppf(0.95, obj.n_stats))
+    kept = consistent_points(obj, np.array([x, y]), 4, 1.0)
+    want = [p for p in (x, y) if obj.own_chi2(p, 4) <= limit]
+    np.testing.assert_array_equal(kept, np.array(want).reshape(-1, 4))

@@ -14,17 +14,18 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.stats import chi2 as chi2_dist
 
 from ..analysis.observables import first_order_trend
 from ..io.load_curves import LoadCurveData
 from ..io.runup_curves import MotorCurve
 from ..model.errors import InputError
 from .basins import Basin, choose, list_basins
-from .joint import LoadFit, joint_consistent, load_consistent, load_part, load_result
+from .joint import LoadFit, joint_consistent, load_part, load_result
 from .model import MODEL_E_SIGMA, EnsembleSpec, member_records, param_names, physical, uniform_grid
 from .objective import Objective
 from .runs import check_runs, mean_curve
-from .search import SearchSettings, search
+from .search import SearchSettings, confirm_points, search
 from .statistics import (
     STATS,
     Layout,
@@ -41,7 +42,9 @@ from .uncertainty import (
     adequate,
     all_profiles,
     birge,
+    chi2_level,
     combinations,
+    consistent_points,
     scan_acceptable,
 )
 
@@ -236,6 +239,7 @@ class FitResult:
     settings: FitSettings
     runs: tuple[MotorCurve, ...]  # every run-up, as fitted (one run: the curve)
     load: LoadFit | None = None  # the load curves' part (joint fit), None for run-ups only
+    chi2_level: float = math.nan  # chi2 at the search's best on fresh members (chi2_level)
 
     @property
     def n_statistics(self) -> int:
@@ -313,20 +317,30 @@ def fit_curve(
     if progress is not None and thr > THRESHOLD:
         progress(f"chi2 {best.chi2:.4g} on {obj.n_stats} statistics: intervals widened "
                  f"(delta chi2 {thr:.4g} instead of {THRESHOLD:.3f})")  # fmt: skip
-    extra_runup = extra = scan_acceptable(obj, s.global_members)
+    extra = scan_acceptable(obj, s.global_members)
     if progress is not None:
         progress(f"scan: {len(extra)} points reproduce the data's statistics within its "
                  "bootstrap scales")  # fmt: skip
     if part is not None:
-        extra = joint_consistent(obj, s.global_members, best.chi2)
-        quiet = load_consistent(obj, extra_runup, s.global_members, best.chi2)
+        joint = joint_consistent(obj, s.global_members, best.chi2)
         if progress is not None:
-            progress(f"scan: {len(extra)} of the joint candidates reproduce the run-ups and the "
-                     f"load curve together (chi2 below its 95 % point); {len(quiet)} of the "
-                     "run-ups' acceptable points are not rejected by the load curve")  # fmt: skip
-        extra = np.concatenate([extra, quiet])
+            progress(f"scan: {len(joint)} of the joint candidates reproduce the run-ups and the "
+                     "load curve together (chi2 below its 95 % point)")  # fmt: skip
+        # with the run-ups' own candidates: their intervals alone are judged on them too
+        extra = np.concatenate([joint, extra])
+    level = chi2_level(obj, best.x, s.members)
+    # polished within three thresholds of the level (held metric) or three times the 95 % point
+    # of chi2(n) (own covariance): a polish of four steps moves chi2 that far, not further
+    scale = max(1.0, best.chi2 / obj.n_stats)
+    gof = scale * float(chi2_dist.ppf(0.95, obj.n_stats))
+    reread = confirm_points(obj, extra, s.members, near=level + 3.0 * thr, near_own=3.0 * gof)
+    consistent = consistent_points(obj, reread, s.members, scale)
+    if progress is not None:
+        progress(f"chi2 {best.chi2:.4g} at the best point, {level:.4g} on fresh members; "
+                 f"{len(reread)} scan candidates re-read on {s.members} members, "
+                 f"{len(consistent)} within their own spread")  # fmt: skip
     profiles, jac, corr, sd = all_profiles(obj, best.x, s.members, s.profile and list(s.profile),
-                                           progress, thr, extra)  # fmt: skip
+                                           progress, thr, consistent, level)  # fmt: skip
     final = obj.best(s.members)  # a profile may have found a better point
     basins = fit_basins(obj, s.members, thr)
     if progress is not None and len(basins) > 1:
@@ -348,7 +362,7 @@ def fit_curve(
     load_fit = None
     if part is not None:
         which = s.profile and list(s.profile)
-        load_fit = load_result(obj, final.x, s.members, which, profiles, extra_runup, progress)
+        load_fit = load_result(obj, final.x, s.members, which, profiles, reread, progress)
     return FitResult(
         names=obj.names, x=final.x, chi2=final.chi2, profiles=profiles, correlation=corr,
         local_sd=sd, comb_sd=comb_sd, comb_vectors=comb_vec, target=target,
@@ -358,4 +372,5 @@ def fit_curve(
                   tuple(np.exp(np.percentile(boot[:, 1], [2.5, 97.5])))),
         physical=physical(theta, fitted), basins=basins, curve=fitted, note=note, evaluations=len(obj.cache),
         wall_time_s=_time.perf_counter() - start, settings=s, runs=tuple(runs), load=load_fit,
+        chi2_level=level,
     )  # fmt: skip

@@ -16,12 +16,11 @@ from scipy import stats as _sps
 from ..io.load_curves import LoadCurveData, check_same_setup
 from ..io.runup_curves import MotorCurve
 from ..model.errors import InputError
-from . import detlinalg
-from .loadpart import LoadPart, check_window, members_for
+from .loadpart import LoadPart, check_window
 from .loadpart import band as load_band
 from .model import EnsembleSpec
 from .objective import Objective, snap
-from .uncertainty import Profile, all_profiles, birge
+from .uncertainty import Profile, all_profiles, birge, chi2_level, consistent_points
 
 
 @dataclass
@@ -118,56 +117,34 @@ def joint_consistent(obj: Objective, members: int, best_chi2: float) -> np.ndarr
     return np.array(list(pts.values())).reshape(-1, len(obj.names))
 
 
-def load_consistent(
-    obj: Objective, runup_ok: np.ndarray, members: int, best_chi2: float
-) -> np.ndarray:
-    """The run-ups' acceptable scan points (``runup_ok``, :func:`.uncertainty.scan_acceptable`)
-    that the load curves do not reject: the load part's ``χ²`` on the scan's load members below
-    its 95 % point (Birge-scaled by the best fit's ``χ²/n``).
-
-    A joint interval is widened to them, so that data without information cannot narrow it: with
-    an uninformative load curve (readings of huge spread) every such point stays, and the joint
-    intervals hold the run-ups' own. Read on the load part alone, neither logged nor counted
-    (the scan's points are the run-ups' own, ``R_φ`` as the scan matched it to their trend).
-    """
-    part = obj.load
-    if part is None or len(runup_ok) == 0:
-        return np.empty((0, len(obj.names)))
-    scale = max(1.0, best_chi2 / obj.n_stats)
-    limit = scale * float(_sps.chi2.ppf(0.95, part.n))
-    k = members_for(members)
-    keep = []
-    for x in runup_ok:
-        xs = snap(x)
-        r = part.residuals(obj.theta(xs), xs, k)
-        if math.isfinite(value := detlinalg.dot(r, r)) and value <= limit:
-            keep.append(xs)
-    return np.array(keep).reshape(-1, len(obj.names))
-
-
 def identifiability(
-    obj: Objective, x: np.ndarray, members: int, which: list[str] | None, extra_runup: np.ndarray
+    obj: Objective, x: np.ndarray, members: int, which: list[str] | None, reread: np.ndarray
 ) -> dict[str, list[Profile]]:
     """The 95 % interval of every coordinate from the run-ups alone and from the load curves
     alone: profiles of each part's ``χ²`` about the joint estimate ``x``, on the same cached
-    evaluations, widened to that part's acceptable points (the scan's for the run-ups: it fitted
-    them). A flat profile is "not identified", as in the joint fit."""
+    evaluations (the scan's candidates ``reread`` among them, :func:`.search.confirm_points`),
+    measured from that part's level at ``x`` (:func:`.uncertainty.chi2_level`) and widened to the
+    candidates that part finds consistent (:func:`.uncertainty.consistent_points`). A flat
+    profile is "not identified", as in the joint fit."""
     out = {}
-    for part, extra in (("runup", extra_runup), ("load", None)):
+    for part in ("runup", "load"):
         view = obj.seeing(part)
-        thr = birge(view.best(members).chi2, view.n_stats, len(view.names))
-        out[part] = all_profiles(view, x, members, which, None, thr, extra)[0]
+        best = view.best(members).chi2
+        thr = birge(best, view.n_stats, len(view.names))
+        level = chi2_level(view, x, members)
+        ok = consistent_points(view, reread, members, max(1.0, best / view.n_stats))
+        out[part] = all_profiles(view, x, members, which, None, thr, ok, level)[0]
     return out
 
 
 def load_result(
     obj: Objective, x: np.ndarray, members: int, which: list[str] | None,
-    profiles: list[Profile], extra_runup: np.ndarray, progress: Callable[[str], None] | None,
+    profiles: list[Profile], reread: np.ndarray, progress: Callable[[str], None] | None,
 ) -> LoadFit:  # fmt: skip
     """The joint fit's load part: identifiability intervals, the fitted load curve's band and
     the load part's ``χ²`` at the estimate."""
     part = obj.load
-    intervals = identifiability(obj, x, members, which, extra_runup)
+    intervals = identifiability(obj, x, members, which, reread)
     intervals["both"] = profiles
     if progress is not None:
         for j, name in enumerate(p.name for p in profiles):

@@ -226,16 +226,18 @@ class LoadPart:
         return self._white[k]
 
     def mean(
-        self, theta: dict[str, float], x: np.ndarray, k: int, serial: bool = False
+        self, theta: dict[str, float], x: np.ndarray, k: int, serial: bool = False, first: int = 0
     ) -> np.ndarray:
-        """Mean reading of ``k`` members, summed in member order (the same bits everywhere)."""
-        return np.add.reduce(self.values(theta, x, k, serial), axis=0) / k
+        """Mean reading of members ``first … first+k−1``, summed in member order (the same bits
+        everywhere)."""
+        return np.add.reduce(self.values(theta, x, first + k, serial)[first:], axis=0) / k
 
     def residuals(
-        self, theta: dict[str, float], x: np.ndarray, k: int, serial: bool = False
+        self, theta: dict[str, float], x: np.ndarray, k: int, serial: bool = False, first: int = 0
     ) -> np.ndarray:
-        """Whitened residuals ``L⁻¹ (μ(θ) − y)``."""
-        return detlinalg.matvec(self.whitener(k), self.mean(theta, x, k, serial) - self.y)
+        """Whitened residuals ``L⁻¹ (μ(θ) − y)`` of members ``first … first+k−1``."""
+        mean = self.mean(theta, x, k, serial, first)
+        return detlinalg.matvec(self.whitener(k), mean - self.y)
 
 
 def _repeats(d: LoadCurveData) -> int:

@@ -39,7 +39,7 @@ from . import detlinalg
 from .basins import rank_key
 from .loadpart import LoadPart, members_for
 from .model import BOUNDS, EnsembleSpec, member_records, thread_map
-from .statistics import EnsembleStats, Layout, records_stats
+from .statistics import EnsembleStats, Layout, records_stats, regularized_cov, stat_floor
 
 #: The data an objective can see (:meth:`Objective.seeing`).
 PARTS = ("runup", "load", "both")
@@ -174,6 +174,59 @@ class Objective:
             x = snap(x)
             out.append(self.load.residuals(self.theta(x), x, members_for(k), self.points_parallel))
         return out[0] if len(out) == 1 else np.concatenate(out)
+
+    def own_residuals(self, x: np.ndarray, members: int) -> np.ndarray:
+        """Whitened residuals with the run-ups' covariance measured at ``x`` itself, on its own
+        ``members`` members (regularized as the held one, :func:`.statistics.regularized_cov`);
+        the load part's as held.
+
+        The held covariance was measured near the best point; in another regime the members
+        spread many times more (measured on a random motor: 2-25 times per statistic at the
+        generating point), so a point of that regime can reproduce the data within its own
+        spread yet read far off under the held one (:func:`.uncertainty.consistent_points`).
+        """
+        x = snap(x)
+        out = []
+        if self.parts != "load":
+            ens = self.ensemble(x, members)
+            cov = regularized_cov(ens.cov, stat_floor(self.target))
+            white = detlinalg.lower_inverse(detlinalg.cholesky(cov))
+            out.append(detlinalg.matvec(white, ens.mean - self.target)
+                       / math.sqrt(1.0 / self.runs + 1.0 / members))  # fmt: skip
+        if self.load is not None and self.parts != "runup":
+            out.append(self.load.residuals(self.theta(x), x, members_for(members)))
+        return out[0] if len(out) == 1 else np.concatenate(out)
+
+    def own_chi2(self, x: np.ndarray, members: int) -> float:
+        """``χ²`` of :meth:`own_residuals`, not logged."""
+        r = self.own_residuals(x, members)
+        value = detlinalg.dot(r, r)
+        return value if math.isfinite(value) else 1e300
+
+    def fresh_chi2(self, x: np.ndarray, members: int, block: int) -> float:
+        """``χ²`` at ``x`` on members the search never used: block ``b ≥ 1`` of ``members``
+        (run-up members ``bK … (b+1)K−1``, the load part's block likewise), not logged.
+
+        The search keeps the lowest ``χ²`` of hundreds of points on one set of members, so the
+        best point's ``χ²`` is low by the Monte-Carlo noise it was selected for (the winner's
+        curse); on fresh members it is an unbiased reading of the level there
+        (:func:`.uncertainty.chi2_level`).
+        """
+        x = snap(x)
+        th = self.theta(x)
+        out = []
+        if self.parts != "load":
+            recs = member_records(th, self.curve, range(block * members, (block + 1) * members),
+                                  self.spec)  # fmt: skip
+            mean = EnsembleStats.from_values(records_stats(np.array(recs), self.layout)).mean
+            out.append(detlinalg.matvec(self._white, mean - self.target)
+                       / math.sqrt(1.0 / self.runs + 1.0 / members))  # fmt: skip
+        if self.load is not None and self.parts != "runup":
+            k = members_for(members)
+            out.append(self.load.residuals(th, x, k, first=block * k))
+        r = out[0] if len(out) == 1 else np.concatenate(out)
+        value = detlinalg.dot(r, r)
+        return value if math.isfinite(value) else 1e300
 
     def chi2(self, x: np.ndarray, members: int | None = None) -> float:
         """``χ²`` at ``x``; every call is logged (the search never returns a worse point)."""

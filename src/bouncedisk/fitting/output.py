@@ -268,6 +268,7 @@ def _global_attrs(fit: FitResult, paths: list[str], not_identified: list[str]) -
         "single one out",
         "chi2": fit.chi2, "n_statistics": n_stats,
         "chi2_p_value": float(chi2_dist.sf(fit.chi2, n_stats)),
+        "chi2_fresh_members": fit.chi2_level,
         "fit_adequate": int(adequate(fit.chi2, n_stats)), "evaluations": fit.evaluations,
         "ensemble_members": fit.settings.members, "band_members": fit.settings.band_members,
         "e_sigma": fit.theta.get("e_sigma", fit.settings.e_sigma),

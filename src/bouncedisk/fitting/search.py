@@ -137,24 +137,85 @@ def _inner(obj: Objective, x: np.ndarray, members: int) -> np.ndarray:
     grid.sort(key=lambda g: g[0])
     # refine (ψ, R_φ [, speed scale]) by least squares from the best INNER_STARTS grid points:
     # the grid step is far coarser than the steady speed's sensitivity to ψ
-    free = [k for k, n in enumerate(names) if n in ("psi", *MATCHED)]
-    span = obj.span[free]
     best, best_chi2 = grid[0][1], obj.chi2(grid[0][1], members)
     for _, start in grid[:INNER_STARTS]:
-
-        def fun(u, start=start):
-            y = start.copy()
-            y[free] = obj.lo[free] + u * span
-            return obj.residuals(y, members)
-
-        u0 = np.clip((start[free] - obj.lo[free]) / span, 0.0, 1.0)
-        res = least_squares(fun, u0, bounds=(0.0, 1.0), diff_step=1e-3, max_nfev=INNER_NFEV)
-        y = start.copy()
-        y[free] = obj.lo[free] + res.x * span
-        c = obj.chi2(y, members)
+        y, c = polish(obj, start, members, INNER_NFEV)
         if c < best_chi2:
             best, best_chi2 = y, c
     return best
+
+
+def polish(
+    obj: Objective, start: np.ndarray, members: int, nfev: int, own: bool = False
+) -> tuple[np.ndarray, float]:
+    """``(ψ, R_φ [, speed scale])`` refined by least squares from ``start`` at its fixed
+    ``(e, omega_s)`` (at most ``nfev`` evaluations, not logged), on the held metric or, ``own``,
+    on each point's own covariance (:meth:`.objective.Objective.own_residuals`); the end point's
+    ``χ²`` (held metric), logged."""
+    free = [k for k, n in enumerate(obj.names) if n in ("psi", *MATCHED)]
+    span = obj.span[free]
+    read = obj.own_residuals if own else obj.residuals
+
+    def fun(u):
+        y = start.copy()
+        y[free] = obj.lo[free] + u * span
+        return read(y, members)
+
+    u0 = np.clip((start[free] - obj.lo[free]) / span, 0.0, 1.0)
+    res = least_squares(fun, u0, bounds=(0.0, 1.0), diff_step=1e-3, max_nfev=nfev)
+    y = start.copy()
+    y[free] = obj.lo[free] + res.x * span
+    return y, obj.chi2(y, members)
+
+
+#: Most candidate points re-read on the fit's members (:func:`confirm_points`).
+CONFIRM_CAP = 128
+#: Least-squares evaluations refining ``(ψ, R_φ)`` of a re-read candidate (:func:`polish`).
+CONFIRM_NFEV = 4
+
+
+def _cheap_scores(obj: Objective) -> dict[tuple, float]:
+    """Every logged point's lowest ``χ²`` per statistic (of the data its evaluation saw)."""
+    n = {p: obj.seeing(p).n_stats for p in {ev.parts for ev in obj.log}}
+    out: dict[tuple, float] = {}
+    for ev in obj.log:
+        key = tuple(ev.x)
+        out[key] = min(out.get(key, np.inf), ev.chi2 / max(1, n[ev.parts]))
+    return out
+
+
+def confirm_points(
+    obj: Objective,
+    points: np.ndarray,
+    members: int,
+    near: float = np.inf,
+    near_own: float = np.inf,
+) -> np.ndarray:
+    """Re-read the candidate ``points`` (the scan's, read on one member) on the fit's
+    ``members`` members, so that :func:`.uncertainty.acceptable_points` judges them like every
+    other point: the scan's own reading, one member against the data, accepts points the fit's
+    members reject. A candidate whose ``χ²`` there is at most ``near`` has its ``(ψ, R_φ)``
+    refined (:func:`polish`), and one whose ``χ²`` on its own covariance is at most
+    ``near_own`` refined on that: a nuisance matched on one member is not matched on many. At most :data:`CONFIRM_CAP`: those read best
+    per statistic so far, when there are more. Returns the points re-read and the polished
+    ones."""
+    pts = np.unique(snap(np.asarray(points, float)).reshape(-1, len(obj.names)), axis=0)
+    if len(pts) > CONFIRM_CAP:
+        score = _cheap_scores(obj)
+        order = sorted(range(len(pts)), key=lambda i: rank_key(score.get(tuple(pts[i]), np.inf),
+                                                               pts[i]))  # fmt: skip
+        pts = pts[np.sort(order[:CONFIRM_CAP])]
+
+    def one(x: np.ndarray) -> list[np.ndarray]:
+        out = [x]
+        if obj.chi2(x, members) <= near:
+            out.append(polish(obj, x, members, CONFIRM_NFEV)[0])
+        if obj.own_chi2(x, members) <= near_own:
+            out.append(polish(obj, x, members, CONFIRM_NFEV, own=True)[0])
+        return out
+
+    done = obj.map(one, list(pts))
+    return np.array([y for ys in done for y in ys]).reshape(-1, len(obj.names))
 
 
 def global_stage(

@@ -122,20 +122,22 @@ def _side(obj, x0, j, sign, step, chi0, members, jac, max_steps, thr=THRESHOLD):
 
 def profile(
     obj: Objective, x0: np.ndarray, j: int, members: int, jac: np.ndarray, sd: float,
-    max_steps: int = 6, thr: float = THRESHOLD,
+    max_steps: int = 6, thr: float = THRESHOLD, level: float | None = None,
 ) -> Profile:  # fmt: skip
-    """Profile likelihood of coordinate ``j`` about the estimate ``x0`` (module docstring)."""
+    """Profile likelihood of coordinate ``j`` about the estimate ``x0`` (module docstring);
+    ``Δχ²`` is measured from ``level`` (:func:`chi2_level`) when that is above ``x0``'s."""
     chi0 = obj.chi2(x0, members)
+    ref = chi0 if level is None else max(chi0, level)
     step = float(
         np.clip(sd if np.isfinite(sd) else np.inf, MIN_STEP * obj.span[j], 0.2 * obj.span[j])
     )
-    lo = _side(obj, x0, j, -1.0, step, chi0, members, jac, max_steps, thr)
-    hi = _side(obj, x0, j, +1.0, step, chi0, members, jac, max_steps, thr)
+    lo = _side(obj, x0, j, -1.0, step, ref, members, jac, max_steps, thr)
+    hi = _side(obj, x0, j, +1.0, step, ref, members, jac, max_steps, thr)
     pts = lo[::-1] + [(float(x0[j]), chi0, x0.copy())] + hi
     values = np.array([p[0] for p in pts])
     chis = np.array([p[1] for p in pts])
     points = np.array([p[2] for p in pts])
-    low, high, open_low, open_high, identified = _interval(values, chis, obj, j, thr)
+    low, high, open_low, open_high, identified = _interval(values, chis, obj, j, thr, ref)
     if np.isfinite(sd) and sd > 0:
         # never narrower than the local quadratic's interval ±sqrt(thr)·sd: the members'
         # Monte-Carlo noise makes a re-optimized profile point err upward only (a worse
@@ -147,9 +149,10 @@ def profile(
                    identified, thr)  # fmt: skip
 
 
-def _interval(values, chis, obj, j, thr=THRESHOLD):
-    """95 % interval from a profile: crossings of the threshold, or the bounds if open."""
-    base = chis.min()
+def _interval(values, chis, obj, j, thr=THRESHOLD, level=None):
+    """95 % interval from a profile: crossings of the threshold above its minimum (or above
+    ``level`` when higher), or the bounds if open."""
+    base = chis.min() if level is None else max(chis.min(), level)
     k0 = int(np.argmin(chis))
     below = chis - base <= thr
 
@@ -183,6 +186,7 @@ def all_profiles(
     progress: Callable[[str], None] | None = None,
     thr: float = THRESHOLD,
     extra: np.ndarray | None = None,
+    level: float | None = None,
 ) -> tuple[list[Profile], np.ndarray, np.ndarray, np.ndarray]:
     """Profiles of the coordinates ``which`` (default all), with the curvature at ``x0``.
 
@@ -191,8 +195,9 @@ def all_profiles(
     landscape in ``(e, omega_s)`` is rugged, a profile that walks from the estimate sees one
     basin only, and an acceptable point in another basin means the interval is (at least) the
     hull of both (:func:`widen`); ``extra`` are further acceptable points (the scan's, judged
-    by the data's own resampling scales, :func:`scan_acceptable`). Returns the profiles, the Jacobian, the correlation matrix and
-    the local standard deviations.
+    by the data's own resampling scales, :func:`scan_acceptable`). ``level`` (:func:`chi2_level`)
+    replaces the best logged ``χ²`` as the base of that widening when it is higher. Returns the
+    profiles, the Jacobian, the correlation matrix and the local standard deviations.
     """
     jac = jacobian(obj, x0, members)
     _cov, corr, sd = curvature(jac)
@@ -200,12 +205,12 @@ def all_profiles(
     for j, name in enumerate(obj.names):
         if which is not None and name not in which:
             continue
-        out.append(profile(obj, x0, j, members, jac, sd[j], thr=thr))
+        out.append(profile(obj, x0, j, members, jac, sd[j], thr=thr, level=level))
         if progress is not None:
             p = out[-1]
             progress(f"profile {name}: {len(p.values)} points")
     # after every profile: a profile may have found a better point than the estimate
-    out = [widen(obj, p, members, extra) for p in out]
+    out = [widen(obj, p, members, extra, level) for p in out]
     if progress is not None:
         for p in out:
             progress(f"interval {p.name}: 95% [{p.ci_low:.4g}, {p.ci_high:.4g}]"
@@ -218,15 +223,58 @@ def all_profiles(
 EDGE = 0.02
 
 
-def acceptable_points(obj: Objective, members: int, thr: float) -> np.ndarray:
-    """Every evaluated point (``members`` members) within ``thr`` of the best ``χ²`` now."""
+def acceptable_points(
+    obj: Objective, members: int, thr: float, level: float | None = None
+) -> np.ndarray:
+    """Every evaluated point (``members`` members) within ``thr`` of the best ``χ²`` now, or of
+    ``level`` (:func:`chi2_level`) when that is higher."""
     pts = {tuple(ev.x): ev.x for ev in obj.log if ev.members == members}
     xs = np.array(list(pts.values()))
     chis = np.array([obj.chi2_now(x, members) for x in xs])
-    return xs[chis <= chis.min() + thr]
+    base = chis.min() if level is None else max(chis.min(), level)
+    return xs[chis <= base + thr]
 
 
-def widen(obj: Objective, p: Profile, members: int, extra: np.ndarray | None = None) -> Profile:
+#: Fresh member blocks read at the best point for its unbiased ``χ²`` (:func:`chi2_level`).
+LEVEL_BLOCKS = 3
+
+
+def chi2_level(obj: Objective, x: np.ndarray, members: int, blocks: int = LEVEL_BLOCKS) -> float:
+    """The ``χ²`` level at the best point ``x``: the mean over ``blocks`` blocks of fresh members
+    (:meth:`.objective.Objective.fresh_chi2`), at least the point's own ``χ²``.
+
+    The best point was selected, out of every point the search evaluated on the same ``members``
+    members, for the lowest ``χ²``; with a rugged landscape (chaotic members: the common random
+    numbers do not make ``χ²`` smooth) that selection lowers it by several units (measured on a
+    random motor: 21.5 on the search's members, 25.9, 30.4 and 25.0 on fresh blocks). An
+    acceptable point must be within the threshold of the level, not of the lucky value, or the
+    generating point itself is rejected.
+    """
+    fresh = [obj.fresh_chi2(x, members, b) for b in range(1, blocks + 1)]
+    return max(float(np.mean(fresh)), obj.chi2_now(x, members))
+
+
+def consistent_points(obj: Objective, points: np.ndarray, members: int, scale: float) -> np.ndarray:
+    """The re-read candidates (:func:`.search.confirm_points`) that reproduce the data within the
+    members' own spread there: :meth:`.objective.Objective.own_chi2` below the 95 % point of
+    ``χ²(n)``, scaled by the best fit's ``χ²/n`` when that exceeds 1 (Birge). A goodness-of-fit
+    test, not a ``Δχ²`` one: the held covariance does not describe another regime (in a chaotic
+    recovery case the generating point reads ``χ²`` 39 on 21 statistics under it), so the
+    intervals are widened to these points too."""
+    if len(points) == 0:
+        return np.empty((0, len(obj.names)))
+    limit = scale * float(chi2_dist.ppf(0.95, obj.n_stats))
+    keep = [x for x in points if obj.own_chi2(x, members) <= limit]
+    return np.array(keep).reshape(-1, len(obj.names))
+
+
+def widen(
+    obj: Objective,
+    p: Profile,
+    members: int,
+    extra: np.ndarray | None = None,
+    level: float | None = None,
+) -> Profile:
     """The interval of ``p`` widened to every acceptable evaluated point (union of basins).
 
     A parameter is **not identified** only when its profile is flat over the search range:
@@ -234,7 +282,7 @@ def widen(obj: Objective, p: Profile, members: int, extra: np.ndarray | None = N
     (possibly one-sided) interval is reported as an identified interval.
     """
     j = obj.names.index(p.name)
-    xs = acceptable_points(obj, members, p.threshold)
+    xs = acceptable_points(obj, members, p.threshold, level)
     if extra is not None and len(extra):
         xs = np.vstack([xs, extra])
     v = xs[:, j]
