@@ -662,8 +662,8 @@ def test_coverage_of_r_phi():
     the coverage benchmark (``benchmarks/fit_coverage.py``, which measures the coverage on 20
     seeds with its Wilson interval; its first five seeds are these). Every interval must be
     identified, and at least 4 of the 5 two-sided (closed at both ends, inside the search range)
-    and holding the generating value: an interval open to a search bound covers vacuously (seed
-    0's is open below: 18 of the benchmark's 20 are two-sided). The default search is tested by the recovery and
+    and holding the generating value: an interval open to a search bound covers vacuously (the
+    benchmark's 20 are two-sided, 19 hold the truth, their ends a median factor 1.20 apart). The default search is tested by the recovery and
     shipped-curve tests.
     """
     bench = _benchmark("fit_coverage")
