@@ -337,8 +337,8 @@ def fit_curve(
     consistent = consistent_points(obj, reread, s.members, scale)
     if progress is not None:
         progress(f"chi2 {best.chi2:.4g} at the best point, {level:.4g} on fresh members; "
-                 f"{len(reread)} scan candidates re-read on {s.members} members, "
-                 f"{len(consistent)} within their own spread")  # fmt: skip
+                 f"{len(reread)} points read on {s.members} members for the scan's candidates "
+                 f"(refinements included), {len(consistent)} within their own spread")  # fmt: skip
     profiles, jac, corr, sd = all_profiles(obj, best.x, s.members, s.profile and list(s.profile),
                                            progress, thr, consistent, level)  # fmt: skip
     final = obj.best(s.members)  # a profile may have found a better point
