@@ -716,6 +716,6 @@ def test_own_covariance_chi2_is_the_held_one_where_the_covariance_was_measured(d
     assert obj.own_chi2(x, 4) == pytest.approx(obj.chi2_now(x, 4), rel=1e-9)
     assert obj.own_chi2(y, 4) != pytest.approx(obj.chi2_now(y, 4), rel=1e-3)
     limit = float(chi2_dist.ppf(0.95, obj.n_stats))
-    kept = consistent_points(obj, np.array([x, y]), 4, 1.0)
+    kept = consistent_points(obj, np.array([x, y]), 4, 0.0)  # a best chi2 below n: no scaling
     want = [p for p in (x, y) if obj.own_chi2(p, 4) <= limit]
     np.testing.assert_array_equal(kept, np.array(want).reshape(-1, 4))

@@ -14,7 +14,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import chi2 as chi2_dist
 
 from ..analysis.observables import first_order_trend
 from ..io.load_curves import LoadCurveData
@@ -45,6 +44,7 @@ from .uncertainty import (
     chi2_level,
     combinations,
     consistent_points,
+    fit_limit,
     scan_acceptable,
 )
 
@@ -331,10 +331,9 @@ def fit_curve(
     level = chi2_level(obj, best.x, s.members)
     # polished within three thresholds of the level (held metric) or three times the 95 % point
     # of chi2(n) (own covariance): a polish of four steps moves chi2 that far, not further
-    scale = max(1.0, best.chi2 / obj.n_stats)
-    gof = scale * float(chi2_dist.ppf(0.95, obj.n_stats))
+    gof = fit_limit(best.chi2, obj.n_stats)
     reread = confirm_points(obj, extra, s.members, near=level + 3.0 * thr, near_own=3.0 * gof)
-    consistent = consistent_points(obj, reread, s.members, scale)
+    consistent = consistent_points(obj, reread, s.members, best.chi2)
     if progress is not None:
         progress(f"chi2 {best.chi2:.4g} at the best point, {level:.4g} on fresh members; "
                  f"{len(reread)} points read on {s.members} members for the scan's candidates "

@@ -11,7 +11,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats as _sps
 
 from ..io.load_curves import LoadCurveData, check_same_setup
 from ..io.runup_curves import MotorCurve
@@ -20,7 +19,7 @@ from .loadpart import LoadPart, check_window
 from .loadpart import band as load_band
 from .model import EnsembleSpec
 from .objective import Objective, snap
-from .uncertainty import Profile, all_profiles, birge, chi2_level, consistent_points
+from .uncertainty import Profile, all_profiles, birge, chi2_level, consistent_points, fit_limit
 
 
 @dataclass
@@ -110,8 +109,7 @@ def joint_consistent(obj: Objective, members: int, best_chi2: float) -> np.ndarr
     residuals are already whitened for ``members`` members (the run-ups' by
     ``sqrt(1/M + 1/k)``, the load curves' by ``D + C_L/k``), so no further factor for the few
     members is due. Every basin among them widens the joint intervals."""
-    scale = max(1.0, best_chi2 / obj.n_stats)
-    limit = scale * float(_sps.chi2.ppf(0.95, obj.n_stats))
+    limit = fit_limit(best_chi2, obj.n_stats)
     pts = {tuple(ev.x): ev.x for ev in obj.log
            if ev.members == members and ev.parts == "both" and ev.chi2 <= limit}  # fmt: skip
     return np.array(list(pts.values())).reshape(-1, len(obj.names))
@@ -132,7 +130,7 @@ def identifiability(
         best = view.best(members).chi2
         thr = birge(best, view.n_stats, len(view.names))
         level = chi2_level(view, x, members)
-        ok = consistent_points(view, reread, members, max(1.0, best / view.n_stats))
+        ok = consistent_points(view, reread, members, best)
         out[part] = all_profiles(view, x, members, which, None, thr, ok, level)[0]
     return out
 

@@ -58,6 +58,12 @@ def snap(x: np.ndarray) -> np.ndarray:
     return np.round(np.asarray(x, float), SNAP_DECIMALS) + 0.0  # + 0.0: no negative zero
 
 
+def _sum_of_squares(r: np.ndarray) -> float:
+    """``rᵀr`` (BLAS-free, :mod:`.detlinalg`); 1e300 for a reading the run did not reach."""
+    value = detlinalg.dot(r, r)
+    return value if math.isfinite(value) else 1e300
+
+
 @dataclass
 class Evaluation:
     """One evaluated point: search coordinates, members used and ``χ²`` under the metric then."""
@@ -162,18 +168,31 @@ class Objective:
         n = len(self.target) if self.parts != "load" else 0
         return n + (self.load.n if self.load is not None and self.parts != "runup" else 0)
 
+    def _joined(
+        self, runup: Callable[[], np.ndarray], load: Callable[[], np.ndarray]
+    ) -> np.ndarray:
+        """The run-ups' residuals, then the load curves', per ``parts`` (each made only when
+        the objective sees it)."""
+        out = []
+        if self.parts != "load":
+            out.append(runup())
+        if self.load is not None and self.parts != "runup":
+            out.append(load())
+        return out[0] if len(out) == 1 else np.concatenate(out)
+
+    def _whitened(self, mean: np.ndarray, white: np.ndarray, k: int) -> np.ndarray:
+        """``L⁻¹ (μ − s_d) / sqrt(1/M + 1/K)`` of the run-ups' mean statistics ``mean``."""
+        return detlinalg.matvec(white, mean - self.target) / math.sqrt(1.0 / self.runs + 1.0 / k)
+
     def residuals(self, x: np.ndarray, members: int | None = None) -> np.ndarray:
         """Whitened residuals ``L⁻¹ (μ(x) − s_d) / sqrt(1/M + 1/K)`` (``C = L Lᵀ``) of the
         run-ups, then the load curves' (:meth:`.loadpart.LoadPart.residuals`), per ``parts``."""
         k = members or self.members
-        out = []
-        if self.parts != "load":
-            d = self.ensemble(x, k).mean - self.target
-            out.append(detlinalg.matvec(self._white, d) / math.sqrt(1.0 / self.runs + 1.0 / k))
-        if self.load is not None and self.parts != "runup":
-            x = snap(x)
-            out.append(self.load.residuals(self.theta(x), x, members_for(k), self.points_parallel))
-        return out[0] if len(out) == 1 else np.concatenate(out)
+        x = snap(x)
+        return self._joined(
+            lambda: self._whitened(self.ensemble(x, k).mean, self._white, k),
+            lambda: self.load.residuals(self.theta(x), x, members_for(k), self.points_parallel),
+        )
 
     def own_residuals(self, x: np.ndarray, members: int) -> np.ndarray:
         """Whitened residuals with the run-ups' covariance measured at ``x`` itself, on its own
@@ -186,22 +205,20 @@ class Objective:
         spread yet read far off under the held one (:func:`.uncertainty.consistent_points`).
         """
         x = snap(x)
-        out = []
-        if self.parts != "load":
+
+        def runup() -> np.ndarray:
             ens = self.ensemble(x, members)
             cov = regularized_cov(ens.cov, stat_floor(self.target))
-            white = detlinalg.lower_inverse(detlinalg.cholesky(cov))
-            out.append(detlinalg.matvec(white, ens.mean - self.target)
-                       / math.sqrt(1.0 / self.runs + 1.0 / members))  # fmt: skip
-        if self.load is not None and self.parts != "runup":
-            out.append(self.load.residuals(self.theta(x), x, members_for(members)))
-        return out[0] if len(out) == 1 else np.concatenate(out)
+            return self._whitened(ens.mean, detlinalg.lower_inverse(detlinalg.cholesky(cov)),
+                                  members)  # fmt: skip
+
+        return self._joined(
+            runup, lambda: self.load.residuals(self.theta(x), x, members_for(members))
+        )
 
     def own_chi2(self, x: np.ndarray, members: int) -> float:
         """``χ²`` of :meth:`own_residuals`, not logged."""
-        r = self.own_residuals(x, members)
-        value = detlinalg.dot(r, r)
-        return value if math.isfinite(value) else 1e300
+        return _sum_of_squares(self.own_residuals(x, members))
 
     def fresh_chi2(self, x: np.ndarray, members: int, block: int) -> float:
         """``χ²`` at ``x`` on members the search never used: block ``b ≥ 1`` of ``members``
@@ -214,27 +231,22 @@ class Objective:
         """
         x = snap(x)
         th = self.theta(x)
-        out = []
-        if self.parts != "load":
+
+        def runup() -> np.ndarray:
             recs = member_records(th, self.curve, range(block * members, (block + 1) * members),
                                   self.spec)  # fmt: skip
             mean = EnsembleStats.from_values(records_stats(np.array(recs), self.layout)).mean
-            out.append(detlinalg.matvec(self._white, mean - self.target)
-                       / math.sqrt(1.0 / self.runs + 1.0 / members))  # fmt: skip
-        if self.load is not None and self.parts != "runup":
-            k = members_for(members)
-            out.append(self.load.residuals(th, x, k, first=block * k))
-        r = out[0] if len(out) == 1 else np.concatenate(out)
-        value = detlinalg.dot(r, r)
-        return value if math.isfinite(value) else 1e300
+            return self._whitened(mean, self._white, members)
+
+        k = members_for(members)
+        return _sum_of_squares(
+            self._joined(runup, lambda: self.load.residuals(th, x, k, first=block * k))
+        )
 
     def chi2(self, x: np.ndarray, members: int | None = None) -> float:
         """``χ²`` at ``x``; every call is logged (the search never returns a worse point)."""
         x = snap(x)
-        r = self.residuals(x, members)
-        value = detlinalg.dot(r, r)
-        if not math.isfinite(value):
-            value = 1e300
+        value = _sum_of_squares(self.residuals(x, members))
         self.log.append(Evaluation(x.copy(), members or self.members, value, self.parts))
         return value
 
@@ -268,6 +280,4 @@ class Objective:
 
     def chi2_now(self, x: np.ndarray, members: int | None = None) -> float:
         """``χ²`` at an evaluated point under the current metric, not logged."""
-        r = self.residuals(x, members)
-        value = detlinalg.dot(r, r)
-        return value if math.isfinite(value) else 1e300
+        return _sum_of_squares(self.residuals(x, members))

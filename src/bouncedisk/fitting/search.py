@@ -196,9 +196,9 @@ def confirm_points(
     other point: the scan's own reading, one member against the data, accepts points the fit's
     members reject. A candidate whose ``χ²`` there is at most ``near`` has its ``(ψ, R_φ)``
     refined (:func:`polish`), and one whose ``χ²`` on its own covariance is at most
-    ``near_own`` refined on that: a nuisance matched on one member is not matched on many. At most :data:`CONFIRM_CAP`: those read best
-    per statistic so far, when there are more. Returns the points re-read and the polished
-    ones."""
+    ``near_own`` refined on that: a nuisance matched on one member is not matched on many. At
+    most :data:`CONFIRM_CAP`: those read best per statistic so far, when there are more. Returns
+    the points re-read and the polished ones."""
     pts = np.unique(snap(np.asarray(points, float)).reshape(-1, len(obj.names)), axis=0)
     if len(pts) > CONFIRM_CAP:
         score = _cheap_scores(obj)

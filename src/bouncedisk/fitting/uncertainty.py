@@ -254,16 +254,23 @@ def chi2_level(obj: Objective, x: np.ndarray, members: int, blocks: int = LEVEL_
     return max(float(np.mean(fresh)), obj.chi2_now(x, members))
 
 
-def consistent_points(obj: Objective, points: np.ndarray, members: int, scale: float) -> np.ndarray:
+def fit_limit(best_chi2: float, n_stats: int) -> float:
+    """``χ²`` below which a point reproduces ``n_stats`` statistics: the 95 % point of
+    ``χ²(n)``, scaled by the best fit's ``χ²/n`` when that exceeds 1 (Birge)."""
+    return max(1.0, best_chi2 / n_stats) * float(chi2_dist.ppf(0.95, n_stats))
+
+
+def consistent_points(
+    obj: Objective, points: np.ndarray, members: int, best_chi2: float
+) -> np.ndarray:
     """The re-read candidates (:func:`.search.confirm_points`) that reproduce the data within the
-    members' own spread there: :meth:`.objective.Objective.own_chi2` below the 95 % point of
-    ``χ²(n)``, scaled by the best fit's ``χ²/n`` when that exceeds 1 (Birge). A goodness-of-fit
-    test, not a ``Δχ²`` one: the held covariance does not describe another regime (in a chaotic
-    recovery case the generating point reads ``χ²`` 39 on 21 statistics under it), so the
-    intervals are widened to these points too."""
+    members' own spread there: :meth:`.objective.Objective.own_chi2` below
+    :func:`fit_limit`. A goodness-of-fit test, not a ``Δχ²`` one: the held covariance does not
+    describe another regime (in a chaotic recovery case the generating point reads ``χ²`` 39 on
+    21 statistics under it), so the intervals are widened to these points too."""
     if len(points) == 0:
         return np.empty((0, len(obj.names)))
-    limit = scale * float(chi2_dist.ppf(0.95, obj.n_stats))
+    limit = fit_limit(best_chi2, obj.n_stats)
     keep = [x for x in points if obj.own_chi2(x, members) <= limit]
     return np.array(keep).reshape(-1, len(obj.names))
 
