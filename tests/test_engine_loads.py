@@ -5,6 +5,8 @@ restitution noise never depend on ``Ω``, so runs that differ only in the load t
 impact. ``omega_integrals`` must therefore give, bit for bit, what :func:`iterate` gives load by
 load, whatever the regime: flights only, chattering and sticking contact, stick–slip under load,
 a rotor driven backwards past stall, static friction above kinetic, a finite stator inertia.
+The same holds for runs that differ in ``R_φ`` and ``ψ`` too (the rotation's parameters):
+``row_trajectories`` gives each run's samples as :func:`simulate_arrays` gives them alone.
 """
 
 import dataclasses
@@ -13,9 +15,9 @@ import math
 import numpy as np
 import pytest
 
-from bouncedisk.engine import EngineConfig, EngineError, InitialState, iterate
+from bouncedisk.engine import EngineConfig, EngineError, InitialState, iterate, simulate_arrays
 from bouncedisk.engine import kernel as K
-from bouncedisk.engine.loads import omega_integrals
+from bouncedisk.engine.loads import omega_integrals, row_trajectories
 
 
 def _one_run(cfg: EngineConfig, load: float, init: InitialState) -> tuple[int, float]:
@@ -89,3 +91,44 @@ def test_settings_it_cannot_honour_are_refused():
     with pytest.raises(EngineError) as err:
         omega_integrals(no_contact, LOADS, InitialState(t=0.0, u=1.2, v=0.0))
     assert err.value.code == K.ST_NEED_CONTACT
+
+
+#: Rows of one axial run: ``(R_φ, ψ, τ_L)``, the rotation's parameters only.
+ROWS = [
+    (0.002, 0.4, 0.0),
+    (0.01, 0.4, 0.0),
+    (0.002, -2.5, 0.0),
+    (0.0004, 3.0, 0.3),
+    (0.05, 1.0, 0.9),
+]
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_one_trajectory_for_rotations_is_one_run_each(case):
+    """Samples of runs differing in ``R_φ``, ``ψ`` and ``τ_L``, from one axial run, equal each
+    run alone bit for bit (the fit evaluates its ``(ψ, R_φ)`` points this way)."""
+    (e, w, _, _), extra, init = CASES[case]
+    cfgs = [EngineConfig(e=e, omega_s=w, r_phi=r, psi=psi, load_torque=load, contact=True,
+                         torsion=True, t_end=600.0, traj_dt=0.7, traj_t0=init.t, traj_t1=590.0,
+                         max_events=10**7, **extra) for r, psi, load in ROWS]  # fmt: skip
+    got = row_trajectories(cfgs, init)
+    for cfg, rows in zip(cfgs, got, strict=True):
+        want = simulate_arrays(cfg, init).traj
+        assert rows.shape == want.shape and len(rows) > 800
+        np.testing.assert_array_equal(rows, want)
+    # the rows do differ: other rotations of one axial motion (its samples equal to rounding:
+    # in contact each row's segments end at its own stick–slip transitions)
+    assert not np.array_equal(got[0][:, K.TR_OMEGA], got[2][:, K.TR_OMEGA])
+    np.testing.assert_allclose(got[0][:, K.TR_U], got[2][:, K.TR_U], rtol=0, atol=1e-11)
+
+
+def test_rows_that_part_in_their_axial_motion_are_refused():
+    """Rows that differ in what the axial motion uses, or without a finite sample grid, are
+    refused before any work."""
+    base = EngineConfig(e=0.5, omega_s=2.0, torsion=True, t_end=100.0, traj_dt=0.5)
+    for other in ({"e": 0.51}, {"omega_s": 2.1}, {"member": 1}, {"e_sigma": 0.01}):
+        with pytest.raises(ValueError, match="differ only in load_torque, r_phi, psi"):
+            row_trajectories([base, dataclasses.replace(base, **other)])
+    for bad in ({"traj_dt": 0.0}, {"t_end": math.inf}, {"stroboscopic": True}):
+        with pytest.raises(ValueError, match="row_trajectories"):
+            row_trajectories([dataclasses.replace(base, **bad)] * 2)

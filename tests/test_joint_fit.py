@@ -719,3 +719,52 @@ def test_own_covariance_chi2_is_the_held_one_where_the_covariance_was_measured(d
     kept = consistent_points(obj, np.array([x, y]), 4, 0.0)  # a best chi2 below n: no scaling
     want = [p for p in (x, y) if obj.own_chi2(p, 4) <= limit]
     np.testing.assert_array_equal(kept, np.array(want).reshape(-1, 4))
+
+
+def test_points_evaluated_together_are_the_points_evaluated_alone(data_dir):
+    """:meth:`Objective.prefetch`: points sharing ``(e, omega_s)`` from one axial run per member
+    (other ψ and R_φ; a point at another ``(e, omega_s)`` on its own) have, bit for bit, the
+    statistics :meth:`Objective.ensemble` gives each on a fresh objective, and are not run again."""
+    base = np.array([0.6, math.log10(0.0027), -0.3, 1.5])
+    pts = [base + [0.0, dl, dp, 0.0] for dl, dp in ((0, 0), (0.2, 0), (0, 1.1), (-0.4, -2.0))]
+    pts.append(base + [0.1, 0.0, 0.0, 0.2])
+    together = _small_objective(data_dir, joint=False)
+    together.prefetch(pts, 4)
+    assert len(together.cache) == len(pts)
+    counted = []
+    together.on_eval = counted.append
+    for x in pts:
+        alone = _small_objective(data_dir, joint=False).ensemble(x, 4)
+        got = together.ensemble(x, 4)
+        np.testing.assert_array_equal(got.mean, alone.mean)
+        np.testing.assert_array_equal(got.cov, alone.cov)
+    assert counted == []  # read from the cache
+    # they differ from each other: the rows are other rotations, not one point repeated
+    assert len({together.ensemble(x, 4).mean[0] for x in pts}) == len(pts)
+
+
+def test_the_jacobians_points_are_predicted_and_read_together():
+    """:func:`search.difference_points` names the points where scipy's forward-difference
+    Jacobian reads (inside the box, at its faces, at zero), so that :func:`search.polish`
+    evaluates them with the step's point: every point the Jacobian asks for was predicted."""
+    from scipy.optimize import least_squares
+
+    from bouncedisk.fitting.search import DIFF_STEP, difference_points
+
+    rng = np.random.default_rng(1)
+    asked, predicted = [], set()
+
+    def step(u):
+        predicted.update(tuple(v) for v in difference_points(u, DIFF_STEP))
+        return a @ (u * u) - b
+
+    def differences(f, us):
+        us = list(us)
+        asked.extend(tuple(u) for u in us)
+        return [a @ (u * u) - b for u in us]
+
+    for start in ([0.0, 0.3], [1.0, 0.7], [0.9995, 0.2], [0.5, 1e-12]):
+        a, b = rng.normal(size=(5, 2)), rng.normal(size=5)
+        least_squares(step, np.array(start), bounds=(0.0, 1.0), diff_step=DIFF_STEP, max_nfev=6,
+                      workers=differences)  # fmt: skip
+    assert len(asked) >= 16 and set(asked) <= predicted

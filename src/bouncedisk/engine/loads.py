@@ -1,4 +1,4 @@
-"""One axial trajectory, several load torques: ``∫Ω dt`` of every load from one impact search.
+"""One axial trajectory, several rotations: ``∫Ω dt`` of every load, or samples, from one search.
 
 The rotor's axial motion never depends on its rotation (docs/model.md "Events": the restitution law
 and the normal load involve ``u``, ``v`` and the stator only; the load torque acts on ``Ω`` alone,
@@ -13,11 +13,15 @@ segments (:func:`~.kernel._contact_step`) to the contact's end, which is the sam
 Every load's state is the kernel's own (one row of ``st``, ``ist``, ``prm`` per load), updated by
 the kernel's own functions with the same arguments as a run with that load alone, so each row's
 ``∫Ω dt`` is **bit-identical** to :func:`~.driver.iterate`'s (``tests/test_engine_loads.py``).
+The same holds for runs that differ in ``R_φ`` and ``ψ`` (:data:`ROTATION_FIELDS`): the fit's
+points at one ``(e, omega_s)`` take their samples from one axial run (:func:`row_trajectories`).
 Should the rows' axial states ever part (they cannot, short of a kernel change that lets ``Ω``
 feed back into the axial motion), the run stops with :data:`ST_APART` and
 :func:`omega_integrals` runs the loads one by one instead.
 """
 
+import math
+from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -34,6 +38,7 @@ from .driver import (
     _pack,
     initial_state,
     iterate,
+    simulate_arrays,
 )
 from .noise import member_key, noisy_restitution
 from .roots import inflections
@@ -81,21 +86,25 @@ def _contact_to_end(prm, flg, st, ist, ev, evk, traj, strobe, info, sep):
 
 @njit(cache=True, nogil=True, **K._nrt_off())
 def run_loads(prm, flg, st, ist, ev, evk, traj, strobe, info):
-    """Advance the rows of ``st``, ``ist`` (one per load, parameters ``prm[l]``) to their end.
+    """Advance the rows of ``st``, ``ist`` (parameters ``prm[l]``) to their end.
 
     Parameters
     ----------
     prm : ndarray, shape (L, N_PRM)
-        The kernel's parameter vector of each load (equal but for ``P_LOAD``).
+        The kernel's parameter vector of each row: equal in everything the axial motion uses,
+        free in ``P_LOAD``, ``P_R`` and ``P_PSI`` (the rotation's).
     flg : ndarray
-        Effect flags (shared; no trajectory or stroboscopic samples).
+        Effect flags (shared; no stroboscopic samples).
     st, ist : ndarray, shape (L, N_ST), (L, N_IST)
-        Each load's float and integer state, from the same initial state.
-    ev, evk, traj, strobe : tuple of ndarray, ndarray
+        Each row's float and integer state, from the same initial state.
+    ev, evk, strobe : tuple of ndarray, ndarray
         Scratch buffers of the kernel's layouts (:func:`~.kernel.run_chunk`; at least one event
         row).
+    traj : ndarray, shape (L, cap, TRAJ_COLS)
+        Each row's trajectory samples (``cap`` 0 without samples; with them, room for every
+        sample of the run: a full buffer is not resumed here).
     info : ndarray, shape (L, N_OUT)
-        Scratch output counters.
+        Output counters of each row (``O_TRAJ``: its samples written).
 
     Returns
     -------
@@ -117,7 +126,7 @@ def run_loads(prm, flg, st, ist, ev, evk, traj, strobe, info):
                 return ST_APART
         if ist[0, K.I_MODE] == K.MODE_CONTACT:
             for l in range(n_loads):
-                _contact_to_end(prm[l], flg, st[l], ist[l], ev, evk, traj, strobe, info[l], sep)
+                _contact_to_end(prm[l], flg, st[l], ist[l], ev, evk, traj[l], strobe, info[l], sep)
             continue
         if ist[0, K.I_EVENTS] >= flg[K.F_MAXEV]:
             for l in range(n_loads):
@@ -140,7 +149,7 @@ def run_loads(prm, flg, st, ist, ev, evk, traj, strobe, info):
         for l in range(n_loads):
             info[l, K.O_EVENTS] = 0
             K._flight_land(
-                prm[l], flg, st[l], ist[l], ev, evk, traj, strobe, info[l], n, th, t_now, hit
+                prm[l], flg, st[l], ist[l], ev, evk, traj[l], strobe, info[l], n, th, t_now, hit
             )
     return K.ST_NUMERICAL  # unreachable
 
@@ -204,7 +213,7 @@ def omega_integrals(
     rows = len(loads)
     ev = tuple(np.empty((K.EV_COLS, 1)))  # the kernel's event columns, one row
     evk = np.empty(1, dtype=np.int8)
-    traj = np.empty((0, K.TRAJ_COLS))
+    traj = np.empty((rows, 0, K.TRAJ_COLS))
     strobe = np.empty((0, K.STROBE_COLS))
     info = np.zeros((rows, K.N_OUT), dtype=np.int64)
     status = run_loads(prm, flg, st, ist, ev, evk, traj, strobe, info)
@@ -216,6 +225,65 @@ def omega_integrals(
     if reached_only:
         out[ist[:, K.I_STATUS] != K.ST_TIME] = np.nan
     return out
+
+
+#: Fields of :class:`~.driver.EngineConfig` the axial motion does not use (docs/model.md
+#: "Events", "The motor under load"): the rows of one :func:`run_loads` may differ in these only.
+ROTATION_FIELDS = {"load_torque": 0.0, "r_phi": 1.0, "psi": 0.0}
+
+
+def _check_rows(cfgs: Sequence[EngineConfig]) -> None:
+    """The runs :func:`row_trajectories` supports: one axial motion, samples on a finite grid."""
+    base = replace(cfgs[0], **ROTATION_FIELDS)
+    if any(replace(c, **ROTATION_FIELDS) != base for c in cfgs[1:]):
+        raise ValueError("rows must differ only in " + ", ".join(ROTATION_FIELDS))
+    if base.traj_dt <= 0.0 or not math.isfinite(min(base.traj_t1, base.t_end)):
+        raise ValueError("row_trajectories samples a finite grid: set traj_dt and traj_t1")
+    if base.stroboscopic or base.clipped:
+        raise ValueError("row_trajectories keeps no stroboscopic samples and runs the rigid model")
+
+
+def row_trajectories(
+    cfgs: Sequence[EngineConfig], init: InitialState | None = None
+) -> list[np.ndarray]:
+    """Trajectory samples of runs that share their axial motion, from one impact search.
+
+    The runs may differ in the load torque, ``R_φ`` and ``ψ`` (:data:`ROTATION_FIELDS`): none
+    of them feeds back into the axial motion (module docstring), so one flight search serves
+    every row, as it serves every load in :func:`omega_integrals`.
+
+    Parameters
+    ----------
+    cfgs : sequence of EngineConfig
+        The runs; equal but for :data:`ROTATION_FIELDS`, with samples on a finite grid.
+    init : InitialState, optional
+        The common initial state (default: the kernel's default).
+
+    Returns
+    -------
+    list of ndarray
+        Each run's samples ``(n, TRAJ_COLS)``: bit for bit :func:`~.driver.simulate_arrays`'s
+        ``traj`` of that configuration alone (``tests/test_engine_loads.py``).
+    """
+    _check_rows(cfgs)
+    cfg, init = cfgs[0], init or InitialState()
+    _, flg = _pack(cfg)
+    prm = np.array([_pack(c)[0] for c in cfgs])
+    states = [initial_state(c, init) for c in cfgs]  # in contact: stick or slip by row
+    st = np.array([s for s, _ in states])
+    ist = np.array([i for _, i in states])
+    last = math.floor((min(cfg.traj_t1, cfg.t_end) - cfg.traj_t0) / cfg.traj_dt + 1e-9)
+    cap = max(0, last + 2 - int(ist[0, K.I_NEXT_SAMPLE]))  # every sample: never resumed here
+    traj = np.empty((len(cfgs), cap, K.TRAJ_COLS))
+    info = np.zeros((len(cfgs), K.N_OUT), dtype=np.int64)
+    ev = tuple(np.empty((K.EV_COLS, 1)))
+    evk = np.empty(1, dtype=np.int8)
+    status = run_loads(prm, flg, st, ist, ev, evk, traj, np.empty((0, K.STROBE_COLS)), info)
+    if status == ST_APART:  # pragma: no cover - see the module docstring
+        return [simulate_arrays(c, init).traj for c in cfgs]
+    if status in (K.ST_NEED_CONTACT, K.ST_NUMERICAL):
+        raise EngineError(f"{STATUS_TEXT[status]} (after {ist[0, K.I_EVENTS]} events)", status)
+    return [traj[k, : info[k, K.O_TRAJ]].copy() for k in range(len(cfgs))]
 
 
 def _one_load(cfg: EngineConfig, load: float, init: InitialState) -> float:

@@ -23,7 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from ..engine import InitialState, simulate_arrays
+from ..engine import EngineConfig, InitialState, simulate_arrays
+from ..engine.loads import row_trajectories
 from ..io.records import TrajColumn
 from ..io.runup_curves import MotorCurve
 from ..model.engine_config import motor_config
@@ -53,6 +54,9 @@ MODEL_E_SIGMA = 0.03
 #: A synthetic curve's restitution-noise seed is its measurement-noise seed plus this offset, so
 #: the two noise streams of one curve differ.
 RESTITUTION_SEED_OFFSET = 1_000_000
+
+#: Every member's start: at rest in contact at ``t = 0`` (docs/model.md "Initial condition").
+START = InitialState(t=0.0, omega=0.0)
 
 
 def param_names(curve: MotorCurve, fit_e_sigma: bool = False) -> list[str]:
@@ -129,25 +133,15 @@ def thread_map(
     return out
 
 
-def simulate_curve(
-    theta: dict[str, float],
-    curve: MotorCurve,
-    member: int = 0,
-    e_sigma: float = 0.0,
-    seed: int = 0,
-) -> np.ndarray:
-    """Noise-free model rotor speed (rad/s) of one member on the curve's uniform grid.
-
-    The run starts at ``t = 0`` with the rotor at rest in contact (docs/model.md "Initial
-    condition") and samples ``Ω`` at ``(grid − grid[0]) / t_c``; ``e_sigma = 0`` is the single
-    deterministic run.
-    """
+def _member_config(theta: dict[str, float], curve: MotorCurve, member: int, e_sigma: float,
+                   seed: int) -> EngineConfig:  # fmt: skip
+    """The engine configuration of one member at ``theta`` sampled on the curve's grid."""
     p = physical(theta, curve)
     grid = uniform_grid(curve)
     t_c = p["t_c"]
     dt_nd = curve.dt / t_c
     span_nd = (grid[-1] - grid[0]) / t_c
-    cfg = motor_config(
+    return motor_config(
         p["e"],
         p["omega_s"],
         p["r_phi"],
@@ -161,11 +155,52 @@ def simulate_curve(
         seed=seed,
         member=member,
     )
-    res = simulate_arrays(cfg, InitialState(t=0.0, omega=0.0))
-    om = res.traj[: len(grid), TrajColumn.OMEGA] * p["speed_scale"]
-    if len(om) < len(grid):
-        om = np.concatenate([om, np.full(len(grid) - len(om), om[-1] if len(om) else 0.0)])
+
+
+def _on_grid(traj: np.ndarray, theta: dict[str, float], curve: MotorCurve) -> np.ndarray:
+    """A run's ``Ω`` samples in rad/s on the curve's grid (the last held if the run ended)."""
+    n = len(uniform_grid(curve))
+    om = traj[:n, TrajColumn.OMEGA] * physical(theta, curve)["speed_scale"]
+    if len(om) < n:
+        om = np.concatenate([om, np.full(n - len(om), om[-1] if len(om) else 0.0)])
     return om
+
+
+def simulate_curve(
+    theta: dict[str, float],
+    curve: MotorCurve,
+    member: int = 0,
+    e_sigma: float = 0.0,
+    seed: int = 0,
+) -> np.ndarray:
+    """Noise-free model rotor speed (rad/s) of one member on the curve's uniform grid.
+
+    The run starts at ``t = 0`` with the rotor at rest in contact (docs/model.md "Initial
+    condition") and samples ``Ω`` at ``(grid − grid[0]) / t_c``; ``e_sigma = 0`` is the single
+    deterministic run.
+    """
+    cfg = _member_config(theta, curve, member, e_sigma, seed)
+    return _on_grid(simulate_arrays(cfg, START).traj, theta, curve)
+
+
+def simulate_rows(
+    thetas: Sequence[dict[str, float]],
+    curve: MotorCurve,
+    member: int = 0,
+    e_sigma: float = 0.0,
+    seed: int = 0,
+) -> list[np.ndarray]:
+    """:func:`simulate_curve` of each of ``thetas``, bit for bit, from one axial run.
+
+    The points must share ``e`` and ``omega_s``: they differ in ``R_φ``, ``ψ`` and the speed
+    scale, none of which the axial motion uses (docs/model.md "Events"), so one impact search
+    serves them all (:func:`bouncedisk.engine.loads.row_trajectories`).
+    """
+    cfgs = [_member_config(th, curve, member, e_sigma, seed) for th in thetas]
+    return [
+        _on_grid(tr, th, curve)
+        for tr, th in zip(row_trajectories(cfgs, START), thetas, strict=True)
+    ]
 
 
 def measurement_noise(n: int, sigma: float, seed: int, member: int) -> np.ndarray:
@@ -184,12 +219,29 @@ def member_records(
     ``reduce(record)`` (if given) is applied to each record on the worker thread, so only the
     reduced values are kept. Members run on ``spec.cores`` threads (the kernel releases the GIL).
     """
-    n = len(uniform_grid(curve))
+    return [rows[0] for rows in rows_records([theta], curve, members, spec, reduce)]
 
-    def one(m: int):
-        om = simulate_curve(theta, curve, m, restitution_noise(theta, spec.e_sigma), spec.seed)
-        rec = om + measurement_noise(n, curve.sigma, spec.seed, m)
-        return reduce(rec) if reduce is not None else rec
+
+def rows_records(
+    thetas: Sequence[dict[str, float]],
+    curve: MotorCurve,
+    members: range,
+    spec: EnsembleSpec,
+    reduce=None,
+) -> list[list]:
+    """:func:`member_records` of points that share ``e``, ``omega_s`` and ``σ_e``, by member
+    (``out[m][i]``: member ``members[m]`` at ``thetas[i]``), each member one axial run
+    (:func:`simulate_rows`)."""
+    n = len(uniform_grid(curve))
+    e_sigma = restitution_noise(thetas[0], spec.e_sigma)
+
+    def one(m: int) -> list:
+        noise = measurement_noise(n, curve.sigma, spec.seed, m)
+        if len(thetas) == 1:
+            oms = [simulate_curve(thetas[0], curve, m, e_sigma, spec.seed)]
+        else:
+            oms = simulate_rows(thetas, curve, m, e_sigma, spec.seed)
+        return [reduce(om + noise) if reduce is not None else om + noise for om in oms]
 
     if spec.cores <= 1 or len(members) == 1:
         return [one(m) for m in members]

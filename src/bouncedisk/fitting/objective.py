@@ -38,7 +38,7 @@ from ..io.runup_curves import MotorCurve
 from . import detlinalg
 from .basins import rank_key
 from .loadpart import LoadPart, members_for
-from .model import BOUNDS, EnsembleSpec, member_records, thread_map
+from .model import BOUNDS, EnsembleSpec, member_records, rows_records, thread_map
 from .statistics import EnsembleStats, Layout, records_stats, regularized_cov, stat_floor
 
 #: The data an objective can see (:meth:`Objective.seeing`).
@@ -155,12 +155,32 @@ class Objective:
         x = snap(x)
         key = (k, *x)
         if key not in self.cache:
-            spec = replace(self.spec, cores=1) if self.points_parallel else self.spec
-            recs = member_records(self.theta(x), self.curve, range(k), spec)
-            self.cache[key] = EnsembleStats.from_values(records_stats(np.array(recs), self.layout))
-            if self.on_eval is not None:
-                self.on_eval(len(self.cache))
+            self.prefetch([x], k)
         return self.cache[key]
+
+    def prefetch(self, xs, members: int | None = None) -> None:
+        """Evaluate the points ``xs`` not yet cached; those that share ``(e, omega_s, σ_e)``
+        together, one axial run per member (:func:`.model.rows_records`).
+
+        The statistics are those :meth:`ensemble` gives each point, bit for bit; a point that
+        is never read costs a share of a run. The scan's ψ grid and a least-squares step's
+        finite differences are such points (:mod:`.search`).
+        """
+        k = members or self.members
+        groups: dict[tuple, dict[tuple, np.ndarray]] = {}
+        for x in map(snap, xs):
+            if (k, *x) not in self.cache:
+                th = self.theta(x)
+                key = (th["e"], th["omega_s"], th.get("e_sigma"))
+                groups.setdefault(key, {})[tuple(x)] = x
+        spec = replace(self.spec, cores=1) if self.points_parallel else self.spec
+        for pts in (list(g.values()) for g in groups.values()):
+            recs = rows_records([self.theta(x) for x in pts], self.curve, range(k), spec)
+            for i, x in enumerate(pts):
+                values = records_stats(np.array([r[i] for r in recs]), self.layout)
+                self.cache[(k, *x)] = EnsembleStats.from_values(values)
+                if self.on_eval is not None:
+                    self.on_eval(len(self.cache))
 
     @property
     def n_stats(self) -> int:

@@ -90,23 +90,28 @@ def matched_point(obj: Objective, x: np.ndarray, members: int, steps: int = 2) -
     moves with it; with Φ0 unknown the speed in rad/s is proportional to the speed scale.
     ``steps`` such corrections, each one evaluation; the point with the best robust loss is kept.
     """
-    names = obj.names
     x = np.clip(np.asarray(x, float), obj.lo, obj.hi)
     best, best_loss = x, obj.robust(x, members)
     for _ in range(steps):
-        m = obj.ensemble(x, members).mean
-        x = x.copy()
-        if "log10_r_phi" in names:
-            j = names.index("log10_r_phi")
-            x[j] += (m[1] - obj.target[1]) / np.log(10.0)
-        if "log10_speed_scale" in names and m[0] * obj.target[0] > 0:
-            j = names.index("log10_speed_scale")
-            x[j] += np.log10(obj.target[0] / m[0])
-        x = np.clip(x, obj.lo, obj.hi)
+        x = _matched_step(obj, x, members)
         loss = obj.robust(x, members)
         if loss < best_loss:
             best, best_loss = x, loss
     return best
+
+
+def _matched_step(obj: Objective, x: np.ndarray, members: int) -> np.ndarray:
+    """One correction of :func:`matched_point` from ``x`` (inside the range)."""
+    names = obj.names
+    m = obj.ensemble(x, members).mean
+    x = x.copy()
+    if "log10_r_phi" in names:
+        j = names.index("log10_r_phi")
+        x[j] += (m[1] - obj.target[1]) / np.log(10.0)
+    if "log10_speed_scale" in names and m[0] * obj.target[0] > 0:
+        j = names.index("log10_speed_scale")
+        x[j] += np.log10(obj.target[0] / m[0])
+    return np.clip(x, obj.lo, obj.hi)
 
 
 #: ψ values tried at every (e, omega_s) point of the scan (the trend's smooth dependence).
@@ -128,10 +133,16 @@ def _inner(obj: Objective, x: np.ndarray, members: int) -> np.ndarray:
     if "psi" not in names:
         return matched_point(obj, x, members, steps=1)
     j = names.index("psi")
-    grid = []
+    starts = []
     for psi in np.linspace(-np.pi, np.pi, PSI_GRID, endpoint=False):
-        y = x.copy()
+        y = np.clip(x, obj.lo, obj.hi)
         y[j] = psi
+        starts.append(y)
+    # the grid and its matched points, each set from one axial run per member (Objective.prefetch)
+    obj.prefetch(starts, members)
+    obj.prefetch([_matched_step(obj, y, members) for y in starts], members)
+    grid = []
+    for y in starts:
         y = matched_point(obj, y, members, steps=1)
         grid.append((obj.robust(y, members), y))
     grid.sort(key=lambda g: g[0])
@@ -156,16 +167,64 @@ def polish(
     span = obj.span[free]
     read = obj.own_residuals if own else obj.residuals
 
-    def fun(u):
+    def at(u):
         y = start.copy()
         y[free] = obj.lo[free] + u * span
-        return read(y, members)
+        return y
+
+    def fun(u):
+        return read(at(u), members)
+
+    def step(u):
+        # with the points where the Jacobian after an accepted step reads: one axial run
+        obj.prefetch([at(v) for v in (u, *difference_points(u, DIFF_STEP))], members)
+        return fun(u)
+
+    def differences(f, us):
+        # the Jacobian's points (``step`` prefetched them when right) share (e, omega_s): one
+        # axial run per member for all; read with ``fun``, not with ``f`` (scipy's wrapper of
+        # ``step``), which would prefetch the differences of the differences
+        us = list(us)
+        obj.prefetch([at(u) for u in us], members)
+        return [fun(u) for u in us]
 
     u0 = np.clip((start[free] - obj.lo[free]) / span, 0.0, 1.0)
-    res = least_squares(fun, u0, bounds=(0.0, 1.0), diff_step=1e-3, max_nfev=nfev)
+    res = least_squares(step, u0, bounds=(0.0, 1.0), diff_step=DIFF_STEP, max_nfev=nfev,
+                        workers=differences)  # fmt: skip
     y = start.copy()
     y[free] = obj.lo[free] + res.x * span
     return y, obj.chi2(y, members)
+
+
+#: Relative step of :func:`polish`'s forward differences, in the unit box.
+DIFF_STEP = 1e-3
+
+
+def difference_points(u: np.ndarray, rel_step: float) -> list[np.ndarray]:
+    """Where a forward-difference Jacobian at ``u`` in the unit box reads the function.
+
+    scipy's ``approx_derivative`` (``'2-point'``, relative step, bounds ``[0, 1]``):
+    ``h_i = rel_step · sign(u_i) · |u_i|`` (``√ε · max(1, |u_i|)`` where that step vanishes),
+    turned back where it leaves the box and fits on the other side, else the distance to the
+    farther bound; the points are ``u + h_i e_i``. :func:`polish` evaluates them with ``u``, so a
+    point predicted wrongly costs a share of a run, never a different result.
+    """
+    u = np.asarray(u, float)
+    sign = np.where(u >= 0.0, 1.0, -1.0)
+    h = rel_step * sign * np.abs(u)
+    h = np.where(
+        (u + h) - u == 0.0, np.sqrt(np.finfo(float).eps) * sign * np.maximum(1.0, np.abs(u)), h
+    )
+    lower, upper = u, 1.0 - u
+    fits = np.abs(h) <= np.maximum(lower, upper)
+    h = np.where(((u + h < 0.0) | (u + h > 1.0)) & fits, -h, h)
+    h = np.where(fits, h, np.where(upper >= lower, upper, -lower))
+    pts = []
+    for i in range(len(u)):
+        v = u.copy()
+        v[i] = u[i] + h[i]
+        pts.append(v)
+    return pts
 
 
 #: Most candidate points re-read on the fit's members (:func:`confirm_points`).
