@@ -112,6 +112,12 @@ def test_load_figures_are_the_mean_curves_with_jackknife_errors():
     # the power tau (cbar - tau) is largest on the grid at tau = 0.25: R_phi times it
     assert got["max_power"][0] == pytest.approx(0.1 * 0.25 * (c.mean() - 0.25), rel=1e-12)
     assert got["efficiency_at_max_power"][0] == pytest.approx(0.1)  # eff at the second load
+    # a member without torsional input at that load (W_t <= 0: its efficiency undefined) is
+    # left out of the efficiency, not the whole point
+    gap = eff.copy()
+    gap[0, 1] = np.nan
+    eta = sens.load_figures(_Curve(loads, speed, gap), r=0.1)["efficiency_at_max_power"]
+    assert eta[0] == pytest.approx(0.1) and np.isfinite(eta[3])
     # runs backwards at no load: stall torque 0, no power, no efficiency
     back = sens.load_figures(_Curve(loads, speed - 1.0, eff), r=0.1)
     assert back["stall_torque"][0] == 0.0 and back["max_power"][0] == 0.0
@@ -162,8 +168,55 @@ def test_motor_shards_join_to_the_one_job_result_bit_for_bit():
     # the chatter rate of A is that of A_B^psi to the bit (R_phi sets the run's length: not so)
     rate = one["chatter_rate"].values.reshape(4, 6)
     assert np.array_equal(rate[:, 0], rate[:, 4]) and not np.array_equal(rate[:, 0], rate[:, 5])
-    # the no-load speed is the load curve's first point: where it is <= 0 the stall torque is 0
-    assert np.all((one["no_load_speed"].values > 0.0) | (stall == 0.0))
+    # the load figures are in the running direction: a motor that turns at no load, either
+    # way, holds a positive load against its motion
+    assert np.all((stall > 0.0) | (one["no_load_speed"].values == 0.0))
+
+
+def _backward_point(model) -> dict:
+    """A cheap point (R_phi = 0.1) of ``model`` that runs backwards at no load."""
+    for psi in (-2.0, -1.0, 1.0, 2.0):
+        point = {"e": 0.6, "omega_s": 1.5, "log10_r_phi": -1.0, "psi": psi}
+        if model(point).values["no_load_speed"][0] < 0.0:
+            return point
+    raise AssertionError("no backward point among the candidates")
+
+
+def test_a_backward_motor_is_loaded_against_its_own_motion_as_its_mirror_at_psi_plus_pi():
+    st = settings(members=2, loads=(0.0, 0.3, 0.6, 1.0, 2.0))
+    running = sens.MotorModel(st)
+    signed = sens.MotorModel(dataclasses.replace(st, running=False))
+    point = _backward_point(signed)
+    back = signed(point).values
+    assert back["stall_torque"][0] == 0.0 and back["max_power"][0] == 0.0  # the sign convention
+    got = running(point).values
+    mirror = signed({**point, "psi": point["psi"] + PI}).values  # docs/model.md: Omega -> -Omega
+    assert mirror["no_load_speed"][0] > 0.0
+    assert got["no_load_speed"][0] == pytest.approx(-mirror["no_load_speed"][0], rel=1e-9)
+    for name in ("stall_torque", "max_power", "efficiency_at_max_power", "log10_tau"):
+        assert got[name][0] == pytest.approx(mirror[name][0], rel=1e-9), name
+        assert got[name][3] == pytest.approx(mirror[name][3], rel=1e-6, abs=1e-12), name
+    assert 0.0 < got["stall_torque"][0] <= 2.0 and got["max_power"][0] > 0.0
+    # the design maps keep the torque-speed curves' sign convention
+    assert sens.map_settings(st).running is False
+
+
+def test_the_run_up_is_the_load_curves_first_run_bit_for_bit():
+    from bouncedisk.analysis.bands import member_speeds
+    from bouncedisk.studies.torque_speed import torque_speed
+
+    st = settings(members=2, loads=(0.0, 0.5, 2.0))
+    model = sens.MotorModel(st)
+    point = {"e": 0.3, "omega_s": 1.5, "log10_r_phi": -1.0, "psi": 0.4}
+    free, curve, (t, om) = sens._load_curve(model.scene(point, load=True), st)
+    assert free.column("mean_omega").mean() > 0.0  # a forward motor: nothing mirrored
+    # one run per member gives the run-up a separate ensemble without the load effect gave
+    t0, om0 = member_speeds(model.scene(point), st.members, st.seed)
+    assert np.array_equal(t, t0) and np.array_equal(om, om0)
+    # and the curve continues from it as torque_speed does
+    ref = torque_speed(model.scene(point, load=True), list(st.loads), branches=("up",))
+    for name in ("mean_omega", "power_out", "efficiency_torsion", "chatter_rate"):
+        assert np.array_equal(curve.matrix("up", name), ref.matrix("up", name)), name
 
 
 def test_the_design_maps_read_their_curves_every_0_05_past_the_momentum_bound():

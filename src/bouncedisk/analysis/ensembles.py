@@ -21,7 +21,7 @@ import numpy as np
 from numba import njit
 
 from ..engine import KIND_CHATTER, KIND_IMPACT, EngineConfig, InitialState
-from ..engine.driver import EngineError, audit_balances, iterate_views
+from ..engine.driver import ChunkView, EngineError, audit_balances, iterate_views
 from ..engine.kernel import EV_PHASE, EV_T, EV_V_REL
 from ..engine.layout import ST_EVENTS
 from ..model import stator
@@ -357,10 +357,14 @@ def run_member(
     member: int,
     t_from: float,
     should_stop: Callable[[], bool] | None = None,
+    on_chunk: Callable[[ChunkView], None] | None = None,
 ) -> tuple[MemberStats, dict[str, float], dict[str, np.ndarray]]:
     """Run member ``member`` of the ensemble of ``cfg`` and reduce it after ``t_from``.
 
-    ``cfg.t_end`` must be finite: the averages are over ``[t_from, t_end]``.
+    ``cfg.t_end`` must be finite: the averages are over ``[t_from, t_end]``. With ``on_chunk``
+    every chunk's views (:class:`bouncedisk.engine.driver.ChunkView`, valid until the next
+    chunk) are handed to it, and the trajectory samples ``cfg`` asks for are kept in them;
+    without, the run takes no samples.
 
     Returns
     -------
@@ -375,8 +379,9 @@ def run_member(
     """
     if not math.isfinite(cfg.t_end) or cfg.t_end <= t_from:
         raise ValueError("an ensemble member needs a finite end time after t_from")
+    traj_dt = cfg.traj_dt if on_chunk is not None else 0.0
     cfg = dataclasses.replace(
-        cfg, member=member, stats_from=t_from, traj_dt=0.0, stroboscopic=False
+        cfg, member=member, stats_from=t_from, traj_dt=traj_dt, stroboscopic=False
     )
     red = _Reducer(cfg.e, cfg.omega_s, t_from)
     gen = iterate_views(cfg, init)  # the kernel's buffers, reduced in place: no copies
@@ -390,6 +395,8 @@ def run_member(
             break
         ev = c.ev
         red.add(ev[:, EV_T], ev[:, EV_PHASE], ev[:, EV_V_REL], c.evk)
+        if on_chunk is not None:
+            on_chunk(c)
     if status == ST_EVENTS:  # the cap, not the window's end, stopped the run
         raise CappedRun(member, final["t"], cfg.t_end, cfg.max_events)
     stats = red.result(member, final, cfg.t_end, cfg.r_phi, cfg.psi)

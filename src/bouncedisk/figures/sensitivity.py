@@ -22,7 +22,9 @@ def _short(output: str) -> str:
 def fig_sensitivity_indices(ds: xr.Dataset) -> Figure:
     """First-order and total Sobol' indices of every output with their 95 % bootstrap intervals,
     the sample size and the share of each output's variance that is ensemble noise. An index
-    whose interval is wider than ``±resolved_half_width`` is drawn grey (not resolved)."""
+    whose interval is wider than ``±resolved_half_width`` is drawn grey (not resolved). The
+    title says when the load figures are in each motor's own running direction (attribute
+    ``load_direction``, :class:`bouncedisk.studies.sensitivity.MotorModel`)."""
     outputs = ds["output"].values.tolist()
     names = ds["parameter"].values.tolist()
     ncol = min(3, len(outputs))
@@ -57,8 +59,12 @@ def fig_sensitivity_indices(ds: xr.Dataset) -> Figure:
     axes[0].set_ylabel("Sobol' index (95 % bootstrap interval)")
     n = ds.attrs.get("n_points", "?")
     base = int(n) // (len(names) + 2) if str(n).isdigit() else "?"
+    running = str(ds.attrs.get("load_direction", "")).startswith("running")
     fig.suptitle(f"Sobol' indices from {n} points (SALib, N = {base} base samples); "
-                 f"grey: interval wider than ±{limit:g}", fontsize=10)  # fmt: skip
+                 f"grey: interval wider than ±{limit:g}"
+                 + ("\nstall torque, power, efficiency: each motor loaded against its own "
+                    "running direction (psi -> psi + pi mirrors it)" if running else ""),
+                 fontsize=10)  # fmt: skip
     return fig
 
 

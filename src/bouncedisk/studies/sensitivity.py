@@ -69,6 +69,12 @@ MAP_LOAD_TOP = 1.1
 #: Fewest members of a design map's points: their intervals pick the best point and those not
 #: resolved from it (with 2 members Student's factor is 12.7, with 4 it is 3.2).
 MAP_MIN_MEMBERS = 4
+#: How the load figures are signed (attribute ``load_direction`` of the points and indices):
+#: against each motor's own no-load motion (:class:`MotorModel`) or against positive rotation.
+LOAD_DIRECTION = {
+    True: "running: the load opposes each motor's no-load motion",
+    False: "positive: the load opposes positive rotation",
+}
 #: Samples of the run-up per unit of ``1/R_φ`` (the trend's time constant is 1-3 of these).
 RUNUP_SAMPLES_PER_UNIT = 20
 
@@ -116,25 +122,29 @@ class MotorModel:
     """The motor's figures of merit at a point ``(e, omega_s, log10_r_phi, psi)``.
 
     Each point is an ensemble of ``members`` runs from rest, differing by restitution noise
-    ``e_sigma`` (docs/model.md "Long-run statistics of chaotic motion"), over ``(discard + duration)/R_φ``:
-    the run-up time constant from the first-order trend
-    (:func:`bouncedisk.analysis.observables.first_order_trend`) of the members' mean run-up with a
-    jackknife interval over members (:meth:`_runup`), and with ``loads`` (starting at 0) one
-    torque–speed curve (:func:`bouncedisk.studies.torque_speed.torque_speed`, up branch): its
-    first load, ``τ_L = 0``, gives the no-load speed, chatter rate and regime (after the
-    transient ``discard/R_φ``), the whole curve the stall torque, maximum power and the
-    torsional efficiency at it (:func:`load_figures`; docs/model.md "The motor under load").
+    ``e_sigma`` (docs/model.md "Long-run statistics of chaotic motion"), over ``(discard + duration)/R_φ``.
+    With ``loads`` (starting at 0) the point is one torque–speed curve, swept up by continuation
+    as :func:`bouncedisk.studies.torque_speed.torque_speed` does (:func:`_load_curve`); its first
+    run, ``τ_L = 0`` from rest, is also the run-up: it gives the no-load speed, chatter rate and
+    regime (after the transient ``discard/R_φ``) and, sampled on a grid, the run-up time constant
+    (first-order trend of the members' mean run-up,
+    :func:`bouncedisk.analysis.observables.first_order_trend`, jackknife interval over members).
+    The whole curve gives the stall torque, maximum power and the torsional efficiency at it
+    (:func:`load_figures`; docs/model.md "The motor under load").
+
+    With ``settings.running`` the load figures are those **in the motor's own running
+    direction**: where the mean no-load speed is negative the load opposes that motion. The
+    stator twist ``sin(w t + ψ)`` is the only place ``ψ`` enters and the axial motion sees
+    neither ``ψ`` nor the rotation (docs/model.md "Variables and scales", "Phases of motion"),
+    so ``ψ → ψ + π`` maps every run to its mirror, ``Ω → −Ω``, bit for bit up to round-off: a
+    backward motor under load is its mirror (at ``ψ + π``, continuing from the mirrored no-load
+    states) under the same load. The no-load speed keeps its sign.
     Without loads the no-load figures come from one ensemble
-    (:func:`bouncedisk.analysis.statistics.run_stats`).
+    (:func:`bouncedisk.analysis.statistics.run_stats`) and the run-up from a second.
     """
 
-    def __init__(self, settings: StudySettings, torque_speed: Callable | None = None):
+    def __init__(self, settings: StudySettings):
         self.s = settings
-        self._torque_speed = torque_speed
-        if settings.loads and torque_speed is None:
-            from .torque_speed import torque_speed as ts  # the load effect (docs/model.md)
-
-            self._torque_speed = ts
         self.outputs = tuple(k for k, v in OUTPUTS.items() if settings.loads or not v[2])
 
     def scene(self, point: Mapping[str, float], load: bool = False) -> Scene:
@@ -160,26 +170,120 @@ class MotorModel:
 
     def __call__(self, point: Mapping[str, float]) -> PointValues:
         r = 10.0 ** point["log10_r_phi"]
-        loaded = bool(self.s.loads)
-        scene = self.scene(point, load=loaded)
-        if loaded:
-            curve = self._torque_speed(scene, list(self.s.loads), cores=1, branches=("up",))
-            free = curve.branches["up"][0]  # tau_L = 0: the no-load run (loads start at 0)
+        if self.s.loads:
+            free, curve, (t, om) = _load_curve(self.scene(point, load=True), self.s)
         else:
-            free = run_stats(scene, cores=1)
+            free = run_stats(self.scene(point), cores=1)
+            t, om = member_speeds(self.scene(point), self.s.members, self.s.seed)
         out = {
             "no_load_speed": interval(r * free.column("mean_omega")),
             "chatter_rate": interval(free.column("chatter_rate")),
-            "log10_tau": self._runup(self.scene(point)),
+            "log10_tau": _runup_tau(t, om),
         }
-        if loaded:
+        if self.s.loads:
             out.update(load_figures(curve, r))
         name, _, _ = free.regime
         return PointValues(out, ob.REGIME_CODES[name])
 
-    def _runup(self, scene: Scene) -> tuple[float, float, float, float]:
-        """log10 τ of the members' mean run-up, with a jackknife interval over members."""
-        return _runup_tau(*member_speeds(scene, self.s.members, self.s.seed))
+
+def _first_run(cfg, init, member: int, t_from: float) -> tuple:
+    """One member's run from rest at the curve's first load
+    (:func:`bouncedisk.analysis.ensembles.run_member`: its statistics and final state), with its
+    ``(t, Ω)`` samples on the scene's trajectory grid, the run-up (docs/model.md "The motor
+    under load": at ``τ_L = 0`` the load effect changes nothing).
+
+    Returns
+    -------
+    stats, final, samples
+        The member's :class:`~bouncedisk.analysis.ensembles.MemberStats`, its final state and
+        its ``(t, Ω)`` samples, shape (samples, 2).
+
+    Raises
+    ------
+    CappedRun
+        The run stopped at its cap on events before the end of its window.
+    """
+    from ..analysis.ensembles import run_member
+    from ..io.records import TrajColumn
+
+    samples: list[np.ndarray] = []
+
+    def keep(c) -> None:
+        samples.append(np.array(c.traj[:, [TrajColumn.T, TrajColumn.OMEGA]]))
+
+    stats, final, _tail = run_member(cfg, init, member, t_from, on_chunk=keep)
+    return stats, final, np.concatenate(samples)
+
+
+def _load_curve(scene: Scene, s: StudySettings) -> tuple:
+    """The point's no-load ensemble, its load curve (up branch) and run-up ``(t, Ω)``
+    (docs/model.md "The motor under load").
+
+    Each member runs ``s.loads[0] = 0`` from rest (:func:`_first_run`), then every further load
+    from its final state at the previous one
+    (:func:`bouncedisk.studies.torque_speed.member_sweep`'s continuation, same numbers). With
+    ``s.running`` and a negative mean no-load speed the curve is the mirror motor's
+    (:class:`MotorModel`): ``ψ + π``, each member's no-load statistics and final state with
+    ``Ω`` negated; the no-load ensemble returned keeps the sign, the run-up is the mirror's.
+
+    Returns
+    -------
+    free : EnsembleStats
+        The members at ``τ_L = 0``, signed.
+    curve : LoadCurve
+        Branch ``up`` at ``s.loads``, in the running direction with ``s.running``.
+    (t, om) : tuple of ndarray
+        The run-up: the times every member reached and the speeds, shape (member, time).
+
+    Raises
+    ------
+    InputError
+        A member stopped at its cap on events (as :func:`~.torque_speed.torque_speed`).
+    """
+    from ..analysis.ensembles import CappedRun
+    from ..analysis.statistics import EnsembleStats, capped_error, ensemble_window
+    from ..model.engine_config import engine_config
+    from .torque_speed import LoadCurve
+
+    t_from, t_end = ensemble_window(scene)
+    cfg = engine_config(scene)
+    discard, duration = scene.stats.discard, t_end - scene.initial.t
+    try:
+        first = [_first_run(cfg, scene.initial, m, t_from) for m in range(s.members)]
+        per_load = _continue_up(cfg, first, s, duration, discard)
+    except CappedRun as ex:
+        raise capped_error(
+            scene, ex, f" (load tau_L = {getattr(ex, 'load', math.nan):.6g})"
+        ) from None
+    free = EnsembleStats([f[0] for f in first], discard, t_end - t_from, True, scene.scales)
+    n = min(len(f[2]) for f in first)  # the samples every member reached
+    t, om = first[0][2][:n, 0], np.stack([f[2][:n, 1] for f in first])
+    if s.running and float(np.mean(free.column("mean_omega"))) < 0.0:
+        om = -om  # the mirror's run-up
+    ens = [EnsembleStats(x, discard, t_end - t_from, True, scene.scales) for x in per_load]
+    return free, LoadCurve(np.asarray(s.loads, float), {"up": ens}), (t, om)
+
+
+def _continue_up(cfg, first: list, s: StudySettings, duration: float, discard: float) -> list:
+    """Every member's statistics at each of ``s.loads`` (a list per load): its first run
+    (:func:`_first_run`), then :func:`~.torque_speed.member_sweep` up the other loads from its
+    final state; with ``s.running`` and a negative mean no-load speed as the mirror motor
+    (:func:`_load_curve`)."""
+    from .torque_speed import continued_state, member_sweep
+
+    stats0, finals = [f[0] for f in first], [f[1] for f in first]
+    if s.running and float(np.mean([x.mean_omega for x in stats0])) < 0.0:
+        cfg = dataclasses.replace(cfg, psi=cfg.psi + math.pi)
+        stats0 = [
+            dataclasses.replace(x, mean_omega=-x.mean_omega, mean_slip=-x.mean_slip) for x in stats0
+        ]
+        finals = [{**f, "omega": -f["omega"]} for f in finals]
+    rest = [
+        member_sweep(cfg, continued_state(f, cfg.omega_s), m, s.loads[1:], discard, duration,
+                     ("up",))["up"]
+        for m, f in enumerate(finals)
+    ]  # fmt: skip
+    return [stats0, *(list(at_load) for at_load in zip(*rest, strict=True))]
 
 
 def _runup_tau(t: np.ndarray, om: np.ndarray) -> tuple[float, float, float, float]:
@@ -208,7 +312,9 @@ def load_figures(curve, r: float) -> dict[str, tuple[float, float, float, float]
     branch (docs/model.md "The motor under load"), each ``(value, low, high, se)``.
 
     The values are those of the members' mean curve, found by the torque–speed summary's own
-    rules (:func:`bouncedisk.studies.torque_speed.first_zero`: the root of the mean speed in
+    rules (the efficiency: the mean over the members whose torsional input over the window
+    is positive, the others' ``η_t = W_L/W_t`` being undefined, docs/model.md "Power and
+    energy audit"; :func:`bouncedisk.studies.torque_speed.first_zero`: the root of the mean speed in
     the load; here 0 when the motor runs backwards at no load, where the curve's summary gives
     no value but the state ``backwards_at_no_load``);
     :func:`bouncedisk.studies.torque_speed.peak`: the largest power over the curve's loads; the
@@ -232,7 +338,8 @@ def load_figures(curve, r: float) -> dict[str, tuple[float, float, float, float]
     def figures(idx: np.ndarray) -> np.ndarray:
         p, at = peak(loads, power[idx].mean(axis=0))
         j = int(np.argmin(np.abs(loads - at)))
-        eta = eff[idx, j].mean() if p > 0.0 else 0.0  # no power delivered: no efficiency
+        col = eff[idx, j][np.isfinite(eff[idx, j])]  # members with a torsional input W_t > 0
+        eta = 0.0 if p <= 0.0 else (col.mean() if col.size else math.nan)  # no power: 0
         mean = speed[idx].mean(axis=0)
         # a motor that turns backwards at no load holds no load forwards: stall torque 0 in the
         # study (the load curve's own summary calls this state backwards_at_no_load, no value)
@@ -272,11 +379,12 @@ def map_settings(settings: StudySettings) -> StudySettings:
     largest load stays, bracketing every stall)."""
     members = max(settings.members, MAP_MIN_MEMBERS)
     if not settings.loads:
-        return dataclasses.replace(settings, members=members)
+        return dataclasses.replace(settings, members=members, running=False)
     top = min(MAP_LOAD_TOP, max(settings.loads))
     steps = MAP_LOAD_STEP * np.arange(round(top / MAP_LOAD_STEP) + 1)
     loads = np.unique(np.round(np.r_[steps, settings.loads], 12))
-    return dataclasses.replace(settings, members=members, loads=tuple(float(x) for x in loads))
+    loads = tuple(float(x) for x in loads)
+    return dataclasses.replace(settings, members=members, loads=loads, running=False)
 
 
 def map_sample(settings: StudySettings, e: float) -> tuple[np.ndarray, tuple[int, int]]:
@@ -363,6 +471,7 @@ def run_shard(
             "base_samples": settings.base_samples,
             "seed": settings.seed,
             "members": settings.members,
+            "load_direction": LOAD_DIRECTION[bool(settings.running)],
         }
     )
     return ds
@@ -494,6 +603,7 @@ def analyse(points: xr.Dataset, ranges: Mapping, resamples: int, seed: int) -> x
                 if int(points.sizes["point"]) >= RBD_FAST_MIN_POINTS
                 else "S1: Saltelli 2010, ST: Jansen (SALib sobol)"
             ),
+            "load_direction": str(points.attrs.get("load_direction", LOAD_DIRECTION[False])),
             "cpu_time_s": float(points.attrs.get("cpu_time_s", math.nan)),
             "cpu_s_per_point": float(points.attrs.get("cpu_time_s", math.nan))
             / max(1, int(points.sizes["point"])),
@@ -563,6 +673,7 @@ def summary(indices: xr.Dataset, maps: Sequence[xr.Dataset] = ()) -> dict:
     point of every design map (:func:`best_point`)."""
     out: dict = {"n_points": int(indices.attrs["n_points"]), "outputs": {}}
     out["cpu_s_per_point"] = float(indices.attrs["cpu_s_per_point"])
+    out["load_direction"] = str(indices.attrs.get("load_direction", LOAD_DIRECTION[False]))
     for o in indices["output"].values.tolist():
         row = indices.sel(output=o)
         entry = {

@@ -71,6 +71,10 @@ class StudySettings:
     map_e, map_omega_s, map_points
         Design maps over ``(psi, log10_r_phi)``: one per ``e`` in ``map_e`` at ``map_omega_s``,
         ``map_points = (n_psi, n_r_phi)``.
+    running : bool
+        Load figures in the motor's own running direction (the load opposes the no-load
+        motion, :class:`bouncedisk.studies.sensitivity.MotorModel`); the design maps keep the
+        sign convention of the torque–speed curves (load against positive rotation), ``False``.
     """
 
     size: str
@@ -87,6 +91,7 @@ class StudySettings:
     map_e: tuple[float, ...]
     map_omega_s: float
     map_points: tuple[int, int]
+    running: bool = True
 
     @classmethod
     def from_params(cls, params: Mapping) -> StudySettings:

@@ -236,9 +236,9 @@ def _physical(out: dict, sc) -> dict:
     return si
 
 
-def _continued(final: dict, omega_s: float) -> InitialState:
-    """The initial state that continues a run from its final state, at time ``θ/w`` (module
-    docstring)."""
+def continued_state(final: dict, omega_s: float) -> InitialState:
+    """The initial state that continues a run from its final state (:func:`~bouncedisk.engine.iterate`'s),
+    at time ``θ/w`` (module docstring)."""
     t = final["phase"] / omega_s
     if final["in_contact"]:
         return InitialState(t=t, omega=final["omega"])
@@ -273,7 +273,7 @@ def member_sweep(
                 ex.load = float(loads[k])
                 raise
             got[k] = stats
-            state = _continued(final, cfg.omega_s)
+            state = continued_state(final, cfg.omega_s)
         out[branch] = [got[k] for k in range(len(loads))]
     return out
 
