@@ -7,7 +7,7 @@ after another on one core, with the pipeline's model bouncedisk.studies.sensitiv
 and prints each shard's CPU time, the CPU per point, the share of the sample measured and the
 whole sample's CPU at that rate. A shard is a contiguous block of the Sobol' sample, so its points
 spread over every parameter's range; the pipeline's own measurement is the shard jobs'
-``cpu_time_s`` (docs/user_guide/sensitivity.md, "Measured"). The first call loads the numba
+``cpu_time_s`` (docs/sensitivity_method.md, "What it costs"). The first call loads the numba
 cache and is not timed.
 """
 

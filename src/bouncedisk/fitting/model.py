@@ -15,6 +15,7 @@ ensemble mean is).
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
@@ -134,10 +135,9 @@ def thread_map(
 
 
 def _member_config(theta: dict[str, float], curve: MotorCurve, member: int, e_sigma: float,
-                   seed: int) -> EngineConfig:  # fmt: skip
-    """The engine configuration of one member at ``theta`` sampled on the curve's grid."""
+                   seed: int, grid: np.ndarray) -> EngineConfig:  # fmt: skip
+    """The engine configuration of one member at ``theta`` sampled on the curve's ``grid``."""
     p = physical(theta, curve)
-    grid = uniform_grid(curve)
     t_c = p["t_c"]
     dt_nd = curve.dt / t_c
     span_nd = (grid[-1] - grid[0]) / t_c
@@ -157,9 +157,9 @@ def _member_config(theta: dict[str, float], curve: MotorCurve, member: int, e_si
     )
 
 
-def _on_grid(traj: np.ndarray, theta: dict[str, float], curve: MotorCurve) -> np.ndarray:
-    """A run's ``Ω`` samples in rad/s on the curve's grid (the last held if the run ended)."""
-    n = len(uniform_grid(curve))
+def _on_grid(traj: np.ndarray, theta: dict[str, float], curve: MotorCurve, n: int) -> np.ndarray:
+    """A run's ``Ω`` samples in rad/s on the curve's grid of ``n`` times (the last held if the
+    run ended)."""
     om = traj[:n, TrajColumn.OMEGA] * physical(theta, curve)["speed_scale"]
     if len(om) < n:
         om = np.concatenate([om, np.full(n - len(om), om[-1] if len(om) else 0.0)])
@@ -179,8 +179,7 @@ def simulate_curve(
     condition") and samples ``Ω`` at ``(grid − grid[0]) / t_c``; ``e_sigma = 0`` is the single
     deterministic run.
     """
-    cfg = _member_config(theta, curve, member, e_sigma, seed)
-    return _on_grid(simulate_arrays(cfg, START).traj, theta, curve)
+    return _simulated([theta], curve, member, e_sigma, seed, uniform_grid(curve))[0]
 
 
 def simulate_rows(
@@ -196,19 +195,30 @@ def simulate_rows(
     scale, none of which the axial motion uses (docs/model.md "Events"), so one impact search
     serves them all (:func:`bouncedisk.engine.loads.row_trajectories`).
     """
-    cfgs = [_member_config(th, curve, member, e_sigma, seed) for th in thetas]
-    return [
-        _on_grid(tr, th, curve)
-        for tr, th in zip(row_trajectories(cfgs, START), thetas, strict=True)
-    ]
+    return _simulated(thetas, curve, member, e_sigma, seed, uniform_grid(curve))
 
 
+def _simulated(thetas: Sequence[dict[str, float]], curve: MotorCurve, member: int,
+               e_sigma: float, seed: int, grid: np.ndarray) -> list[np.ndarray]:  # fmt: skip
+    """:func:`simulate_rows` on the curve's ``grid`` (one point: its own run)."""
+    cfgs = [_member_config(th, curve, member, e_sigma, seed, grid) for th in thetas]
+    if len(cfgs) == 1:
+        trajs = [simulate_arrays(cfgs[0], START).traj]
+    else:
+        trajs = row_trajectories(cfgs, START)
+    return [_on_grid(tr, th, curve, len(grid)) for tr, th in zip(trajs, thetas, strict=True)]
+
+
+@functools.lru_cache(maxsize=512)
 def measurement_noise(n: int, sigma: float, seed: int, member: int) -> np.ndarray:
-    """The fixed measurement-noise draw of member ``member`` (standard deviation ``sigma``)."""
+    """The fixed measurement-noise draw of member ``member`` (standard deviation ``sigma``),
+    drawn once (read-only: the same draw at every parameter point)."""
     if sigma <= 0:
-        return np.zeros(n)
-    rng = np.random.default_rng([_NOISE_STREAM, seed, member])
-    return rng.normal(0.0, sigma, n)
+        out = np.zeros(n)
+    else:
+        out = np.random.default_rng([_NOISE_STREAM, seed, member]).normal(0.0, sigma, n)
+    out.flags.writeable = False
+    return out
 
 
 def member_records(
@@ -232,15 +242,12 @@ def rows_records(
     """:func:`member_records` of points that share ``e``, ``omega_s`` and ``σ_e``, by member
     (``out[m][i]``: member ``members[m]`` at ``thetas[i]``), each member one axial run
     (:func:`simulate_rows`)."""
-    n = len(uniform_grid(curve))
+    grid = uniform_grid(curve)
     e_sigma = restitution_noise(thetas[0], spec.e_sigma)
 
     def one(m: int) -> list:
-        noise = measurement_noise(n, curve.sigma, spec.seed, m)
-        if len(thetas) == 1:
-            oms = [simulate_curve(thetas[0], curve, m, e_sigma, spec.seed)]
-        else:
-            oms = simulate_rows(thetas, curve, m, e_sigma, spec.seed)
+        noise = measurement_noise(len(grid), curve.sigma, spec.seed, m)
+        oms = _simulated(thetas, curve, m, e_sigma, spec.seed, grid)
         return [reduce(om + noise) if reduce is not None else om + noise for om in oms]
 
     if spec.cores <= 1 or len(members) == 1:

@@ -546,7 +546,7 @@ def analyse(points: xr.Dataset, ranges: Mapping, resamples: int, seed: int) -> x
     RBD-FAST on every point as given data (``SALib.analyze.rbd_fast``: each output sorted by one
     parameter, its spectrum's low harmonics, bias-corrected), which uses all ``N (D + 2)``
     points where Saltelli's ``S1`` estimator uses ``N`` pairs: at the same points its intervals
-    are 2–3 times narrower (docs/user_guide/sensitivity.md, "Measured"). Below
+    are 2–3 times narrower (docs/sensitivity_method.md, "Estimators"). Below
     :data:`RBD_FAST_MIN_POINTS` points (a smoke test) ``S1`` is Saltelli's (``SALib.analyze.sobol``):
     RBD-FAST's ten harmonics need many more points than that.
 
