@@ -10,13 +10,22 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
 from .dynamics import REGIME_COLORS
-from .joint_fit import fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
+from .joint_fit import (  # the fit's figures: drawn through FIGURES
+    COORDINATES,
+    fig_fit_identifiability,  # noqa: F401
+    fig_fit_load,  # noqa: F401
+)
 from .load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
 
 
 def _short(output: str) -> str:
     """An output's name as an axis label."""
     return output.replace("_", " ")
+
+
+def _parameter(name: str) -> str:
+    """A sampled parameter as the figures write it (the fit's coordinates' labels)."""
+    return COORDINATES[name][0] if name in COORDINATES else name
 
 
 def fig_sensitivity_indices(ds: xr.Dataset) -> Figure:
@@ -45,7 +54,7 @@ def fig_sensitivity_indices(ds: xr.Dataset) -> Figure:
         note = (f"undefined at {undefined} points: no indices" if undefined
                 else f"ensemble noise: {100 * share:.1f} % of the variance")  # fmt: skip
         ax.set_title(f"{_short(o)}\n{note}", fontsize=9)
-        ax.set_xticks(pos, names, fontsize=8)
+        ax.set_xticks(pos, [_parameter(n) for n in names], fontsize=8)
         ax.axhline(0, color="k", lw=0.5)
         low = np.nanmin(np.r_[row["S1"].values - row["S1_conf"].values, -0.1])
         high = np.nanmax(np.r_[row["ST"].values + row["ST_conf"].values, 1.1])
@@ -63,7 +72,7 @@ def fig_sensitivity_indices(ds: xr.Dataset) -> Figure:
     fig.suptitle(f"Sobol' indices from {n} points (SALib, N = {base} base samples); "
                  f"grey: interval wider than ±{limit:g}"
                  + ("\nstall torque, power, efficiency: each motor loaded against its own "
-                    "running direction (psi -> psi + pi mirrors it)" if running else ""),
+                    "running direction ($\\psi \\to \\psi + \\pi$ mirrors it)" if running else ""),
                  fontsize=10)  # fmt: skip
     return fig
 
@@ -83,7 +92,7 @@ def fig_sensitivity_scatter(ds: xr.Dataset) -> Figure:
             ax = axes[i, j]
             ax.scatter(ds["x"].sel(parameter=p).values, ds[o].values, s=5, c=colors, lw=0)
             if i == len(outputs) - 1:
-                ax.set_xlabel(p)
+                ax.set_xlabel(_parameter(p))
             if j == 0:
                 ax.set_ylabel(_short(o), fontsize=8)
     handles = [
