@@ -88,6 +88,7 @@ def one_by_one():
             spec = dataclasses.replace(self.spec, cores=1) if self.points_parallel else self.spec
             recs = member_records(self.theta(x), self.curve, range(k), spec)
             self.cache[key] = EnsembleStats.from_values(records_stats(np.array(recs), self.layout))
+        self.read.add(key)
         return self.cache[key]
 
     cls.prefetch, cls.ensemble = (lambda self, xs, members=None: None), ensemble

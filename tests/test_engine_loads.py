@@ -132,3 +132,9 @@ def test_rows_that_part_in_their_axial_motion_are_refused():
     for bad in ({"traj_dt": 0.0}, {"t_end": math.inf}, {"stroboscopic": True}):
         with pytest.raises(ValueError, match="row_trajectories"):
             row_trajectories([dataclasses.replace(base, **bad)] * 2)
+    # a run that fails alone fails the same way among rows
+    no_contact = dataclasses.replace(base, contact=False, e=0.2)
+    rows = [no_contact, dataclasses.replace(no_contact, psi=1.0)]
+    with pytest.raises(EngineError) as err:
+        row_trajectories(rows, InitialState(t=0.0, u=1.2, v=0.0))
+    assert err.value.code == K.ST_NEED_CONTACT

@@ -724,13 +724,14 @@ def test_own_covariance_chi2_is_the_held_one_where_the_covariance_was_measured(d
 def test_points_evaluated_together_are_the_points_evaluated_alone(data_dir):
     """:meth:`Objective.prefetch`: points sharing ``(e, omega_s)`` from one axial run per member
     (other ψ and R_φ; a point at another ``(e, omega_s)`` on its own) have, bit for bit, the
-    statistics :meth:`Objective.ensemble` gives each on a fresh objective, and are not run again."""
+    statistics :meth:`Objective.ensemble` gives each on a fresh objective, are not run again, and
+    count as evaluations only once read."""
     base = np.array([0.6, math.log10(0.0027), -0.3, 1.5])
     pts = [base + [0.0, dl, dp, 0.0] for dl, dp in ((0, 0), (0.2, 0), (0, 1.1), (-0.4, -2.0))]
     pts.append(base + [0.1, 0.0, 0.0, 0.2])
     together = _small_objective(data_dir, joint=False)
     together.prefetch(pts, 4)
-    assert len(together.cache) == len(pts)
+    assert len(together.cache) == len(pts) and not together.read  # run ahead, not yet read
     counted = []
     together.on_eval = counted.append
     for x in pts:
@@ -738,7 +739,8 @@ def test_points_evaluated_together_are_the_points_evaluated_alone(data_dir):
         got = together.ensemble(x, 4)
         np.testing.assert_array_equal(got.mean, alone.mean)
         np.testing.assert_array_equal(got.cov, alone.cov)
-    assert counted == []  # read from the cache
+    # read from the cache, each counted as an evaluation once it is read (the fit's count)
+    assert counted == list(range(1, len(pts) + 1)) and len(together.read) == len(pts)
     # they differ from each other: the rows are other rotations, not one point repeated
     assert len({together.ensemble(x, 4).mean[0] for x in pts}) == len(pts)
 

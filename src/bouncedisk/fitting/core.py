@@ -369,7 +369,7 @@ def fit_curve(
         trend_data=(td.steady, td.tau), trend_model=(tm.steady, tm.tau),
         trend_ci=(tuple(np.percentile(boot[:, 0], [2.5, 97.5])),
                   tuple(np.exp(np.percentile(boot[:, 1], [2.5, 97.5])))),
-        physical=physical(theta, fitted), basins=basins, curve=fitted, note=note, evaluations=len(obj.cache),
+        physical=physical(theta, fitted), basins=basins, curve=fitted, note=note, evaluations=len(obj.read),
         wall_time_s=_time.perf_counter() - start, settings=s, runs=tuple(runs), load=load_fit,
         chi2_level=level,
     )  # fmt: skip

@@ -108,6 +108,9 @@ class Objective:
     members: int
     cov: np.ndarray | None = None
     cache: dict = field(default_factory=dict)
+    #: The points (with their member counts) whose statistics were read: the fit's evaluations
+    #: (a point :meth:`prefetch` ran ahead and nobody read is not one).
+    read: set = field(default_factory=set)
     log: list[Evaluation] = field(default_factory=list)
     on_eval: Callable[[int], None] | None = None
     points_parallel: bool = False
@@ -156,6 +159,10 @@ class Objective:
         key = (k, *x)
         if key not in self.cache:
             self.prefetch([x], k)
+        if key not in self.read:
+            self.read.add(key)
+            if self.on_eval is not None:
+                self.on_eval(len(self.read))
         return self.cache[key]
 
     def prefetch(self, xs, members: int | None = None) -> None:
@@ -179,8 +186,6 @@ class Objective:
             for i, x in enumerate(pts):
                 values = records_stats(np.array([r[i] for r in recs]), self.layout)
                 self.cache[(k, *x)] = EnsembleStats.from_values(values)
-                if self.on_eval is not None:
-                    self.on_eval(len(self.cache))
 
     @property
     def n_stats(self) -> int:

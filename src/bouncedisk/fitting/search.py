@@ -651,7 +651,7 @@ def local_stage(
         _say(progress, f"local search ({members} members): start {k + 1}/{len(starts)}, best "
                        f"chi2 {obj.best(members).chi2:.4g}")  # fmt: skip
     best = obj.best(members)
-    _say(progress, f"local search: chi2 {best.chi2:.4g} ({len(obj.cache)} ensembles evaluated)")
+    _say(progress, f"local search: chi2 {best.chi2:.4g} ({len(obj.read)} ensembles evaluated)")
     return best
 
 
