@@ -770,3 +770,16 @@ def test_the_jacobians_points_are_predicted_and_read_together():
         least_squares(step, np.array(start), bounds=(0.0, 1.0), diff_step=DIFF_STEP, max_nfev=6,
                       workers=differences)  # fmt: skip
     assert len(asked) >= 16 and set(asked) <= predicted
+
+
+def test_the_chi2_at_the_generating_point_changes_no_cache_and_no_count(data_dir):
+    """:func:`~bouncedisk.fitting.joint.chi2_at_truth` reads the generating point after the fit:
+    the objective's cache and its points read (the fit's count of evaluations) are as before."""
+    from bouncedisk.fitting.joint import chi2_at_truth
+
+    obj = _small_objective(data_dir)
+    obj.chi2(np.array([0.6, math.log10(0.0027), -0.3, 1.5]), 4)
+    cache, read = set(obj.cache), set(obj.read)
+    at = chi2_at_truth(obj, 4)
+    assert at is not None and at["both"] == pytest.approx(at["runup"] + at["load"], rel=1e-12)
+    assert set(obj.cache) == cache and set(obj.read) == read and len(read) == 1

@@ -74,13 +74,14 @@ def chi2_at_truth(obj: Objective, members: int) -> dict[str, float] | None:
     if any(v is None for v in x):
         return None
     x = snap(np.array(x, float))
-    cached, out = set(obj.cache), {}
+    cached, read, out = set(obj.cache), set(obj.read), {}
     try:
         for part in ("runup", "load", "both"):
             out[part] = obj.seeing(part).chi2_now(x, members)
     finally:
         for key in set(obj.cache) - cached:
             del obj.cache[key]
+        obj.read.intersection_update(read)
     return out
 
 
