@@ -204,19 +204,7 @@ def omega_integrals(
     loads = np.asarray(loads, dtype=float)
     init = init or InitialState()
     cfgs = [replace(cfg, load_torque=float(x)) for x in loads]
-    _, flg = _pack(cfg)
-    prm = np.array([_pack(c)[0] for c in cfgs])
-    # each load's own initial state: in contact, the stick–slip state depends on τ_L
-    states = [initial_state(c, init) for c in cfgs]
-    st = np.array([s for s, _ in states])
-    ist = np.array([i for _, i in states])
-    rows = len(loads)
-    ev = tuple(np.empty((K.EV_COLS, 1)))  # the kernel's event columns, one row
-    evk = np.empty(1, dtype=np.int8)
-    traj = np.empty((rows, 0, K.TRAJ_COLS))
-    strobe = np.empty((0, K.STROBE_COLS))
-    info = np.zeros((rows, K.N_OUT), dtype=np.int64)
-    status = run_loads(prm, flg, st, ist, ev, evk, traj, strobe, info)
+    status, st, ist, _traj, _info = _run_rows(cfgs, init, 0)
     if status == ST_APART:  # pragma: no cover - see the module docstring
         return np.array([_one_load(cfg, x, init) for x in loads])
     if status in (K.ST_NEED_CONTACT, K.ST_NUMERICAL):
@@ -225,6 +213,26 @@ def omega_integrals(
     if reached_only:
         out[ist[:, K.I_STATUS] != K.ST_TIME] = np.nan
     return out
+
+
+def _run_rows(cfgs: Sequence[EngineConfig], init: InitialState, samples: int) -> tuple:
+    """:func:`run_loads` on one row per configuration of ``cfgs``, all from ``init``, with room
+    for ``samples`` trajectory samples a row; returns ``(status, st, ist, traj, info)``.
+
+    Each row starts from its own initial state: in contact the stick–slip state depends on the
+    rotation's parameters (``τ_L``, ``R_φ``, ``ψ``).
+    """
+    _, flg = _pack(cfgs[0])
+    prm = np.array([_pack(c)[0] for c in cfgs])
+    states = [initial_state(c, init) for c in cfgs]
+    st = np.array([s for s, _ in states])
+    ist = np.array([i for _, i in states])
+    traj = np.empty((len(cfgs), samples, K.TRAJ_COLS))
+    info = np.zeros((len(cfgs), K.N_OUT), dtype=np.int64)
+    ev = tuple(np.empty((K.EV_COLS, 1)))  # the kernel's event columns, one row
+    evk = np.empty(1, dtype=np.int8)
+    status = run_loads(prm, flg, st, ist, ev, evk, traj, np.empty((0, K.STROBE_COLS)), info)
+    return status, st, ist, traj, info
 
 
 #: Fields of :class:`~.driver.EngineConfig` the axial motion does not use (docs/model.md
@@ -267,18 +275,9 @@ def row_trajectories(
     """
     _check_rows(cfgs)
     cfg, init = cfgs[0], init or InitialState()
-    _, flg = _pack(cfg)
-    prm = np.array([_pack(c)[0] for c in cfgs])
-    states = [initial_state(c, init) for c in cfgs]  # in contact: stick or slip by row
-    st = np.array([s for s, _ in states])
-    ist = np.array([i for _, i in states])
     last = math.floor((min(cfg.traj_t1, cfg.t_end) - cfg.traj_t0) / cfg.traj_dt + 1e-9)
-    cap = max(0, last + 2 - int(ist[0, K.I_NEXT_SAMPLE]))  # every sample: never resumed here
-    traj = np.empty((len(cfgs), cap, K.TRAJ_COLS))
-    info = np.zeros((len(cfgs), K.N_OUT), dtype=np.int64)
-    ev = tuple(np.empty((K.EV_COLS, 1)))
-    evk = np.empty(1, dtype=np.int8)
-    status = run_loads(prm, flg, st, ist, ev, evk, traj, np.empty((0, K.STROBE_COLS)), info)
+    # room for every sample of the grid (a run starting later writes fewer): never resumed here
+    status, _st, _ist, traj, info = _run_rows(cfgs, init, max(0, last + 2))
     if status in (ST_APART, K.ST_NEED_CONTACT, K.ST_NUMERICAL):
         # rows parted, or row 0 failed (in contact its own segments can): each row alone, so
         # that a row fails exactly when its own run does (simulate_arrays raises)

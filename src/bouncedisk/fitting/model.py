@@ -182,25 +182,15 @@ def simulate_curve(
     return _simulated([theta], curve, member, e_sigma, seed, uniform_grid(curve))[0]
 
 
-def simulate_rows(
-    thetas: Sequence[dict[str, float]],
-    curve: MotorCurve,
-    member: int = 0,
-    e_sigma: float = 0.0,
-    seed: int = 0,
-) -> list[np.ndarray]:
-    """:func:`simulate_curve` of each of ``thetas``, bit for bit, from one axial run.
-
-    The points must share ``e`` and ``omega_s``: they differ in ``R_φ``, ``ψ`` and the speed
-    scale, none of which the axial motion uses (docs/model.md "Events"), so one impact search
-    serves them all (:func:`bouncedisk.engine.loads.row_trajectories`).
-    """
-    return _simulated(thetas, curve, member, e_sigma, seed, uniform_grid(curve))
-
-
 def _simulated(thetas: Sequence[dict[str, float]], curve: MotorCurve, member: int,
                e_sigma: float, seed: int, grid: np.ndarray) -> list[np.ndarray]:  # fmt: skip
-    """:func:`simulate_rows` on the curve's ``grid`` (one point: its own run)."""
+    """:func:`simulate_curve` of each of ``thetas`` on the curve's ``grid``, bit for bit.
+
+    Several points must share ``e``, ``omega_s`` and ``σ_e``: they differ in ``R_φ``, ``ψ`` and
+    the speed scale, none of which the axial motion uses (docs/model.md "Events"), so one impact
+    search serves them all (:func:`bouncedisk.engine.loads.row_trajectories`); one point is its
+    own run.
+    """
     cfgs = [_member_config(th, curve, member, e_sigma, seed, grid) for th in thetas]
     if len(cfgs) == 1:
         trajs = [simulate_arrays(cfgs[0], START).traj]
@@ -241,7 +231,7 @@ def rows_records(
 ) -> list[list]:
     """:func:`member_records` of points that share ``e``, ``omega_s`` and ``σ_e``, by member
     (``out[m][i]``: member ``members[m]`` at ``thetas[i]``), each member one axial run
-    (:func:`simulate_rows`)."""
+    (:func:`_simulated`)."""
     grid = uniform_grid(curve)
     e_sigma = restitution_noise(thetas[0], spec.e_sigma)
 
