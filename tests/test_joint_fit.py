@@ -631,22 +631,16 @@ def test_a_view_of_one_part_shares_the_evaluations(tmp_path):
 
 
 def _small_objective(data_dir, joint: bool = True):
-    """The joint objective of ``data_dir``'s data as :func:`~bouncedisk.fitting.fit_curve` builds
-    it (the provisional metric), 4 members, one thread; ``joint=False``: the run-up's alone."""
-    from bouncedisk.fitting import core
-    from bouncedisk.fitting.joint import load_part
-    from bouncedisk.fitting.model import EnsembleSpec, param_names
-    from bouncedisk.fitting.objective import Objective
+    """The joint objective of ``data_dir``'s data as :func:`~bouncedisk.fitting.fit_curve` poses
+    it (:func:`~bouncedisk.fitting.pose_fit`: the provisional metric, nothing evaluated), 4
+    members, one thread; ``joint=False``: the run-up's alone."""
+    from bouncedisk.fitting import pose_fit
 
-    s = TINY.for_runs(1)
-    runs, fitted, _ = core.prepare_runs(read_curve(data_dir / "run.csv"))
-    layout, records, target = core.data_layout(runs)
-    boot = core.bootstrap_stats(layout, records, s.bootstrap, s.seed)
-    spec = EnsembleSpec(e_sigma=0.03, seed=s.seed, cores=1)
-    part = load_part([read_load_curve(data_dir / "load.csv")], fitted, spec) if joint else None
-    return Objective(fitted, param_names(fitted), layout, target, spec, 4,
-                     cov=core.provisional_cov(target, boot), load=part,
-                     parts="both" if joint else "runup")  # fmt: skip
+    load = [read_load_curve(data_dir / "load.csv")] if joint else None
+    settings = dataclass_replace(TINY, e_sigma=0.03, cores=1)
+    obj = pose_fit(read_curve(data_dir / "run.csv"), settings, load=load).obj
+    assert not obj.cache and not obj.log and obj.members == 4  # posed, not searched
+    return obj
 
 
 def test_fresh_members_are_other_members_and_the_level_is_their_mean(data_dir):

@@ -13,7 +13,7 @@ physical conversion (docs/model.md "Physical conversion"), :mod:`.output` the fi
 """
 
 from .command import run_fit
-from .core import FitResult, FitSettings, fit_curve, prepare_curve
+from .core import FitResult, FitSettings, PosedFit, fit_curve, pose_fit, prepare_curve
 from .model import param_names, physical, simulate_curve, synthesize_curve, uniform_grid
 from .output import PUBLIC, fit_dataset, summary_text
 
@@ -21,10 +21,12 @@ __all__ = [
     "PUBLIC",
     "FitResult",
     "FitSettings",
+    "PosedFit",
     "fit_curve",
     "fit_dataset",
     "param_names",
     "physical",
+    "pose_fit",
     "prepare_curve",
     "run_fit",
     "simulate_curve",

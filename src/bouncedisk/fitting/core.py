@@ -289,16 +289,31 @@ def fit_basins(obj: Objective, members: int, thr: float) -> list[Basin]:
     return [basins[k], *basins[:k], *basins[k + 1 :]]
 
 
-def fit_curve(
+@dataclass(frozen=True)
+class PosedFit:
+    """The problem a fit searches (:func:`pose_fit`): its objective and what it was made from."""
+
+    obj: Objective  # the joint (or run-ups') objective, provisional covariance, nothing evaluated
+    settings: FitSettings  # ensemble sizes resolved for the runs (FitSettings.for_runs)
+    runs: list[MotorCurve]  # every run-up, as fitted
+    note: str  # the work bound applied (empty: none)
+    records: np.ndarray  # the run-ups on the fit's grid (runs, samples)
+    boot: np.ndarray  # block-bootstrap statistics of the data (resamples, statistics)
+
+
+def pose_fit(
     curve: MotorCurve | Sequence[MotorCurve],
     settings: FitSettings | None = None,
     progress: Callable[[str], None] | None = None,
     load: Sequence[LoadCurveData] | None = None,
-) -> FitResult:
-    """Fit the model to ``curve``, or jointly to several run-ups of one motor (module docstring,
-    :mod:`~bouncedisk.fitting.runs`) and, with ``load``, to its load curves too (:mod:`.loadpart`). Deterministic
-    for a given seed."""
-    start = _time.perf_counter()
+) -> PosedFit:
+    """The objective :func:`fit_curve` searches for ``curve`` (and ``load``), before any search.
+
+    The run-ups are checked and bounded (:func:`prepare_runs`), reduced to their statistics with
+    a provisional covariance from the block bootstrap (:func:`provisional_cov`), and joined to the
+    load curves' part (:func:`.joint.load_part`); ``settings.e_sigma = None`` adds ``e_sigma``
+    to the search coordinates (docs/fitting_method.md).
+    """
     runs, fitted, note = prepare_runs(curve)
     s = (settings or FitSettings()).for_runs(len(runs))
     if note and progress:
@@ -312,6 +327,23 @@ def fit_curve(
     obj = Objective(fitted, names, layout, target, spec, s.members,
                     cov=provisional_cov(target, boot), runs=len(runs), load=part,
                     parts="both" if part is not None else "runup")  # fmt: skip
+    return PosedFit(obj, s, runs, note, records, boot)
+
+
+def fit_curve(
+    curve: MotorCurve | Sequence[MotorCurve],
+    settings: FitSettings | None = None,
+    progress: Callable[[str], None] | None = None,
+    load: Sequence[LoadCurveData] | None = None,
+) -> FitResult:
+    """Fit the model to ``curve``, or jointly to several run-ups of one motor (module docstring,
+    :mod:`~bouncedisk.fitting.runs`) and, with ``load``, to its load curves too (:mod:`.loadpart`). Deterministic
+    for a given seed."""
+    start = _time.perf_counter()
+    posed = pose_fit(curve, settings, progress, load)
+    obj, s, part = posed.obj, posed.settings, posed.obj.load
+    runs, fitted, note, layout, spec = posed.runs, obj.curve, posed.note, obj.layout, obj.spec
+    records, target, boot = posed.records, obj.target, posed.boot
     best = search(obj, s.search_settings(), progress)
     thr = birge(best.chi2, obj.n_stats, len(obj.names))
     if progress is not None and thr > THRESHOLD:
