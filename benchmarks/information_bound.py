@@ -25,7 +25,6 @@ One JSON line per motor, then the count of motors whose bound allows ``R_phi`` t
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 import tempfile
@@ -33,7 +32,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from random_motors import SAMPLE_SEED, make_motor_data, motors
+from random_motors import SAMPLE_SEED, make_motor_data, run_slice, slice_arguments
 from record import write_record
 from scipy.stats import chi2 as chi2_dist
 
@@ -93,23 +92,10 @@ def below_two(rows: list[dict]) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--motors", type=int, default=16, help="size of the Sobol' sample")
-    ap.add_argument("--first", type=int, default=0, help="first motor of the slice run")
-    ap.add_argument("--count", type=int, default=None, help="motors run (default: all)")
-    ap.add_argument("--cores", type=int, default=2)
-    ap.add_argument("--json", help="append each row to this file (JSON lines)")
+    slice_arguments(ap)
     ap.add_argument("--record", action="store_true", help="write benchmarks/out/information.json")
     args = ap.parse_args()
-    sample = motors(args.motors)
-    stop = len(sample) if args.count is None else min(len(sample), args.first + args.count)
-    rows = []
-    for k in range(args.first, stop):
-        rows.append(bound(sample[k], k, args.cores))
-        line = json.dumps(rows[-1])
-        print(line, flush=True)
-        if args.json:
-            with open(args.json, "a") as stream:
-                stream.write(line + "\n")
+    rows = run_slice(args, lambda true, k: bound(true, k, args.cores))
     counts = below_two(rows)
     factors = [min(r["steps"][s]["r_phi_factor"] for s in map(str, STEPS)) for r in rows]
     print(f"R_phi bound below a factor 2 on {counts['either']} of {len(rows)} motors "

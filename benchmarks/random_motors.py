@@ -177,31 +177,43 @@ def rates(rows: list[dict]) -> dict:
     }  # fmt: skip
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def slice_arguments(ap: argparse.ArgumentParser) -> None:
+    """The options that pick a slice of the sample and where its rows go (shared by the
+    benchmarks that run motor by motor)."""
     ap.add_argument("--motors", type=int, default=16, help="size of the Sobol' sample")
     ap.add_argument("--first", type=int, default=0, help="first motor of the slice run")
     ap.add_argument("--count", type=int, default=None, help="motors run (default: all)")
+    ap.add_argument("--cores", type=int, default=2)
+    ap.add_argument("--json", help="append each row to this file (JSON lines)")
+
+
+def run_slice(args: argparse.Namespace, one) -> list[dict]:
+    """``one(true, k)`` for every motor ``k`` of the slice ``args`` picks, each row printed as a
+    JSON line (and appended to ``--json``) as soon as it is made."""
+    sample = motors(args.motors)
+    stop = len(sample) if args.count is None else min(len(sample), args.first + args.count)
+    rows = []
+    for k in range(args.first, stop):
+        rows.append(one(sample[k], k))
+        line = json.dumps(rows[-1])
+        print(line, flush=True)
+        if args.json:
+            with open(args.json, "a", encoding="utf-8") as f:
+                f.write(line + "\n")
+    return rows
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    slice_arguments(ap)
     ap.add_argument("--scan", type=int, default=192)
     ap.add_argument("--zoom", type=int, default=16)
     ap.add_argument("--loads", type=int, default=12)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--reading-noise", type=float, default=0.05, help="rad/s per reading")
-    ap.add_argument("--cores", type=int, default=2)
-    ap.add_argument("--json", help="append each row to this file (JSON lines)")
     ap.add_argument("--progress", action="store_true", help="the fits' progress on stderr")
     args = ap.parse_args()
-    sample = motors(args.motors)
-    stop = len(sample) if args.count is None else min(len(sample), args.first + args.count)
-    rows = []
-    for k in range(args.first, stop):
-        row = recover(sample[k], k, args)
-        rows.append(row)
-        line = json.dumps(row)
-        print(line, flush=True)
-        if args.json:
-            with open(args.json, "a", encoding="utf-8") as f:
-                f.write(line + "\n")
+    rows = run_slice(args, lambda true, k: recover(true, k, args))
     print(json.dumps(rates(rows)))
 
 
