@@ -20,15 +20,12 @@ from ..io.provenance import base_attrs, new_run_id
 from ..io.records import TrajColumn
 from ..model.engine_config import engine_config
 from ..model.errors import InputError
+from ..model.params import NATURAL_E_SIGMA
 from ..model.scene import Scene
 from ..run.cores import map_on_threads
 from ..run.runner import scene_attrs
 from . import observables as ob
 from .statistics import LEVEL, t_half_width
-
-#: Restitution noise of the band's members when the scene has none (docs/model.md: enough to
-#: sample the natural measure, physically meaningless).
-DEFAULT_E_SIGMA = 1e-9
 
 
 def _member_omega(scene: Scene, member: int, e_sigma: float, seed: int) -> np.ndarray:
@@ -41,7 +38,7 @@ def _member_omega(scene: Scene, member: int, e_sigma: float, seed: int) -> np.nd
 
 
 def member_speeds(
-    scene: Scene, members: int, seed: int, e_sigma: float = DEFAULT_E_SIGMA, cores: int = 1
+    scene: Scene, members: int, seed: int, e_sigma: float = NATURAL_E_SIGMA, cores: int = 1
 ) -> tuple[np.ndarray, np.ndarray]:
     """``Ω(t)`` of members ``0 … members−1`` on the scene's trajectory grid.
 
@@ -97,7 +94,7 @@ def omega_band(
     scene: Scene,
     members: int,
     seed: int = 0,
-    e_sigma: float = DEFAULT_E_SIGMA,
+    e_sigma: float = NATURAL_E_SIGMA,
     cores: int = 1,
 ) -> xr.Dataset:
     """The ensemble band of ``Ω(t)`` for ``scene`` (which must sample a trajectory, with torsion).

@@ -14,6 +14,11 @@ from dataclasses import asdict, dataclass, fields
 
 from .errors import InputError
 
+#: Restitution noise that samples the natural measure (docs/model.md "Long-run statistics of
+#: chaotic motion"), for ensembles whose scene states none: physically meaningless, a periodic
+#: attractor's members still coincide, a chaotic one's spread over the attractor.
+NATURAL_E_SIGMA = 1e-9
+
 
 def number(
     source: str, name: str, value: object, *, positive: bool = False, nonneg: bool = False

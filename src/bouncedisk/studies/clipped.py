@@ -9,12 +9,17 @@ import xarray as xr
 
 from ..io.provenance import base_attrs
 from ..io.records import TrajColumn
+from ..model.params import NATURAL_E_SIGMA
 from ..model.scene import Scene
 from ..run.runner import run_scene_arrays, scene_attrs
 
 
 def clipped_comparison(
-    scene: Scene, psis: list[float], members: int = 16, seed: int = 1, e_sigma: float = 1e-9
+    scene: Scene,
+    psis: list[float],
+    members: int = 16,
+    seed: int = 1,
+    e_sigma: float = NATURAL_E_SIGMA,
 ) -> xr.Dataset:
     """Rotor angular velocity ``omega_rotor(model, psi, time)`` of both contact models.
 

@@ -15,6 +15,7 @@ from pathlib import Path
 import pandas as pd
 
 from ..engine import EngineConfig, iterate
+from ..model.params import NATURAL_E_SIGMA
 
 
 # ------------------------------------------------------------------------------------ scaling
@@ -131,7 +132,7 @@ def scaling(
     effects = {
         "axial only": dict(torsion=False),
         "+ torsion": dict(torsion=True, r_phi=0.01),
-        "+ torsion + restitution noise": dict(torsion=True, r_phi=0.01, e_sigma=1e-9),
+        "+ torsion + restitution noise": dict(torsion=True, r_phi=0.01, e_sigma=NATURAL_E_SIGMA),
         "+ torsion + trajectory (dt = 0.01)": dict(torsion=True, r_phi=0.01, traj_dt=0.01),
     }
     for label, kw in effects.items():
