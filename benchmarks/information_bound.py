@@ -13,7 +13,10 @@ be missed: a width found here is a property of the data and the statistics, not 
 ``R_phi``'s factor is ``10 ** (2 * 1.96 * sd(log10 R_phi))``, the ratio of the linearized
 interval's ends (as ``random_motors.py`` reports it). The Jacobian is taken at two steps (1 % and
 3 % of each range) so that Monte-Carlo noise (chaotic motors) and curvature show as disagreement;
-noise in a Jacobian adds to ``JᵀJ``, so it can only make a bound narrower than the truth's.
+on average noise in a Jacobian adds to ``JᵀJ``, making a bound narrower, not wider. Where
+``e_sigma = 0`` and the motor is chaotic the members coincide, the covariance measured there holds
+the reading noise only, and ``chi2`` at the truth reads far above its degrees of freedom
+(docs/fitting_method.md, "What the data can pin").
 
 Run:  python benchmarks/information_bound.py [--motors 16] [--first 0] [--count N]
       [--cores 2] [--json OUT.jsonl] [--record]
