@@ -6,8 +6,9 @@ run-up and load curve), the objective the joint fit searches (``bouncedisk.fitti
 (as the search does at its best point) and the Jacobian of its whitened residuals is taken by
 central differences (``bouncedisk.fitting.uncertainty.jacobian``, common random numbers). The
 inverse of ``JᵀJ`` is the covariance of a linearized fit centred on the truth: its 95 %
-half-widths are what the profile intervals of a perfect search would be if the likelihood were
-quadratic there (the Cramér–Rao bound of the fit's statistics). No search is run, so no basin can
+half-widths are what profile intervals about the truth would be, at the plain threshold (no
+widening, no level on fresh members), if the likelihood with its covariance measured at the truth
+were quadratic there (the Cramér–Rao bound of the fit's statistics). No search is run, so no basin can
 be missed: a width found here is a property of the data and the statistics, not of the method.
 
 ``R_phi``'s factor is ``10 ** (2 * 1.96 * sd(log10 R_phi))``, the ratio of the linearized
@@ -22,7 +23,7 @@ Run:  python benchmarks/information_bound.py [--motors 16] [--first 0] [--count 
       [--cores 2] [--json OUT.jsonl] [--record]
 
 One JSON line per motor, then the count of motors whose bound allows ``R_phi`` to a factor below
-2 at either step (the random-motor target asks for 80 %).
+2 at both steps (the random-motor target asks for 80 %). ``--record`` needs the whole sample.
 """
 
 from __future__ import annotations
@@ -79,47 +80,59 @@ def bound(true: dict, k: int, cores: int) -> dict:
             "half_width": half,
             "r_phi_factor": round(10.0 ** (2.0 * half["log10_r_phi"]), 3),
             # sd of the eigen-combinations as fractions of the ranges, best pinned first
-            "combination_sd": [round(float(v), 4) for v in comb_sd],
+            "combination_sd": [float(f"{v:.3g}") for v in comb_sd],
         }
     row["seconds"] = round(time.perf_counter() - start, 1)
     return row
 
 
 def below_two(rows: list[dict]) -> dict:
-    """Motors whose bound allows ``R_phi`` to a factor below 2, at each step and at either."""
+    """Motors whose bound allows ``R_phi`` to a factor below 2: at each step alone, and at both
+    (the larger of the two factors, the cautious reading: noise narrows a bound)."""
     out = {s: int(sum(r["steps"][s]["r_phi_factor"] < 2.0 for r in rows)) for s in map(str, STEPS)}
-    out["either"] = int(sum(min(r["steps"][s]["r_phi_factor"] for s in map(str, STEPS)) < 2.0
-                            for r in rows))  # fmt: skip
+    out["both"] = int(sum(larger_factor(r) < 2.0 for r in rows))
     return out
+
+
+def larger_factor(row: dict) -> float:
+    """The larger of a motor's ``R_phi`` factors at the two steps."""
+    return max(row["steps"][str(s)]["r_phi_factor"] for s in STEPS)
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     slice_arguments(ap)
-    ap.add_argument("--record", action="store_true", help="write benchmarks/out/information.json")
+    ap.add_argument("--record", action="store_true",
+                    help="write benchmarks/out/information.json (the whole sample only)")  # fmt: skip
     args = ap.parse_args()
+    if args.record and (args.first != 0 or args.count is not None):
+        ap.exit(2, "information_bound.py: --record: the record is of the whole sample; drop "
+                   "--first and --count\n")  # fmt: skip
     rows = run_slice(args, lambda true, k: bound(true, k, args.cores))
     counts = below_two(rows)
-    factors = [min(r["steps"][s]["r_phi_factor"] for s in map(str, STEPS)) for r in rows]
-    print(f"R_phi bound below a factor 2 on {counts['either']} of {len(rows)} motors "
-          f"(steps {counts}); median factor {float(np.median(factors)):.3g}", file=sys.stderr)  # fmt: skip
+    factors = [larger_factor(r) for r in rows]
+    print(f"R_phi bound below a factor 2 on {counts['both']} of {len(rows)} motors at both steps "
+          f"({counts}); median factor {float(np.median(factors)):.3g}", file=sys.stderr)  # fmt: skip
     if args.record:
-        write_record(
-            "information",
-            "Random motors: what the data can pin at the truth",
-            record_rows(rows, counts, factors),
-        )
+        write_record("information", "Random motors: what the data can pin at the truth",
+                     record_rows(rows, counts, factors))  # fmt: skip
 
 
 def record_rows(rows: list[dict], counts: dict, factors: list[float]) -> list[tuple[str, str]]:
     """The record's rows: the summary, then one per motor."""
     misfit = [r["motor"] for r in rows if r["chi2_truth"] > chi2_dist.ppf(0.999, r["n"])]
+    zero = [r["motor"] for r in rows if r["true"]["e_sigma"] == 0.0]
     out = [(f"motors (seed {SAMPLE_SEED}) whose linearized bound at the truth allows R_phi to a "
-            "factor below 2 (the smaller of the two steps)",
-            f"{counts['either']} of {len(rows)}; median factor {float(np.median(factors)):.3g}"),
-           ("motors whose generating point does not reproduce its own data under the likelihood of the "
-            "fit (chi2 at the truth above the 99.9 % point)",
-            ", ".join(map(str, misfit)) or "none")]  # fmt: skip
+            "factor below 2",
+            f"{counts['both']} of {len(rows)} at both steps (median of the larger factor "
+            f"{float(np.median(factors)):.3g}); {counts[str(STEPS[0])]} at the 1 % step alone, "
+            f"{counts[str(STEPS[1])]} at the 3 % step alone"),
+           ("motors whose generating point does not reproduce its own data under the likelihood "
+            "with its covariance measured there (chi2 at the truth above the 99.9 % point)",
+            ", ".join(map(str, misfit)) or "none"),
+           ("motors at e_sigma = 0, where a chaotic motor has members that coincide and a "
+            "covariance of the reading noise only: their widths are not a bound",
+            ", ".join(map(str, zero)) or "none")]  # fmt: skip
     for r in rows:
         h = r["steps"][str(STEPS[0])]["half_width"]
         f = [r["steps"][str(s)]["r_phi_factor"] for s in STEPS]

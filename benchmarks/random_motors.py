@@ -45,6 +45,7 @@ import math
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -183,11 +184,11 @@ def slice_arguments(ap: argparse.ArgumentParser) -> None:
     ap.add_argument("--motors", type=int, default=16, help="size of the Sobol' sample")
     ap.add_argument("--first", type=int, default=0, help="first motor of the slice run")
     ap.add_argument("--count", type=int, default=None, help="motors run (default: all)")
-    ap.add_argument("--cores", type=int, default=2)
+    ap.add_argument("--cores", type=int, default=2, help="threads for the members (default: 2)")
     ap.add_argument("--json", help="append each row to this file (JSON lines)")
 
 
-def run_slice(args: argparse.Namespace, one) -> list[dict]:
+def run_slice(args: argparse.Namespace, one: Callable[[dict, int], dict]) -> list[dict]:
     """``one(true, k)`` for every motor ``k`` of the slice ``args`` picks, each row printed as a
     JSON line (and appended to ``--json``) as soon as it is made."""
     sample = motors(args.motors)

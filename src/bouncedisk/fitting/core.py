@@ -293,12 +293,18 @@ def fit_basins(obj: Objective, members: int, thr: float) -> list[Basin]:
 class PosedFit:
     """The problem a fit searches (:func:`pose_fit`): its objective and what it was made from."""
 
-    obj: Objective  # the joint (or run-ups') objective, provisional covariance, nothing evaluated
-    settings: FitSettings  # ensemble sizes resolved for the runs (FitSettings.for_runs)
-    runs: list[MotorCurve]  # every run-up, as fitted
-    note: str  # the work bound applied (empty: none)
-    records: np.ndarray  # the run-ups on the fit's grid (runs, samples)
-    boot: np.ndarray  # block-bootstrap statistics of the data (resamples, statistics)
+    #: The joint (or run-ups') objective: provisional covariance, nothing evaluated.
+    obj: Objective
+    #: The settings with the ensemble sizes resolved for the runs (:meth:`FitSettings.for_runs`).
+    settings: FitSettings
+    #: Every run-up, as fitted.
+    runs: list[MotorCurve]
+    #: The work bound applied (empty: none).
+    note: str
+    #: The run-ups on the fit's grid ``(runs, samples)``.
+    records: np.ndarray
+    #: Block-bootstrap statistics of the data ``(resamples, statistics)``.
+    boot: np.ndarray
 
 
 def pose_fit(

@@ -567,7 +567,8 @@ def synthetic_load_curve(spec: dict, spec_path: str = "") -> tuple:
         {
             "torque_Nm": loads,
             "speed_rad_s": speeds.mean(axis=1),
-            "speed_sd_rad_s": speeds.std(axis=1, ddof=1),
+            # one reading per load has no spread: NaN, said so (not numpy's warning)
+            "speed_sd_rad_s": speeds.std(axis=1, ddof=1) if speeds.shape[1] > 1 else np.nan,
         }
     )
     sidecar = {
