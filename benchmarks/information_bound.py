@@ -36,7 +36,16 @@ import time
 from pathlib import Path
 
 import numpy as np
-from random_motors import SAMPLE_SEED, make_motor_data, run_slice, slice_arguments
+from random_motors import (
+    FIT_SEED,
+    LOADS,
+    READING_NOISE,
+    REPEATS,
+    SAMPLE_SEED,
+    make_motor_data,
+    run_slice,
+    slice_arguments,
+)
 from record import write_record
 from scipy.stats import chi2 as chi2_dist
 
@@ -63,8 +72,8 @@ def bound(true: dict, k: int, cores: int) -> dict:
     """The linearized 95 % half-widths at motor ``k``'s truth, at each of :data:`STEPS`."""
     start = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
-        run, load = make_motor_data(Path(tmp), true, k, loads=12, repeats=5, reading_noise=0.05)
-        settings = FitSettings(seed=1, cores=cores, e_sigma=None)
+        run, load = make_motor_data(Path(tmp), true, k, LOADS, REPEATS, READING_NOISE)
+        settings = FitSettings(seed=FIT_SEED, cores=cores, e_sigma=None)
         posed = pose_fit(read_curve(run), settings, load=[read_load_curve(load)])
     obj, members = posed.obj, posed.settings.members
     x = truth_x(obj.names, true)

@@ -64,6 +64,10 @@ WINDOW = (0.03, 0.06)
 #: The sample's coordinates, in the order of the Sobol' dimensions.
 AXES = ("e", "log10_r_phi", "psi", "omega_s", "e_sigma")
 SAMPLE_SEED = 20261125
+#: Each motor's load curve by default: loads, readings per load, reading noise (rad/s).
+LOADS, REPEATS, READING_NOISE = 12, 5, 0.05
+#: The seed of every fit of the sample.
+FIT_SEED = 1
 
 
 def motors(n: int, seed: int = SAMPLE_SEED) -> list[dict[str, float]]:
@@ -139,7 +143,7 @@ def recover(true: dict, k: int, args) -> dict:
         run, load = make_motor_data(Path(tmp), true, k, args.loads, args.repeats,
                                     args.reading_noise)  # fmt: skip
         made = time.perf_counter() - start
-        settings = FitSettings(seed=1, scan=args.scan, zoom=args.zoom, cores=args.cores,
+        settings = FitSettings(seed=FIT_SEED, scan=args.scan, zoom=args.zoom, cores=args.cores,
                                e_sigma=None)  # fmt: skip
         progress = (
             (lambda msg: print(f"motor {k}: {msg}", file=sys.stderr, flush=True))
@@ -209,9 +213,9 @@ def main() -> None:
     slice_arguments(ap)
     ap.add_argument("--scan", type=int, default=192)
     ap.add_argument("--zoom", type=int, default=16)
-    ap.add_argument("--loads", type=int, default=12)
-    ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--reading-noise", type=float, default=0.05, help="rad/s per reading")
+    ap.add_argument("--loads", type=int, default=LOADS)
+    ap.add_argument("--repeats", type=int, default=REPEATS)
+    ap.add_argument("--reading-noise", type=float, default=READING_NOISE, help="rad/s per reading")
     ap.add_argument("--progress", action="store_true", help="the fits' progress on stderr")
     args = ap.parse_args()
     rows = run_slice(args, lambda true, k: recover(true, k, args))
