@@ -12,7 +12,8 @@ spread over every parameter's range; the pipeline's own measurement is the shard
 cache and is not timed.
 
 ``--by-r`` measures instead what a point costs as a function of ``R_phi``: the first
-:data:`BY_R_POINTS` points of the size's sample, each evaluated at every ``log10 R_phi`` of
+:data:`BY_R_POINTS` base points of the size's sample (Saltelli's ``A`` rows, every ``D + 2``-th
+row, so no two share coordinates), each evaluated at every ``log10 R_phi`` of
 :data:`BY_R_GRID` (the other coordinates its own), CPU per point; then the mean over a
 log-uniform ``R_phi`` on the study's range and on its upper decade (trapezoid rule on the grid).
 A run lasts ``(discard + duration)/R_phi``, so the small ``R_phi`` dominate the study's cost.
@@ -63,9 +64,9 @@ def log_uniform_mean(cost: list[float], lo: float, hi: float) -> float:
 def by_r(model: sens.MotorModel, st, x: np.ndarray, record: bool) -> None:
     """The ``--by-r`` measurement (module docstring), printed and with ``record`` recorded."""
     names = list(st.ranges)
-    cost = cost_by_r(model, x[:BY_R_POINTS], names)
+    cost = cost_by_r(model, x[:: len(names) + 2][:BY_R_POINTS], names)
     lo, hi = st.ranges["log10_r_phi"]
-    rows = [(f"CPU per point at log10 R_phi = {lr:g} (mean of {BY_R_POINTS} points)",
+    rows = [(f"CPU per point at log10 R_phi = {lr:g} (mean of {BY_R_POINTS} base points)",
              f"{1e3 * c:.1f} ms") for lr, c in zip(BY_R_GRID, cost, strict=True)]  # fmt: skip
     whole, upper = log_uniform_mean(cost, lo, hi), log_uniform_mean(cost, hi - 1.0, hi)
     rows.append((f"mean over log10 R_phi uniform on [{lo:g}, {hi:g}], the study range",
