@@ -175,7 +175,10 @@ class LoadPart:
         have = self.cache.get(key)
         if have is None or len(have) < k:
             start = 0 if have is None else len(have)
-            tasks = [(m, d) for m in range(start, k) for d in self.curves]
+            # at sigma_e = 0 every member reads the same, bit for bit (their streams draw only
+            # the restitution noise): one member's curves, repeated
+            same = restitution_noise(theta, self.e_sigma) == 0.0
+            tasks = [(m, d) for m in range(start, start + 1 if same else k) for d in self.curves]
 
             def one(task):
                 return curve_readings(theta, task[1], task[0], self.e_sigma, self.seed)
@@ -197,7 +200,8 @@ class LoadPart:
                     done(len(flat))
             else:
                 flat = thread_map(one, tasks, self.cores, done)
-            new = np.concatenate(flat).reshape(k - start, self.n)
+            new = np.concatenate(flat).reshape(-1, self.n)
+            new = np.repeat(new, k - start, axis=0) if same else new
             have = new if have is None else np.vstack([have, new])
             self.cache[key] = have
         return have[:k]

@@ -231,13 +231,21 @@ def rows_records(
 ) -> list[list]:
     """:func:`member_records` of points that share ``e``, ``omega_s`` and ``σ_e``, by member
     (``out[m][i]``: member ``members[m]`` at ``thetas[i]``), each member one axial run
-    (:func:`_simulated`)."""
+    (:func:`_simulated`).
+
+    At ``σ_e = 0`` (the deterministic limit) the members' runs are the same, bit for bit: a
+    member's stream only draws the restitution noise (docs/model.md, "Long-run statistics of chaotic motion"), and
+    its measurement noise is added after the run. So one run serves every member there.
+    """
     grid = uniform_grid(curve)
     e_sigma = restitution_noise(thetas[0], spec.e_sigma)
+    shared = _simulated(thetas, curve, members[0], 0.0, spec.seed, grid) if e_sigma == 0.0 else None
 
     def one(m: int) -> list:
         noise = measurement_noise(len(grid), curve.sigma, spec.seed, m)
-        oms = _simulated(thetas, curve, m, e_sigma, spec.seed, grid)
+        oms = (
+            shared if shared is not None else _simulated(thetas, curve, m, e_sigma, spec.seed, grid)
+        )
         return [reduce(om + noise) if reduce is not None else om + noise for om in oms]
 
     if spec.cores <= 1 or len(members) == 1:

@@ -16,8 +16,10 @@
    shrinking patches in ``(e, ψ, omega_s)`` from the best run-up candidates and a walk along the
    valley they reach (:func:`joint_refine`, :func:`valley_walk`).
 3. :func:`scipy.optimize.least_squares` on the whitened residuals, in coordinates scaled to the
-   search box, from each of the best few re-ranked points (multi-start); then ``C`` is measured
-   again at the new best point and the search polished.
+   search box, from each of the best few re-ranked points (multi-start); with ``e_sigma`` fitted,
+   a sweep of it (:func:`noise_sweep`) and, for a joint fit, the walk along the deterministic
+   limit's valley (:mod:`.limit_walk`); then ``C`` is measured again at the new best point and
+   the search polished.
 
 Every evaluation is logged, and the result is the best logged point at the final ensemble size
 under the final metric: the search never returns a point worse than one it evaluated.
@@ -40,6 +42,7 @@ from scipy.stats import qmc
 
 from .basins import rank_key
 from .basins import ranked as rank_order
+from .limit_walk import WALK_GAIN, deterministic_walk
 from .loadpart import LOAD_PILOT
 from .objective import Evaluation, Objective, snap
 from .statistics import regularized_cov, stat_floor
@@ -680,6 +683,10 @@ def search(
     nfev = s.local_nfev if obj.load is None else max(4, s.local_nfev // 2)
     best = local_stage(obj, starts, s.members, nfev, progress)
     best = noise_sweep(obj, best, s.members, progress)
+    if obj.load is not None and ("e_sigma" in obj.names or obj.spec.e_sigma == 0.0):
+        # a periodic motor's valley at e_sigma = 0 is narrower than the scan sees (limit_walk)
+        walked = deterministic_walk(obj, best, s.members, progress)
+        best = walked if walked.chi2 < best.chi2 - WALK_GAIN else best
     obj.set_cov(measure_cov(obj, best.x, s.pilot_members))
     best = local_stage(obj, [best.x], s.members, max(8, s.local_nfev // 3), progress)
     return best
