@@ -2,7 +2,7 @@
 
 Without restitution noise a periodic motor's load curve is a smooth, exact function of the
 parameters, and the readings of a lab's few repeated runs pin it very tightly: on the random
-motor 7 of ``benchmarks/random_motors.py`` (``σ_e = 0``) the joint ``χ²`` rises from 3 to about
+motor 7 of ``benchmarks/random_motors.py`` (``σ_e = 0``) the joint ``χ²`` rises from 5.5 to about
 50 when ``e`` moves by 0.002 or ``omega_s`` by 0.001 with ``(ψ, R_φ)`` refitted, narrower than any
 scan's spacing. The scan runs at the stated noise, where such a valley is not seen, and the
 local search stops in a neighbouring one. But along ``e`` the valley floor descends smoothly to
@@ -18,8 +18,11 @@ run serves an ensemble (:func:`.model.rows_records`) and a step costs a few seco
 walk: 99 s, from ``χ²`` 48.7 to 2.0). Every point is logged: the search's result is the best
 logged point, never worse than before.
 
-A chaotic motor at ``σ_e = 0`` has no such valley: a change of ``2·10⁻⁴`` in ``e`` moves its
-readings by hundreds of their standard deviations (motor 15), so the walk stops at once there.
+The refit frees every coordinate but ``e`` and ``σ_e``: ``(R_φ, ψ, omega_s)``, and the speed scale
+where ``Φ0`` is unknown. A chaotic motor at ``σ_e = 0`` has no such valley: a change of ``2·10⁻⁴``
+in ``e`` moves its readings by hundreds of their standard deviations (motor 15), so the walk
+finds nothing there (it is skipped where ``σ_e = 0`` reads over :data:`WORTH` times the best
+``χ²``, as on motor 15, and otherwise ends after a few halvings).
 """
 
 from __future__ import annotations
@@ -40,7 +43,7 @@ WALK_GAIN = 3.84
 WORTH = 2.0
 #: The walk's first step in ``e`` (and its longest), as a fraction of the range of ``e``.
 STEP = 0.0117
-#: Steps each way at most (a direction's walk is at most this long, whatever its halvings).
+#: Passes of a direction's loop at most (steps tried and halvings together).
 MAX_STEPS = 24
 #: The shortest step, as a fraction of :data:`STEP` (a direction ends below it).
 SHORTEST = 0.25
@@ -50,8 +53,9 @@ PAST = 1
 NFEV = 10
 #: Least-squares evaluations of the last refit, ``e`` free, from the walk's best point.
 FINAL_NFEV = 30
-#: Relative step of the refit's forward differences, in the unit box (the valley is about
-#: ``2·10⁻⁴`` of the range of ``omega_s`` across: finer than the local search's ``2·10⁻³``).
+#: Relative step of the refit's forward differences (scipy's ``diff_step``: the step in the unit
+#: box is this times the coordinate's position there). The valley is about ``2·10⁻⁴`` of the range
+#: of ``omega_s`` across: far finer than the local search's ``2·10⁻³``.
 DIFF_STEP = 1e-4
 
 
@@ -69,6 +73,8 @@ def _refit(
         y[free] = obj.lo[free] + u * span
         return y
 
+    if not np.isfinite(obj.residuals(y0, members)).all():
+        return y0, obj.chi2(y0, members)  # a run that did not reach its window: no refit from it
     u0 = np.clip((y0[free] - obj.lo[free]) / span, 0.0, 1.0)
     res = least_squares(lambda u: obj.residuals(at(u), members), u0, bounds=(0.0, 1.0),
                         diff_step=DIFF_STEP, max_nfev=nfev)  # fmt: skip
@@ -97,7 +103,8 @@ def _one_way(
     (:data:`NFEV` evaluations rarely converge where the valley bends). The walk goes on past
     :data:`PAST` such steps in a row (the floor has bumps: on motor 7 one of 10 units 0.01 before
     the truth), then returns to its best point with the step halved; it ends when the step is
-    below :data:`SHORTEST` of :data:`STEP`, or after :data:`MAX_STEPS` steps.
+    below :data:`SHORTEST` of :data:`STEP`, when the next step leaves the range of ``e``, or
+    after :data:`MAX_STEPS` passes.
     """
     ie = obj.names.index("e")
     h = STEP * obj.span[ie]

@@ -234,12 +234,14 @@ def rows_records(
     (:func:`_simulated`).
 
     At ``σ_e = 0`` (the deterministic limit) the members' runs are the same, bit for bit: a
-    member's stream only draws the restitution noise (docs/model.md, "Long-run statistics of chaotic motion"), and
-    its measurement noise is added after the run. So one run serves every member there.
+    member's stream only draws the restitution noise (docs/model.md, "Long-run statistics of
+    chaotic motion"), and its measurement noise is added after the run. So one run serves every member there.
     """
     grid = uniform_grid(curve)
     e_sigma = restitution_noise(thetas[0], spec.e_sigma)
-    shared = _simulated(thetas, curve, members[0], 0.0, spec.seed, grid) if e_sigma == 0.0 else None
+    shared = None
+    if e_sigma == 0.0 and len(members) > 0:
+        shared = _simulated(thetas, curve, members[0], 0.0, spec.seed, grid)
 
     def one(m: int) -> list:
         noise = measurement_noise(len(grid), curve.sigma, spec.seed, m)

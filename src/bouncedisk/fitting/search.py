@@ -17,9 +17,10 @@
    valley they reach (:func:`joint_refine`, :func:`valley_walk`).
 3. :func:`scipy.optimize.least_squares` on the whitened residuals, in coordinates scaled to the
    search box, from each of the best few re-ranked points (multi-start); with ``e_sigma`` fitted,
-   a sweep of it (:func:`noise_sweep`) and, for a joint fit, the walk along the deterministic
-   limit's valley (:mod:`.limit_walk`); then ``C`` is measured again at the new best point and
-   the search polished.
+   a sweep of it (:func:`noise_sweep`); for a joint fit with ``e_sigma`` fitted or stated 0, the
+   walk along the deterministic limit's valley (:mod:`.limit_walk`); then ``C`` is measured
+   again at the best point (the walk's only if it gained more than
+   :data:`.limit_walk.WALK_GAIN`) and the search polished.
 
 Every evaluation is logged, and the result is the best logged point at the final ensemble size
 under the final metric: the search never returns a point worse than one it evaluated.
