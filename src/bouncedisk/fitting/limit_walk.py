@@ -21,8 +21,8 @@ logged point, never worse than before.
 The refit frees every coordinate but ``e`` and ``σ_e``: ``(R_φ, ψ, omega_s)``, and the speed scale
 where ``Φ0`` is unknown. A chaotic motor at ``σ_e = 0`` has no such valley: a change of ``2·10⁻⁴``
 in ``e`` moves its readings by hundreds of their standard deviations (motor 15), so the walk
-finds nothing there (it is skipped where ``σ_e = 0`` reads over :data:`WORTH` times the best
-``χ²``, as on motor 15, and otherwise ends after a few halvings).
+finds nothing there (skipped by the :data:`WORTH` rule, as on motor 15, or ended after a few
+halvings).
 """
 
 from __future__ import annotations

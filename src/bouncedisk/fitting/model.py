@@ -235,7 +235,8 @@ def rows_records(
 
     At ``σ_e = 0`` (the deterministic limit) the members' runs are the same, bit for bit: a
     member's stream only draws the restitution noise (docs/model.md, "Long-run statistics of
-    chaotic motion"), and its measurement noise is added after the run. So one run serves every member there.
+    chaotic motion"), and its measurement noise is added after the run. So one run serves every
+    member there.
     """
     grid = uniform_grid(curve)
     e_sigma = restitution_noise(thetas[0], spec.e_sigma)
