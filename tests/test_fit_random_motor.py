@@ -43,6 +43,27 @@ def test_the_sample_is_seeded_spans_the_box_and_has_deterministic_motors():
     assert es[0] < 0.15 and es[-1] > 0.85
 
 
+def test_the_coverage_carries_its_exact_interval_and_the_targets_own_chance():
+    """The pooled coverage of the table: Clopper–Pearson's interval (exact: the binomial tail
+    at each end is 2.5 %), and the chance that exact 95 % intervals hold on 15 or 16 of 16
+    motors, the binomial sum."""
+    from scipy.stats import binom
+
+    rm = _bench()
+    c = rm.coverage(74, 16, 5)
+    assert (c["held"], c["intervals"], c["rate"]) == (74, 80, 0.925)
+    lo, hi = c["ci95"]
+    assert binom.sf(73, 80, lo) == pytest.approx(0.025, abs=2e-3)  # P(X >= 74 | lo)
+    assert binom.cdf(74, 80, hi) == pytest.approx(0.025, abs=2e-3)  # P(X <= 74 | hi)
+    assert c["exact_intervals_meet_one_target"] == round(0.95**16 + 16 * 0.05 * 0.95**15, 3)
+    assert (
+        rm.rates([{"adequate": True, "holds": {"e": True, "psi": False}, "r_phi_factor": 1.5}])[
+            "coverage"
+        ]["held"]
+        == 1
+    )
+
+
 @pytest.mark.slow  # one small joint fit with five coordinates
 @pytest.mark.xfail(
     strict=True,

@@ -549,6 +549,28 @@ def test_a_fitted_restitution_noise_is_the_points_own_and_zero_is_deterministic(
     assert not np.array_equal(*(lp.curve_readings(theta, data, m, 0.03, 17) for m in (0, 1)))
 
 
+def test_a_fitted_noise_reads_each_candidate_at_every_level_and_a_stated_one_at_none():
+    """:func:`search.at_noise_levels`: with ``e_sigma`` fitted, each run-up candidate again at
+    every level of :data:`search.CANDIDATE_NOISE`, the other coordinates as they were (a basin
+    whose own noise is far from the scan's is otherwise never a joint candidate); with the noise
+    stated, no copy."""
+    from types import SimpleNamespace
+
+    from bouncedisk.fitting import search as se
+
+    assert se.CANDIDATE_NOISE == (0.01, 0.06, 0.09)
+    names = ["e", "log10_r_phi", "psi", "omega_s", "e_sigma"]
+    xs = [np.array([0.5, -2.0, 0.3, 1.7, 0.03]), np.array([0.2, -2.5, -1.0, 2.4, 0.03])]
+    out = se.at_noise_levels(SimpleNamespace(names=names), xs)
+    assert len(out) == len(xs) * len(se.CANDIDATE_NOISE)
+    for k, y in enumerate(out):
+        x = xs[k // len(se.CANDIDATE_NOISE)]
+        np.testing.assert_array_equal(y[:4], x[:4])
+        assert y[4] == se.CANDIDATE_NOISE[k % len(se.CANDIDATE_NOISE)]
+    assert xs[0][4] == 0.03  # the candidates themselves unchanged
+    assert se.at_noise_levels(SimpleNamespace(names=names[:4]), [x[:4] for x in xs]) == []
+
+
 def read_curve_like():
     """A 0.02 s curve of the test motor (for the grid and scales only)."""
     from bouncedisk.io.runup_curves import MotorCurve

@@ -11,7 +11,7 @@ from test_joint_fit import _fake_load_data, read_curve_like
 from bouncedisk.fitting import limit_walk as lw
 from bouncedisk.fitting import loadpart as lp
 from bouncedisk.fitting import model as fm
-from bouncedisk.fitting.objective import Evaluation
+from bouncedisk.fitting.objective import Evaluation, Objective
 
 THETA = {"e": 0.55, "log10_r_phi": math.log10(0.002), "psi": 0.4, "omega_s": 1.7, "e_sigma": 0.0}
 
@@ -58,6 +58,7 @@ class _Valley:
     hi = np.array([0.95, -1.0, math.pi, 4.0, 0.1])
     span = hi - lo
     WIDTH = 2e-4
+    to_unit, from_unit = Objective.to_unit, Objective.from_unit  # the unit box: lo, span only
 
     def __init__(self, noise: float = 0.0):
         self.log: list[Evaluation] = []

@@ -35,9 +35,11 @@ from scipy.optimize import least_squares
 from .objective import Evaluation, Objective
 
 #: The least lowering of ``χ²`` for which the search moves to the walk's best point and measures
-#: the model's covariance there (the plain threshold ``χ²₁(0.95)``). At ``σ_e = 0`` a chaotic
-#: motor's members coincide, so a covariance measured there holds the reading noise only: on
-#: motor 9 (``σ_e`` 0.073) a walk that lowered ``χ²`` by 0.07 made the fit read 321 on 23.
+#: the model's covariance there (the plain threshold ``χ²₁(0.95)``): a gain within the noise of
+#: ``χ²`` is no reason to move the metric. (Before the covariance was measured at
+#: ``σ_e ≥ 10⁻⁸``, :func:`.search.metric_point`, a chaotic motor's coinciding members at
+#: ``σ_e = 0`` made it hold the reading noise only: on motor 9 a walk that lowered ``χ²`` by
+#: 0.07 made the fit read 321 on 23.)
 WALK_GAIN = 3.84
 #: The walk runs where the deterministic limit's ``χ²`` is at most this many times the best's.
 WORTH = 2.0
@@ -66,19 +68,12 @@ def _refit(
     """Every coordinate but ``held`` refitted from ``y0`` by least squares (at most ``nfev``
     evaluations); the end point and its ``χ²`` (logged)."""
     free = [k for k, n in enumerate(obj.names) if n not in held]
-    span = obj.span[free]
-
-    def at(u: np.ndarray) -> np.ndarray:
-        y = y0.copy()
-        y[free] = obj.lo[free] + u * span
-        return y
-
     if not np.isfinite(obj.residuals(y0, members)).all():
         return y0, obj.chi2(y0, members)  # a run that did not reach its window: no refit from it
-    u0 = np.clip((y0[free] - obj.lo[free]) / span, 0.0, 1.0)
-    res = least_squares(lambda u: obj.residuals(at(u), members), u0, bounds=(0.0, 1.0),
-                        diff_step=DIFF_STEP, max_nfev=nfev)  # fmt: skip
-    y = at(res.x)
+    res = least_squares(lambda u: obj.residuals(obj.from_unit(u, y0, free), members),
+                        obj.to_unit(y0, free), bounds=(0.0, 1.0), diff_step=DIFF_STEP,
+                        max_nfev=nfev)  # fmt: skip
+    y = obj.from_unit(res.x, y0, free)
     return y, obj.chi2(y, members)
 
 

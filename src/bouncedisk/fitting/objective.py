@@ -140,6 +140,20 @@ class Objective:
         """Width of the search range of every coordinate."""
         return self.hi - self.lo
 
+    def to_unit(self, x: np.ndarray, free: list[int] | slice = slice(None)) -> np.ndarray:
+        """The coordinates ``free`` of ``x`` in the unit box of their search ranges, clipped to
+        it (the box the least-squares stages search in)."""
+        return np.clip((np.asarray(x, float)[free] - self.lo[free]) / self.span[free], 0.0, 1.0)
+
+    def from_unit(
+        self, u: np.ndarray, start: np.ndarray, free: list[int] | slice = slice(None)
+    ) -> np.ndarray:
+        """A copy of ``start`` with its coordinates ``free`` at the unit-box position ``u``
+        (the inverse of :meth:`to_unit`)."""
+        y = np.array(start, float)
+        y[free] = self.lo[free] + u * self.span[free]
+        return y
+
     def set_cov(self, cov: np.ndarray) -> None:
         """Use the across-member covariance ``cov`` (already regularized) from now on."""
         self.cov = np.asarray(cov, float)

@@ -45,7 +45,7 @@ from .basins import rank_key
 from .basins import ranked as rank_order
 from .limit_walk import WALK_GAIN, deterministic_walk
 from .loadpart import LOAD_PILOT
-from .objective import Evaluation, Objective, snap
+from .objective import SNAP_DECIMALS, Evaluation, Objective, snap
 from .statistics import regularized_cov, stat_floor
 
 #: Allowed sizes of the scan and of the zoom around each centre (``bouncedisk fit --scan/--zoom``,
@@ -168,13 +168,10 @@ def polish(
     on each point's own covariance (:meth:`.objective.Objective.own_residuals`); the end point's
     ``χ²`` (held metric), logged."""
     free = [k for k, n in enumerate(obj.names) if n in ("psi", *MATCHED)]
-    span = obj.span[free]
     read = obj.own_residuals if own else obj.residuals
 
     def at(u):
-        y = start.copy()
-        y[free] = obj.lo[free] + u * span
-        return y
+        return obj.from_unit(u, start, free)
 
     def fun(u):
         return read(at(u), members)
@@ -192,11 +189,9 @@ def polish(
         obj.prefetch([at(u) for u in us], members)
         return [fun(u) for u in us]
 
-    u0 = np.clip((start[free] - obj.lo[free]) / span, 0.0, 1.0)
-    res = least_squares(step, u0, bounds=(0.0, 1.0), diff_step=DIFF_STEP, max_nfev=nfev,
-                        workers=differences)  # fmt: skip
-    y = start.copy()
-    y[free] = obj.lo[free] + res.x * span
+    res = least_squares(step, obj.to_unit(start, free), bounds=(0.0, 1.0), diff_step=DIFF_STEP,
+                        max_nfev=nfev, workers=differences)  # fmt: skip
+    y = at(res.x)
     return y, obj.chi2(y, members)
 
 
@@ -346,17 +341,44 @@ def _scan(
                   key=lambda ev: rank_key(ev.chi2, ev.x))  # fmt: skip
 
 
+#: The least restitution noise a covariance is measured at (:func:`metric_point`): the objective's
+#: smallest nonzero ``e_sigma`` (its lattice, :func:`.objective.snap`, rounds the model's
+#: natural-measure noise ``1e-9`` to 0); like it, physically nothing, enough to sample the
+#: natural measure.
+METRIC_E_SIGMA = 10.0**-SNAP_DECIMALS
+
+
 def measure_cov(obj: Objective, x: np.ndarray, members: int) -> np.ndarray:
     """Regularized across-member covariance of the statistics at ``x`` (``members`` members).
 
     With load curves the load part's covariance ``C_L`` is measured at ``x`` too (its
-    :data:`.loadpart.LOAD_PILOT` members) and held from now on.
+    :data:`.loadpart.LOAD_PILOT` members) and held from now on. A fitted ``e_sigma`` is measured
+    at :data:`METRIC_E_SIGMA` at least (:func:`metric_point`).
     """
+    x = metric_point(obj, x)
     ens = obj.ensemble(x, members)
     if obj.load is not None:
         xs = snap(x)
         obj.load.set_cov(obj.load.values(obj.theta(xs), xs, LOAD_PILOT))
     return regularized_cov(ens.cov, stat_floor(obj.target))
+
+
+def metric_point(obj: Objective, x: np.ndarray) -> np.ndarray:
+    """Where the covariance of ``x`` is measured: ``x`` with a fitted ``e_sigma`` raised to
+    :data:`METRIC_E_SIGMA` (docs/model.md "Long-run statistics of chaotic motion").
+
+    At ``e_sigma = 0`` every member runs the same orbit, so a chaotic motor's members coincide
+    and their covariance holds the reading noise only: measured there, the metric made random
+    motor 12's generating point read ``χ²`` 6.8 million on 23 and the fit inadequate. At
+    :data:`METRIC_E_SIGMA` a chaotic motor's members spread over its attractor while a periodic
+    motor's still coincide, so the metric is that of the motor's natural measure either way.
+    """
+    if "e_sigma" not in obj.names:
+        return x
+    j = obj.names.index("e_sigma")
+    out = np.array(x, float)
+    out[j] = max(out[j], METRIC_E_SIGMA)
+    return out
 
 
 def joint_candidates(
@@ -379,6 +401,7 @@ def joint_candidates(
     ok = {tuple(x) for x in scan_acceptable(obj, s.global_members)}
     pool = [ev.x for ev in _distinct([ev for ev in ranked if tuple(ev.x) in ok], obj.span, len(ok))]
     runup = pool or [ev.x for ev in _distinct(ranked, obj.span, s.candidates)]  # best first
+    runup = runup + at_noise_levels(obj, runup)
     # each point as the run-ups matched it and with R_phi moved to the load curve's torque scale
     pool = runup + obj.map(lambda x: load_matched(obj, x), runup)
     scores = obj.map(lambda x: obj.chi2(x, s.global_members), pool)
@@ -395,6 +418,35 @@ def joint_candidates(
         pool = pool + [x for x, _ in more]
         scores = scores + [c for _, c in more]
     return [pool[i] for i in rank_order(scores, pool)[: s.candidates]]
+
+
+#: Restitution noise levels at which a fitted ``e_sigma``'s joint candidates are read besides the
+#: scan's stated one (:func:`at_noise_levels`), about every 0.03 of the range [0, 0.1]. Not 0:
+#: the best candidate's covariance becomes the metric (:func:`rerank`), and at 0 a chaotic
+#: motor's members coincide (random motor 6 then read chi2 1081); the deterministic limit is
+#: the walk's (:mod:`.limit_walk`).
+CANDIDATE_NOISE = (0.01, 0.06, 0.09)
+
+
+def at_noise_levels(obj: Objective, xs: list[np.ndarray]) -> list[np.ndarray]:
+    """With ``e_sigma`` fitted: every point of ``xs`` again at each :data:`CANDIDATE_NOISE`
+    level (none without).
+
+    The scan reads the run-ups at the stated noise, and at fixed other coordinates the joint
+    ``χ²`` rises tenfold within ±0.01 of a basin's own ``e_sigma`` (a random motor at
+    ``e_sigma`` 0.049: 5.0 at 0.05, 78.7 at 0.03), so a basin whose noise is far from the stated
+    one is never a candidate; read at the levels, its load curve can make it one.
+    """
+    if "e_sigma" not in obj.names:
+        return []
+    j = obj.names.index("e_sigma")
+    out = []
+    for x in xs:
+        for v in CANDIDATE_NOISE:
+            y = np.array(x, float)
+            y[j] = v
+            out.append(y)
+    return out
 
 
 def joint_missed(obj: Objective, scores: list[float]) -> bool:
@@ -642,16 +694,15 @@ def local_stage(
     Multi-start: the landscape in ``(e, omega_s)`` is rugged (periodic windows), so each start is
     refined on its own and the best logged point with ``members`` members is kept.
     """
-    span = obj.span
 
     def logged(u):
-        x = obj.lo + u * span
+        x = obj.from_unit(u, obj.lo)
         obj.chi2(x, members)
         return obj.residuals(x, members)
 
     for k, x0 in enumerate(starts):
-        u0 = np.clip((x0 - obj.lo) / span, 0.0, 1.0)
-        least_squares(logged, u0, bounds=(0.0, 1.0), diff_step=2e-3, max_nfev=nfev, x_scale=1.0)
+        least_squares(logged, obj.to_unit(x0), bounds=(0.0, 1.0), diff_step=2e-3, max_nfev=nfev,
+                      x_scale=1.0)  # fmt: skip
         _say(progress, f"local search ({members} members): start {k + 1}/{len(starts)}, best "
                        f"chi2 {obj.best(members).chi2:.4g}")  # fmt: skip
     best = obj.best(members)
