@@ -107,7 +107,7 @@ def rows_cost(model: sens.MotorModel, st, x: np.ndarray, names: list[str]) -> di
     loads = np.array(st.loads, float)
     sets = {"study": None, "rows, the loads": loads,
             "rows, the loads and their negatives": np.concatenate([loads, -loads[loads > 0]]),
-            "rows, no load alone": loads[:1]}  # fmt: skip
+            "rows, no load alone": np.zeros(1)}  # fmt: skip
     out = dict.fromkeys(sets, 0.0)
     for row in x:
         point = dict(zip(names, row, strict=True))
@@ -132,8 +132,9 @@ def rows(model: sens.MotorModel, st, x: np.ndarray, record: bool) -> None:
     names = list(st.ranges)
     cost = rows_cost(model, st, x[:: len(names) + 2][:ROWS_POINTS], names)
     base = cost["study"]
+    timed = len(x[:: len(names) + 2][:ROWS_POINTS])
     out = [(f"CPU per point of the study ({st.members} members, {len(st.loads)} loads continued, "
-            f"mean of {ROWS_POINTS} base points)", f"{1e3 * base:.1f} ms")]  # fmt: skip
+            f"mean of {timed} base points)", f"{1e3 * base:.1f} ms")]  # fmt: skip
     out += [(f"{k} from rest on one axial trajectory a member",
              f"{1e3 * v:.1f} ms ({base / v:.2f} times cheaper)")
             for k, v in cost.items() if k != "study"]  # fmt: skip
@@ -158,6 +159,8 @@ def main() -> None:
     args = ap.parse_args()
     if args.record and not (args.by_r or args.rows):
         ap.error("--record goes with --by-r or --rows")
+    if args.by_r and args.rows:
+        ap.error("--by-r and --rows are two measurements: one at a time")
     cfg = yaml.safe_load((ROOT / "workflow" / "config" / "config.yaml").read_text())
     st = study_settings({**cfg, "sensitivity": args.size})
     model = sens.MotorModel(st)

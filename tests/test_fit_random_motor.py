@@ -43,25 +43,26 @@ def test_the_sample_is_seeded_spans_the_box_and_has_deterministic_motors():
     assert es[0] < 0.15 and es[-1] > 0.85
 
 
-def test_the_coverage_carries_its_exact_interval_and_the_targets_own_chance():
-    """The pooled coverage of the table: Clopper–Pearson's interval (exact: the binomial tail
-    at each end is 2.5 %), and the chance that exact 95 % intervals hold on 15 or 16 of 16
-    motors, the binomial sum."""
+def test_the_coverage_carries_its_interval_over_motors_and_the_targets_own_chance():
+    """The pooled coverage of the table: the bootstrap over whole motors is wider than the
+    binomial interval of independent intervals when misses cluster in motors (and equal to the
+    observed rate when every motor holds the same number), Clopper–Pearson's is exact (the
+    binomial tail at each end is 2.5 %), and the chance that exact 95 % intervals hold on 15 or
+    16 of 16 motors is the binomial sum."""
     from scipy.stats import binom
 
     rm = _bench()
-    c = rm.coverage(74, 16, 5)
-    assert (c["held"], c["intervals"], c["rate"]) == (74, 80, 0.925)
-    lo, hi = c["ci95"]
-    assert binom.sf(73, 80, lo) == pytest.approx(0.025, abs=2e-3)  # P(X >= 74 | lo)
-    assert binom.cdf(74, 80, hi) == pytest.approx(0.025, abs=2e-3)  # P(X <= 74 | hi)
+    clustered = [5] * 12 + [0, 3, 3, 2]  # 68 of 80, the misses in four motors
+    c = rm.coverage(clustered, 5)
+    assert (c["held"], c["intervals"], c["rate"]) == (68, 80, 0.85)
+    lo, hi = c["ci95_if_independent"]
+    assert binom.sf(67, 80, lo) == pytest.approx(0.025, abs=2e-3)  # P(X >= 68 | lo)
+    assert binom.cdf(68, 80, hi) == pytest.approx(0.025, abs=2e-3)  # P(X <= 68 | hi)
+    assert c["ci95_motors"][0] < lo - 0.03 and c["ci95_motors"][1] > hi + 0.03
+    assert rm.coverage([4] * 16, 5)["ci95_motors"] == [0.8, 0.8]
     assert c["exact_intervals_meet_one_target"] == round(0.95**16 + 16 * 0.05 * 0.95**15, 3)
-    assert (
-        rm.rates([{"adequate": True, "holds": {"e": True, "psi": False}, "r_phi_factor": 1.5}])[
-            "coverage"
-        ]["held"]
-        == 1
-    )
+    row = {"adequate": True, "holds": {"e": True, "psi": False}, "r_phi_factor": 1.5}
+    assert rm.rates([row])["coverage"]["held"] == 1
 
 
 @pytest.mark.slow  # one small joint fit with five coordinates

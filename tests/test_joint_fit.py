@@ -571,6 +571,34 @@ def test_a_fitted_noise_reads_each_candidate_at_every_level_and_a_stated_one_at_
     assert se.at_noise_levels(SimpleNamespace(names=names[:4]), [x[:4] for x in xs]) == []
 
 
+def test_the_metric_is_measured_where_a_chaotic_motors_members_part():
+    """:func:`search.metric_point`: a fitted ``e_sigma`` of 0 is raised to
+    :data:`search.METRIC_E_SIGMA`, which the objective's lattice keeps (8 decimals), any other
+    point is left as it is; there the members of a chaotic point part (at 0 they coincide, so
+    a covariance measured there would hold the reading noise only)."""
+    from types import SimpleNamespace
+
+    from bouncedisk.fitting import search as se
+    from bouncedisk.fitting.model import EnsembleSpec, member_records
+    from bouncedisk.fitting.objective import snap
+
+    names = ["e", "log10_r_phi", "psi", "omega_s", "e_sigma"]
+    obj = SimpleNamespace(names=names)
+    x = np.array([0.55, math.log10(0.002), 0.4, 1.7, 0.0])
+    y = se.metric_point(obj, x)
+    np.testing.assert_array_equal(y[:4], x[:4])
+    assert y[4] == se.METRIC_E_SIGMA == snap(y)[4] > 0.0 and x[4] == 0.0
+    noisy = np.array([0.55, -2.7, 0.4, 1.7, 0.05])
+    np.testing.assert_array_equal(se.metric_point(obj, noisy), noisy)
+    np.testing.assert_array_equal(se.metric_point(SimpleNamespace(names=names[:4]), x[:4]), x[:4])
+    theta = dict(zip(names[:4], x[:4], strict=True))
+    quiet = dataclass_replace(read_curve_like(), sigma=0.0)
+    spec = EnsembleSpec(e_sigma=0.03, seed=4)
+    at = {s: member_records({**theta, "e_sigma": s}, quiet, range(2), spec) for s in (0.0, y[4])}
+    np.testing.assert_array_equal(*at[0.0])
+    assert np.max(np.abs(at[y[4]][0] - at[y[4]][1])) > 1e-3
+
+
 def read_curve_like():
     """A 0.02 s curve of the test motor (for the grid and scales only)."""
     from bouncedisk.io.runup_curves import MotorCurve

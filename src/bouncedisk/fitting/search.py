@@ -7,12 +7,14 @@
    the same way around the best distinct scan points (``zoom`` points each, one scan spacing
    wide): a periodic window narrower than the scan's spacing is found from a neighbour.
 2. A pilot ensemble (``pilot_members``) at the best point measures the model's across-member
-   covariance ``C``; the objective switches to it. The best ``candidates`` distinct scan points
+   covariance ``C`` (with ``e_sigma`` fitted, at ``e_sigma >= 1e-8``: :func:`metric_point`); the
+   objective switches to it. The best ``candidates`` distinct scan points
    are re-ranked on ``members`` members (one member is a noisy estimate where the model is
    chaotic), ``C`` is measured again at the best of them. With load curves the candidates are
    the scan points that reproduce the run-ups, each also with ``R_φ`` moved to the load curve's
-   torque scale, and a joint zoom around the best of them (:func:`joint_candidates`,
-   :func:`joint_zoom`), ranked by the joint ``χ²``; when none of them reproduces both data sets,
+   torque scale and, with ``e_sigma`` fitted, each also at the noise levels of
+   :data:`CANDIDATE_NOISE` (:func:`at_noise_levels`), and a joint zoom around the best of them
+   (:func:`joint_candidates`, :func:`joint_zoom`), ranked by the joint ``χ²``; when none of them reproduces both data sets,
    shrinking patches in ``(e, ψ, omega_s)`` from the best run-up candidates and a walk along the
    valley they reach (:func:`joint_refine`, :func:`valley_walk`).
 3. :func:`scipy.optimize.least_squares` on the whitened residuals, in coordinates scaled to the
@@ -370,8 +372,8 @@ def metric_point(obj: Objective, x: np.ndarray) -> np.ndarray:
     At ``e_sigma = 0`` every member runs the same orbit, so a chaotic motor's members coincide
     and their covariance holds the reading noise only: measured there, the metric made random
     motor 12's generating point read ``χ²`` 6.8 million on 23 and the fit inadequate. At
-    :data:`METRIC_E_SIGMA` a chaotic motor's members spread over its attractor while a periodic
-    motor's still coincide, so the metric is that of the motor's natural measure either way.
+    :data:`METRIC_E_SIGMA` a chaotic point's members part (``tests/test_joint_fit.py``), as at
+    the model's natural-measure ``1e-9``, while a periodic motor's converge to one orbit.
     """
     if "e_sigma" not in obj.names:
         return x
@@ -388,9 +390,10 @@ def joint_candidates(
     progress: Callable[[str], None] | None = None,
 ) -> list[np.ndarray]:
     """The scan points to refine: with load curves, every distinct scan point that reproduces
-    the run-ups (:func:`.uncertainty.scan_acceptable`), as it is and with its ``R_φ`` moved to the
-    load curve's torque scale (:func:`load_matched`), re-ranked by the joint ``χ²`` on the scan's
-    ensemble size — the run-ups leave a valley of points that reproduce them, the load curve picks along
+    the run-ups (:func:`.uncertainty.scan_acceptable`), also at each noise level with ``e_sigma``
+    fitted (:func:`at_noise_levels`), as it is and with its ``R_φ`` moved to the load curve's
+    torque scale (:func:`load_matched`), re-ranked by the joint ``χ²`` on the scan's ensemble
+    size — the run-ups leave a valley of points that reproduce them, the load curve picks along
     it; without load curves, the best ``s.candidates`` distinct scan points. When no candidate,
     nor any point of the joint zoom, reproduces both data sets (:func:`joint_missed`), the best
     run-up candidates are refined into the joint valley (:func:`joint_refine`)."""
@@ -421,10 +424,10 @@ def joint_candidates(
 
 
 #: Restitution noise levels at which a fitted ``e_sigma``'s joint candidates are read besides the
-#: scan's stated one (:func:`at_noise_levels`), about every 0.03 of the range [0, 0.1]. Not 0:
-#: the best candidate's covariance becomes the metric (:func:`rerank`), and at 0 a chaotic
-#: motor's members coincide (random motor 6 then read chi2 1081); the deterministic limit is
-#: the walk's (:mod:`.limit_walk`).
+#: scan's stated one (:func:`at_noise_levels`), about every 0.03 of the range [0, 0.1]. Not 0,
+#: the deterministic limit being the walk's (:mod:`.limit_walk`): before the covariance was
+#: measured at :func:`metric_point`, a candidate at 0 set the metric where a chaotic motor's
+#: members coincide (random motor 6 read chi2 1081); with it, 0 has not been tried.
 CANDIDATE_NOISE = (0.01, 0.06, 0.09)
 
 
@@ -433,9 +436,10 @@ def at_noise_levels(obj: Objective, xs: list[np.ndarray]) -> list[np.ndarray]:
     level (none without).
 
     The scan reads the run-ups at the stated noise, and at fixed other coordinates the joint
-    ``χ²`` rises tenfold within ±0.01 of a basin's own ``e_sigma`` (a random motor at
-    ``e_sigma`` 0.049: 5.0 at 0.05, 78.7 at 0.03), so a basin whose noise is far from the stated
-    one is never a candidate; read at the levels, its load curve can make it one.
+    ``χ²`` is sharp in ``e_sigma`` (random motor 5, ``e_sigma`` 0.049: 5.0 at 0.05, 15.9 at 0.04,
+    78.7 at 0.03), so a basin whose noise is far from the stated one is never a candidate; read
+    at the levels, its load curve can make it one. More candidates then reproduce both data
+    sets, so the joint refinement (:func:`joint_missed`) runs less often.
     """
     if "e_sigma" not in obj.names:
         return []
