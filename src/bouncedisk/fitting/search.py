@@ -8,15 +8,16 @@
    wide): a periodic window narrower than the scan's spacing is found from a neighbour.
 2. A pilot ensemble (``pilot_members``) at the best point measures the model's across-member
    covariance ``C`` (with ``e_sigma`` fitted, at ``e_sigma >= 1e-8``: :func:`metric_point`); the
-   objective switches to it. The best ``candidates`` distinct scan points
-   are re-ranked on ``members`` members (one member is a noisy estimate where the model is
-   chaotic), ``C`` is measured again at the best of them. With load curves the candidates are
-   the scan points that reproduce the run-ups, each also with ``R_φ`` moved to the load curve's
-   torque scale and, with ``e_sigma`` fitted, each also at the noise levels of
-   :data:`CANDIDATE_NOISE` (:func:`at_noise_levels`), and a joint zoom around the best of them
-   (:func:`joint_candidates`, :func:`joint_zoom`), ranked by the joint ``χ²``; when none of them reproduces both data sets,
-   shrinking patches in ``(e, ψ, omega_s)`` from the best run-up candidates and a walk along the
-   valley they reach (:func:`joint_refine`, :func:`valley_walk`).
+   objective switches to it. The best ``candidates`` distinct scan points are re-ranked on
+   ``members`` members (one member is a noisy estimate where the model is chaotic), ``C`` is
+   measured again at the best of them. With load curves the candidates are the scan points that
+   reproduce the run-ups, each also with ``R_φ`` moved to the load curve's torque scale and,
+   with ``e_sigma`` fitted, each also at the noise levels of :data:`CANDIDATE_NOISE`
+   (:func:`at_noise_levels`), and a joint zoom around the best of them
+   (:func:`joint_candidates`, :func:`joint_zoom`), ranked by the joint ``χ²``; when none of them
+   reproduces both data sets, shrinking patches in ``(e, ψ, omega_s)`` from the best run-up
+   candidates and a walk along the valley they reach (:func:`joint_refine`,
+   :func:`valley_walk`).
 3. :func:`scipy.optimize.least_squares` on the whitened residuals, in coordinates scaled to the
    search box, from each of the best few re-ranked points (multi-start); with ``e_sigma`` fitted,
    a sweep of it (:func:`noise_sweep`); for a joint fit with ``e_sigma`` fitted or stated 0, the
@@ -36,7 +37,7 @@ order the threads logged the points in.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -443,13 +444,18 @@ def at_noise_levels(obj: Objective, xs: list[np.ndarray]) -> list[np.ndarray]:
     """
     if "e_sigma" not in obj.names:
         return []
+    return [y for x in xs for y in noise_copies(obj, x, CANDIDATE_NOISE)]
+
+
+def noise_copies(obj: Objective, x: np.ndarray, levels: Sequence[float]) -> list[np.ndarray]:
+    """Copies of ``x`` with its (fitted) ``e_sigma`` at each of ``levels``, the other
+    coordinates as they are."""
     j = obj.names.index("e_sigma")
     out = []
-    for x in xs:
-        for v in CANDIDATE_NOISE:
-            y = np.array(x, float)
-            y[j] = v
-            out.append(y)
+    for v in levels:
+        y = np.array(x, float)
+        y[j] = v
+        out.append(y)
     return out
 
 
@@ -766,12 +772,7 @@ def noise_sweep(
     if "e_sigma" not in obj.names:
         return best
     j = obj.names.index("e_sigma")
-    pts = []
-    for v in NOISE_GRID:
-        x = best.x.copy()
-        x[j] = v
-        pts.append(x)
-    obj.map(lambda x: obj.chi2(x, members), pts)
+    obj.map(lambda x: obj.chi2(x, members), noise_copies(obj, best.x, NOISE_GRID))
     out = obj.best(members)
     _say(progress, f"noise sweep: e_sigma {out.x[j]:.4g}, chi2 {out.chi2:.4g} (before: "
                    f"{best.x[j]:.4g}, {best.chi2:.4g})")  # fmt: skip
