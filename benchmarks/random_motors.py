@@ -264,8 +264,12 @@ def main() -> None:
                          "--json) instead of fitting")  # fmt: skip
     args = ap.parse_args()
     if args.rates:
-        with open(args.rates, encoding="utf-8") as f:
-            print(json.dumps(rates([json.loads(line) for line in f if line.strip()])))
+        try:
+            with open(args.rates, encoding="utf-8") as f:
+                rows = [json.loads(line) for line in f if line.strip()]
+            print(json.dumps(rates(rows)))
+        except (OSError, ValueError, KeyError, TypeError) as ex:
+            ap.error(f"--rates {args.rates}: not rows of this benchmark ({ex})")
         return
     rows = run_slice(args, lambda true, k: recover(true, k, args))
     print(json.dumps(rates(rows)))
