@@ -117,8 +117,8 @@ def main(argv: list[str] | None = None) -> int:
 
 def _finished() -> None:
     """The command is done (outputs final, standard output flushed): a Ctrl-C or SIGTERM while
-    the interpreter shuts down (about half a second) no longer changes its outcome. Before, it
-    killed the process with status 130 and no message, the outputs kept."""
+    the interpreter shuts down (about half a second) is ignored, so it cannot turn a finished
+    command's status into 130."""
     with contextlib.suppress(ValueError):  # not the main thread: the host's handlers stay
         for sig in (signal.SIGINT, signal.SIGTERM):
             signal.signal(sig, signal.SIG_IGN)

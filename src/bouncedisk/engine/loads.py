@@ -61,8 +61,8 @@ def _same_axial(st, ist, l):
 
 
 # numba's reference counting off, as the kernel's steps (kernel._on_arrays): these allocate
-# nothing, and the atomic count of every array argument of every call (the event buffer is six)
-# made omega_integrals 1.7x as slow (4.1 against 2.4 ms for 16 loads, 2026-11-25)
+# nothing, and an atomic count of every array argument of every call (the event buffer is six)
+# would dominate the cost of a short contact segment
 @njit(cache=True, **K._nrt_off())
 def _contact_to_end(prm, flg, st, ist, ev, evk, traj, strobe, info, sep):
     """Contact segments of one load's row until the contact ends (flight) or the run does.
