@@ -24,6 +24,7 @@ from ..engine import KIND_CHATTER, KIND_IMPACT, EngineConfig, InitialState
 from ..engine.driver import ChunkView, EngineError, audit_balances, iterate_views
 from ..engine.kernel import EV_PHASE, EV_T, EV_V_REL
 from ..engine.layout import ST_EVENTS
+from ..engine.noise import member_key, noisy_restitution
 from ..model import stator
 from ..run.cores import map_on_threads
 from . import observables as ob
@@ -70,26 +71,29 @@ class MemberStats:
 
 # slots of the reducer's state arrays (:func:`_reduce_chunk`)
 _I_IMPACTS, _I_CHATTER, _I_PREV, _I_OFFSET, _I_SKIP, _I_COUNT, _I_TAIL = range(7)
-_N_INTS = 7
+_I_SEEN = 7  # events of the run seen so far, before t_from too (the next row's noise counter)
+_N_INTS = 8
 _F_FIRST, _F_LAST, _F_TOTAL, _F_SIN, _F_COS = range(5)
-_N_FLOATS = 5
+_F_E = 5  # restitution of the tail's last row
+_N_FLOATS = 6
 #: Where Benettin's vector restarts: ``(1, 1)/√2``.
 _RESET = 1.0 / sqrt(2.0)
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _pair_jacobian(p_t, p_vr, p_s, p_c, tj, s_j, vr_j, e, w):
+def _pair_jacobian(p_t, p_vr, p_s, p_c, p_e, tj, s_j, vr_j, e, w):
     """The impact map's Jacobian of two successive impacts, if they are one free flight apart.
 
-    The previous impact at ``p_t`` (``sin φ, cos φ = p_s, p_c``, relative velocity ``p_vr``) and
-    this one at ``tj`` (``s_j = sin φ``, ``vr_j``). The pair is valid when the flight from the
-    first lands on the second (``|landing − s_j| < 1e-7 (1 + Δt²)``) with ``vr_j > 0``; returns
-    ``(valid, a, b, j10, j11)``, the formulas and the order of operations of
+    The previous impact at ``p_t`` (``sin φ, cos φ = p_s, p_c``, relative velocity ``p_vr``,
+    restitution ``p_e``) and this one at ``tj`` (``s_j = sin φ``, ``vr_j``, restitution ``e``).
+    The pair is valid when the flight from the first lands on the second
+    (``|landing − s_j| < 1e-7 (1 + Δt²)``) with ``vr_j > 0``; returns ``(valid, a, b, j10,
+    j11)``, the formulas and the order of operations of
     :func:`~bouncedisk.analysis.observables.impact_jacobians` (docs/model.md "Impact map
     Jacobian").
     """
     vs = w * p_c
-    v_post = vs + e * p_vr
+    v_post = vs + p_e * p_vr
     dt = tj - p_t
     landing = p_s + v_post * dt - 0.5 * (dt * dt)
     if not (abs(landing - s_j) < 1e-7 * (1.0 + dt * dt) and vr_j > 0.0):
@@ -147,11 +151,13 @@ def _keep_tail(t, phase, v_rel, kind, t_from, kept, tail_f, tail_k, n_tail):
 
 
 @njit(cache=True, nogil=True)
-def _reduce_chunk(t, phase, v_rel, kind, t_from, e, w, vec, ints, fl, tail_f, tail_k):
+def _reduce_chunk(t, phase, v_rel, kind, t_from, noise, w, vec, ints, fl, tail_f, tail_k):
     """One chunk of :meth:`_Reducer.add`, compiled (releases the GIL); returns the rows kept.
 
     The events with ``t >= t_from``, preceded by the tail's last row, are counted and walked
-    pair by pair: the impact map's Jacobian of each valid pair (:func:`_pair_jacobian`) goes
+    pair by pair: the impact map's Jacobian of each valid pair (:func:`_pair_jacobian`, with
+    each impact's own restitution: ``noise = (e, e_sigma, key)``, the chunk's first row being
+    the run's event ``ints[_I_SEEN]``; :func:`~bouncedisk.engine.noise.noisy_restitution`) goes
     straight into Benettin's step (:func:`_benettin_step`); the chunk's sum of logs and its
     count go to ``fl[_F_TOTAL]``, ``ints[_I_COUNT]``; the tail is renewed (:func:`_keep_tail`).
     The state arrays ``ints``, ``fl`` (slots ``_I_*``, ``_F_*``) carry the counts from chunk to
@@ -165,10 +171,12 @@ def _reduce_chunk(t, phase, v_rel, kind, t_from, e, w, vec, ints, fl, tail_f, ta
     skip, prev = ints[_I_SKIP], ints[_I_PREV]
     n_imp, n_chat = ints[_I_IMPACTS], ints[_I_CHATTER]
     first, last = fl[_F_FIRST], fl[_F_LAST]
-    p_t, p_vr, p_k, p_s, p_c = 0.0, 0.0, 0, 0.0, 0.0
+    e, e_sigma, key = noise
+    seen = ints[_I_SEEN]
+    p_t, p_vr, p_k, p_s, p_c, p_e = 0.0, 0.0, 0, 0.0, 0.0, e
     if have:
         p_t, p_vr, p_k = tail_f[n_tail - 1, 0], tail_f[n_tail - 1, 2], tail_k[n_tail - 1]
-        p_s, p_c = fl[_F_SIN], fl[_F_COS]
+        p_s, p_c, p_e = fl[_F_SIN], fl[_F_COS], fl[_F_E]
     total = 0.0
     count = 0
     j_pair = 0  # index of the pair among this chunk's valid pairs
@@ -188,8 +196,9 @@ def _reduce_chunk(t, phase, v_rel, kind, t_from, e, w, vec, ints, fl, tail_f, ta
         ph_j = phase[j]
         s_j = sin(ph_j)
         vr_j = v_rel[j]
+        e_j = noisy_restitution(e, e_sigma, key, seen + j) if e_sigma > 0.0 else e
         if li > 0 and p_k == KIND_IMPACT and kj == KIND_IMPACT:
-            valid, a, b, j10, j11 = _pair_jacobian(p_t, p_vr, p_s, p_c, tj, s_j, vr_j, e, w)
+            valid, a, b, j10, j11 = _pair_jacobian(p_t, p_vr, p_s, p_c, p_e, tj, s_j, vr_j, e_j, w)
             if valid:
                 k = li - 1 + start
                 if k != prev + 1:
@@ -201,14 +210,16 @@ def _reduce_chunk(t, phase, v_rel, kind, t_from, e, w, vec, ints, fl, tail_f, ta
                     total += log(norm)
                     count += 1
                 j_pair += 1
-        p_t, p_vr, p_k, p_s, p_c = tj, vr_j, kj, s_j, cos(ph_j)
+        p_t, p_vr, p_k, p_s, p_c, p_e = tj, vr_j, kj, s_j, cos(ph_j), e_j
         li += 1
+    ints[_I_SEEN] = seen + len(t)
     kept = li - (1 if have else 0)
     if kept == 0:
         return 0
     ints[_I_TAIL] = _keep_tail(t, phase, v_rel, kind, t_from, kept, tail_f, tail_k, n_tail)
     ints[_I_IMPACTS], ints[_I_CHATTER], ints[_I_PREV], ints[_I_COUNT] = n_imp, n_chat, prev, count
     fl[_F_FIRST], fl[_F_LAST], fl[_F_TOTAL], fl[_F_SIN], fl[_F_COS] = first, last, total, p_s, p_c
+    fl[_F_E] = p_e
     return kept
 
 
@@ -216,11 +227,23 @@ class _Reducer:
     """Streams one member's events after ``t_from`` into counts, a Lyapunov sum and a tail.
 
     The reduction of a chunk is compiled and releases the GIL (:func:`_reduce_chunk`), so the
-    members of an ensemble reduce in parallel as they run.
+    members of an ensemble reduce in parallel as they run. ``e_sigma, seed, member``: the run's
+    restitution noise (its events' own ``e_k`` enter the Jacobians); every chunk of the run must
+    be added, from its first event, those before ``t_from`` too.
     """
 
-    def __init__(self, e: float, omega_s: float, t_from: float):
+    def __init__(
+        self,
+        e: float,
+        omega_s: float,
+        t_from: float,
+        e_sigma: float = 0.0,
+        seed: int = 0,
+        member: int = 0,
+    ):
         self.e = e
+        key = np.uint64(member_key(np.int64(seed), np.int64(member)) if e_sigma > 0.0 else 0)
+        self._noise = (float(e), float(e_sigma), key)
         self.w = omega_s
         self.t_from = t_from
         self.n_impacts = 0
@@ -268,7 +291,7 @@ class _Reducer:
         fl[_F_FIRST] = self.chatter_first
         fl[_F_LAST] = self.chatter_last
         kept = _reduce_chunk(
-            t, phase, v_rel, kind, self.t_from, self.e, self.w,
+            t, phase, v_rel, kind, self.t_from, self._noise, self.w,
             self.vec, ints, fl, self._tail_f, self._tail_k,
         )  # fmt: skip
         if kept == 0:
@@ -295,7 +318,14 @@ class _Reducer:
         tl = self.tail
         lam = self.lyap_sum / self.lyap_count if self.lyap_count else math.nan
         reg = ob.classify(
-            tl["t"], tl["phase"], tl["v_rel"], tl["kind"], self.w, lam, self.n_chatter
+            tl["t"],
+            tl["phase"],
+            tl["v_rel"],
+            tl["kind"],
+            self.w,
+            lam,
+            self.n_chatter,
+            e_sigma=self._noise[1],
         )
         if reg.name == "chattering-periodic":
             lam = -math.inf
@@ -383,7 +413,7 @@ def run_member(
     cfg = dataclasses.replace(
         cfg, member=member, stats_from=t_from, traj_dt=traj_dt, stroboscopic=False
     )
-    red = _Reducer(cfg.e, cfg.omega_s, t_from)
+    red = _Reducer(cfg.e, cfg.omega_s, t_from, cfg.e_sigma, cfg.seed, member)
     gen = iterate_views(cfg, init)  # the kernel's buffers, reduced in place: no copies
     while True:
         if should_stop is not None and should_stop():

@@ -14,9 +14,48 @@ import numpy as np
 from numba import njit
 
 from ..engine import KIND_CHATTER, KIND_IMPACT
+from ..engine.noise import member_key, noisy_restitution
 from ..model import stator
 
 TWO_PI = 2.0 * math.pi
+
+
+@njit(cache=True, nogil=True)
+def _restitutions(e, e_sigma, key, first, n):
+    """``e_k`` of the events ``first … first + n − 1`` of one noise stream (the engine's draws)."""
+    out = np.empty(n)
+    for i in range(n):
+        out[i] = noisy_restitution(e, e_sigma, key, first + i)
+    return out
+
+
+def event_restitution(
+    e: float, e_sigma: float, seed: int, member: int, first: int, n: int
+) -> np.ndarray:
+    """Each event's own restitution ``e_k`` (docs/model.md "Long-run statistics").
+
+    The engine draws event ``k``'s restitution from the counter-based stream ``(seed, member)``
+    (:mod:`bouncedisk.engine.noise`), ``k`` counting every event of the run from 0 (impacts and
+    chattering tails), so the value of each row of an event table is known without being
+    recorded. ``e_sigma = 0``: ``e`` everywhere.
+
+    Parameters
+    ----------
+    e, e_sigma : float
+        Mean restitution and its standard deviation (0 without ``restitution_noise``).
+    seed, member : int
+        The run's noise stream.
+    first, n : int
+        Index in the run of the first row, and the number of rows.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
+    if not e_sigma > 0.0:
+        return np.full(n, float(e))
+    key = np.uint64(member_key(np.int64(seed), np.int64(member)))
+    return _restitutions(float(e), float(e_sigma), key, np.int64(first), n)
 
 
 def circular_distance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -135,20 +174,37 @@ def _first_period(ph, vr, kd, max_period, tol):
 
 
 def impact_jacobians(
-    t: np.ndarray, phase: np.ndarray, v_rel: np.ndarray, kind: np.ndarray, e: float, omega_s: float
+    t: np.ndarray,
+    phase: np.ndarray,
+    v_rel: np.ndarray,
+    kind: np.ndarray,
+    e: float | np.ndarray,
+    omega_s: float,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Jacobians of the exact impact map for consecutive free-flight impacts.
 
-    With ``v_k = v_s(t_k) + e V_k`` the rotor velocity after impact ``k``, flight time ``Δ`` and
-    relative impact velocity ``V_{k+1}``, differentiating the first-root condition (eq. 20) and
-    the restitution law (eq. 4) gives::
+    With ``v_k = v_s(t_k) + e_k V_k`` the rotor velocity after impact ``k``, flight time ``Δ``
+    and relative impact velocity ``V_{k+1}``, differentiating the first-root condition (eq. 20)
+    and the restitution law (eq. 4) with the landing impact's restitution ``e' = e_{k+1}``
+    gives::
 
         ∂t'/∂t = (v_s(t_k) − v_k + Δ)/V_{k+1},   ∂t'/∂v = Δ/V_{k+1},
-        c = e − (1 + e) w² sin φ_{k+1},
-        ∂v'/∂t = c ∂t'/∂t − e,                   ∂v'/∂v = c ∂t'/∂v − e.
+        c = e' − (1 + e') w² sin φ_{k+1},
+        ∂v'/∂t = c ∂t'/∂t − e',                  ∂v'/∂v = c ∂t'/∂v − e'.
 
     At a period-1 fixed point this gives ``det J = e²`` and
     ``trace J = 1 + e² − (1 + e)² Γ sin φ`` (docs/model.md "Impact map Jacobian").
+
+    Parameters
+    ----------
+    t, phase, v_rel, kind : ndarray
+        Event table of a run.
+    e : float or ndarray
+        Restitution: one value, or each row's own ``e_k`` (restitution noise:
+        :func:`event_restitution`). A run with noise needs its rows' own values: with the mean
+        ``e`` the flights do not land where the table says and the derivatives are wrong.
+    omega_s : float
+        Stator frequency ``w``.
 
     Returns
     -------
@@ -161,6 +217,7 @@ def impact_jacobians(
     w = omega_s
     if len(t) < 2:
         return np.empty((0, 2, 2)), np.empty(0, dtype=int)
+    e = np.broadcast_to(np.asarray(e, dtype=float), np.shape(t))
     vs = stator.velocity(phase, w)
     v_post = vs + e * v_rel
     dt = np.diff(t)
@@ -177,12 +234,13 @@ def impact_jacobians(
     d = dt[idx]
     a = (vs[idx] - v_post[idx] + d) / V
     b = d / V
-    c = e - (1.0 + e) * w * w * np.sin(phase[idx + 1])
+    e1 = e[idx + 1]
+    c = e1 - (1.0 + e1) * w * w * np.sin(phase[idx + 1])
     jac = np.empty((len(idx), 2, 2))
     jac[:, 0, 0] = a
     jac[:, 0, 1] = b
-    jac[:, 1, 0] = c * a - e
-    jac[:, 1, 1] = c * b - e
+    jac[:, 1, 0] = c * a - e1
+    jac[:, 1, 1] = c * b - e1
     return jac, idx
 
 
@@ -241,14 +299,15 @@ def lyapunov_exponent(
     phase: np.ndarray,
     v_rel: np.ndarray,
     kind: np.ndarray,
-    e: float,
+    e: float | np.ndarray,
     omega_s: float,
     skip: int = 100,
 ) -> tuple[float, float]:
     """Largest Lyapunov exponent of the impact map between resets (Benettin, exact Jacobian).
 
     Contact and chattering episodes collapse all perturbations (:func:`benettin`); they are
-    left out of the average, so the value is the mean expansion rate over free flights.
+    left out of the average, so the value is the mean expansion rate over free flights. ``e``:
+    one restitution or each row's own (:func:`impact_jacobians`).
 
     Returns
     -------
@@ -448,6 +507,21 @@ def _chatter_cycle_length(phase, v_rel, kind, tol):
     return m
 
 
+#: Tolerance of a cycle's repetition without noise (radians of phase, relative velocity).
+CYCLE_TOL = 1e-6
+#: Under restitution noise a stable cycle repeats within its response to the noise: ``σ_e``
+#: times this gain (the scatter of a cycle's phase is tens of ``σ_e``, more near a bifurcation)...
+NOISE_TOL_GAIN = 1000.0
+#: ...up to this resolution: a tail that scatters more is not resolved as a cycle.
+NOISE_TOL_MAX = 0.1
+
+
+def cycle_tolerance(e_sigma: float) -> float:
+    """Tolerance of a cycle's repetition in a run with restitution noise ``e_sigma``
+    (docs/model.md "Regimes"): ``max(CYCLE_TOL, min(NOISE_TOL_GAIN σ_e, NOISE_TOL_MAX))``."""
+    return max(CYCLE_TOL, min(NOISE_TOL_GAIN * float(e_sigma), NOISE_TOL_MAX))
+
+
 def classify(
     t: np.ndarray,
     phase: np.ndarray,
@@ -457,6 +531,7 @@ def classify(
     lyapunov: float,
     chatters: int | None = None,
     max_period: int = 32,
+    e_sigma: float = 0.0,
 ) -> Regime:
     """Classify the tail of a run (docs/model.md "Regimes").
 
@@ -469,6 +544,8 @@ def classify(
     chatters : int, optional
         Complete chatters over the whole averaging window, when longer than the tail (a rare
         reinjection may fall outside the tail); default: those in the tail.
+    e_sigma : float
+        The run's restitution noise: a cycle repeats within :func:`cycle_tolerance`.
 
     Returns
     -------
@@ -480,13 +557,14 @@ def classify(
     """
     if len(t) == 0:
         return Regime("rest")
+    tol = cycle_tolerance(e_sigma)
     in_tail = bool(np.any(kind == KIND_CHATTER))
     if in_tail:
-        cyc = chatter_cycle(t, phase, v_rel, kind, omega_s)
+        cyc = chatter_cycle(t, phase, v_rel, kind, omega_s, tol)
         if cyc is not None:
             return Regime("chattering-periodic", *cyc)
         return Regime("chaotic-reinjection")
-    per = find_period(t, phase, v_rel, kind, omega_s, max_period=max_period, tail=len(t))
+    per = find_period(t, phase, v_rel, kind, omega_s, max_period, len(t), tol)
     if per is not None:
         return Regime("periodic", per.p, per.q)
     if chatters:

@@ -1,4 +1,4 @@
-"""``bouncedisk runs [list | show RUN | diff A B]``: the tracked runs."""
+"""``bouncedisk runs [list | show RUN | diff A B | ui]``: the tracked runs."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from .common import EXIT_USER
 
 # --- experiment tracking (bouncedisk.tracking; `runs` reads it back through bouncedisk.tracking.reading)
 
-RUNS_ACTIONS = {"list": (0, 0), "show": (1, 1), "diff": (0, 2)}  # action: (min, max) run ids
+RUNS_ACTIONS = {"list": (0, 0), "show": (1, 1), "diff": (0, 2), "ui": (0, 0)}  # (min, max) ids
 
 
 def _cmd_runs(args: argparse.Namespace) -> int:
@@ -22,9 +22,13 @@ def _cmd_runs(args: argparse.Namespace) -> int:
     action = words.pop(0) if words and words[0] in RUNS_ACTIONS else "list"
     lo, hi = RUNS_ACTIONS[action]
     if not lo <= len(words) <= hi:
-        need = {"list": "no run id", "show": "one run id", "diff": "at most two run ids"}[action]
+        need = {"show": "one run id", "diff": "at most two run ids"}.get(action, "no run id")
         extra = " ".join(words[hi:]) or "(none)"
         raise InputError("runs", action, f"takes {need}; got {extra!r}")
+    if action != "ui" and (args.port is not None or args.no_browser):
+        raise InputError("runs", action, "--port and --no-browser are options of `runs ui`")
+    if action == "ui":
+        return _runs_ui(args)
     runs = registry.Runs(args.tracking_uri, args.results)
     if action == "list":
         rows = [registry.row(runs, r) for r in runs.runs]
@@ -49,6 +53,50 @@ def _cmd_runs(args: argparse.Namespace) -> int:
     return 0
 
 
+def _runs_ui(args: argparse.Namespace) -> int:
+    """``bouncedisk runs ui``: MLflow's UI on the store, until Ctrl-C (docs/user_guide/tracking.md)."""
+    from ..tracking import reading as registry
+    from ..tracking import store as tracking_store
+    from ..tracking import ui
+
+    store = tracking_store.resolve_store(args.tracking_uri, args.results)
+    if store.is_http:
+        raise InputError(
+            f"tracking store {store.uri}", "runs ui", "a tracking server serves its own UI: open it"
+        )
+    runs = registry.Runs(args.tracking_uri, args.results)  # an existing, readable store
+    exp = tracking_store.experiment_id(runs.client, runs.store, create=False)
+    if exp is None:
+        raise InputError(
+            f"tracking store {store.uri}",
+            "runs ui",
+            f"no {store.experiment!r} experiment yet: run the pipeline or a command with --track",
+        )
+
+    def announce(url: str) -> None:
+        print(f"MLflow UI on {store.uri}: the runs at", flush=True)
+        print(f"  {url}", flush=True)
+        print("(Ctrl-C stops it)", flush=True)
+
+    try:
+        ui.serve(runs.store, exp, args.port, not args.no_browser, announce)
+    except KeyboardInterrupt:
+        pass
+    print("MLflow UI stopped", flush=True)
+    return 0
+
+
+def _port(text: str) -> int:
+    """A TCP port number for ``--port``."""
+    try:
+        port = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a port number: {text!r}") from None
+    if not 1 <= port <= 65535:
+        raise argparse.ArgumentTypeError(f"a port is 1-65535, got {port}")
+    return port
+
+
 def _one_line_error(prefix: str):
     """An argparse ``error`` that prints one line and exits 2 (no usage block)."""
 
@@ -60,14 +108,22 @@ def _one_line_error(prefix: str):
 
 
 def _add_runs(sub) -> None:
-    """``bouncedisk runs [list | show RUN | diff A B]`` (docs/formats.md "Experiment tracking")."""
+    """``bouncedisk runs [list | show RUN | diff A B | ui]`` (docs/formats.md "Experiment
+    tracking")."""
     p = sub.add_parser(
         "runs",
-        help="the tracked runs: list, show RUN, diff A B",
-        usage="bouncedisk runs [list | show RUN | diff [A [B]]] [--json] [--tracking-uri URI]",
+        help="the tracked runs: list, show RUN, diff A B, ui (MLflow's UI on them)",
+        usage="bouncedisk runs [list | show RUN | diff [A [B]] | ui [--port N] [--no-browser]] "
+        "[--json] [--tracking-uri URI]",
     )
-    p.add_argument("words", nargs="*", metavar="ACTION RUN", help="list | show RUN | diff A B")
+    p.add_argument("words", nargs="*", metavar="ACTION RUN", help="list | show RUN | diff A B | ui")
     p.add_argument("--json", action="store_true", help="print JSON")
+    p.add_argument(
+        "--port", type=_port, help="runs ui: serve on this port of 127.0.0.1 (default: a free one)"
+    )
+    p.add_argument(
+        "--no-browser", action="store_true", help="runs ui: print the address, open no browser"
+    )
     p.add_argument(
         "--tracking-uri",
         metavar="URI",
