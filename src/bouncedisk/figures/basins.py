@@ -63,15 +63,19 @@ def fig_basin_map(ds: xr.Dataset) -> Figure:
 
 
 def fig_startup(ds: xr.Dataset) -> Figure:
-    """Start-up under load: the fraction of starts from rest that settle on the fast branch
-    against the load torque, with its 95 % Wilson band, and the fraction not settled."""
+    """Start-up under load: the fractions of starts from rest that settle on the fast branch and
+    on a slower one (the slow branch) against the load torque, with their 95 % Wilson bands, and
+    the fraction not settled."""
     fig = Figure(figsize=(7.0, 4.2), layout="constrained")
     ax = fig.subplots()
     load = ds["load_torque"].values
-    for name, color, label in (
-        ("fast_fraction", "C0", f"settled on the fast branch (mean speed >= {ds.attrs.get('fast_above', np.nan):g})"),
-        ("unsettled_fraction", "0.5", "not settled within the window"),
-    ):  # fmt: skip
+    fast = f"{ds.attrs.get('fast_above', np.nan):g}"
+    curves = [
+        ("fast_fraction", "C0", rf"settled on the fast branch (mean speed $\geq$ {fast})"),
+        ("slow_fraction", "C1", f"settled on the slow branch (mean speed < {fast})"),
+        ("unsettled_fraction", "0.5", "not settled within the longest window"),
+    ]
+    for name, color, label in (c for c in curves if c[0] in ds):
         ax.fill_between(load, ds[f"{name}_ci95_low"], ds[f"{name}_ci95_high"], color=color,
                         alpha=0.25, lw=0)  # fmt: skip
         ax.plot(load, ds[name], "o-", ms=3, lw=1.0, color=color, label=label)
@@ -88,9 +92,13 @@ def fig_startup(ds: xr.Dataset) -> Figure:
 
 
 def _title(ax, ds: xr.Dataset, head: str, starts: str, bands: str) -> None:
-    """``head, N <starts>, window [a, b] (<bands>)`` over ``ax``."""
+    """``head, N <starts>, window [a, b]`` (doubled up to ``2^extend`` times for a start not
+    settled in it) ``(<bands>)`` over ``ax``."""
     window = np.ravel(ds.attrs.get("window", [np.nan, np.nan]))
+    extend = int(ds.attrs.get("extend", 0))
+    longer = f", doubled up to {2**extend}x until settled" if extend else ""
     ax.set_title(
-        f"{head}, {ds.sizes['start']} {starts}, window [{window[0]:g}, {window[1]:g}] ({bands})",
+        f"{head}, {ds.sizes['start']} {starts}\nwindow [{window[0]:g}, {window[1]:g}]{longer} "
+        f"({bands})",
         fontsize=9,
     )
