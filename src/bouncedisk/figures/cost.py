@@ -103,8 +103,8 @@ def fig_scaling(table: pd.DataFrame) -> Figure:
         a4.xaxis.set_minor_formatter(NullFormatter())
         a4.set_xlabel("time per impact [ns] (log scale)")
         a4.set_title(f"cost of each effect ({_scene_of(f)})", fontsize=9)
-    else:
-        a4.set_visible(False)
+    else:  # a table without the effects' rows
+        a4.remove()
     fig.suptitle(
         "Cost of the exact engine on one core: impacts and contact, torsion only where said",
         fontsize=10,
