@@ -96,7 +96,13 @@ def basins_command(args: argparse.Namespace) -> dict:
 def _cmd_basins(args: argparse.Namespace) -> int:
     store = _tracking_store(args)
     out = basins_command(args)
-    params = {"scene_file": args.scene, "set": args.set or [], "phases": args.phases}
+    params = {
+        "scene_file": args.scene,
+        "set": args.set or [],
+        "phases": args.phases,
+        "extend": out["extend"],
+        "settle": out["settle"],
+    }
     metrics = {"n_attractors": len(out["attractors"]), "unsettled": out["unsettled"]["fraction"]}
     _track(args, store, "basins", [args.output] if args.output else [], params, metrics)
     return 0
