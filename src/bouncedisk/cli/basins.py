@@ -18,7 +18,7 @@ def format_basins(summary: dict) -> str:
     longer = sum(f > 1 for f in summary["per_start"]["window_factor"])
     lines = [
         f"{summary['starts']} starts, averaged over [{lo:g}, {hi:g}] time units after switch-on "
-        f"({longer} not settled in it run again over the window doubled, up to "
+        f"({longer} not settled in it measured again over the window doubled, up to "
         f"{2 ** summary['extend']}x)",
         f"{'label':>5} {'mean speed':>12} {'regime':>22} {'starts':>7} {'fraction':>9} "
         f"{'95% CI (Wilson)':>18}",
@@ -146,8 +146,9 @@ def _add_basins(sub) -> None:
         type=int,
         default=None,
         metavar="K",
-        help="a start not settled runs again from its start over the window doubled, up to K "
-        "times (0: the scene's window only); default 3, up to 8x (bouncedisk.studies.basins.EXTEND)",
+        help="a start not settled is measured again over the window doubled (its run "
+        "continued), up to K times (0: the scene's window only); default 3, up to 8x "
+        "(bouncedisk.studies.basins.EXTEND)",
     )
     p.add_argument("-o", "--output", help="write the starts and the attractors to this netCDF file")
     _add_set_option(p, "parameters.load_torque=0.075")

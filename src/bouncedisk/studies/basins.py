@@ -24,11 +24,15 @@ the mean of its two halves' means and its regime that of the window's end:
    periodic orbit's halves differ by its ripple over part of a cycle, which falls as ``1/h``, a
    drifting start's by its drift rate times ``h``), ``10 x settle x scale`` for the chaotic
    class, whose finite-time means fluctuate. A start not settled by this rule with its own
-   speed as the scale (``max(1, |mean speed|)``: as strict as the grouping's or stricter) runs
-   again from its start over the scene's window doubled (``[2 discard, 2 stop]`` after its
+   speed as the scale (``max(1, |mean speed|)``: as strict as the grouping's or stricter) is
+   measured again over the scene's window doubled (``[2 discard, 2 stop]`` after its
    switch-on), then four times, ..., up to ``extend`` doublings (:data:`EXTEND`), and keeps
    the first window it settles in (``window_factor``), else the longest it ran to its end; a
-   start that has not settled even then is labelled ``-1`` (a drifting speed: run longer);
+   start that has not settled even then is labelled ``-1`` (a drifting speed: run longer).
+   A longer window continues the start's run from where its last window ended (when that is
+   not past the new window's start; else from the start), in segments each continued from
+   the last state at the same stator phase: the same orbit to rounding, at the cost of the
+   added time only; each segment draws start ``i``'s noise stream afresh;
 3. settled starts of one class (and, for periodic classes, one cycle of impact phases within
    :data:`PHASE_TOL`) belong to one attractor when a chain of them joins their mean speeds with
    steps of at most the larger of the two starts' tolerances. A chaotic attractor is not split
@@ -45,9 +49,9 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections import Counter, deque
+from collections import Counter
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -101,10 +105,10 @@ RULE = (
     "start settled when its two half-window mean speeds differ by <= settle * scale * "
     "min(1, 10 T_s / h) (h: the start's half-window, T_s: the stator period; chaotic class: "
     "10 settle * scale; scale = max |mean speed|, >= 1); a start not settled with its own "
-    "|mean speed| as the scale runs again from its start over the window doubled, up to "
-    "`extend` times; settled starts of one class (regime + period + cycle phases; chaotic and "
-    "chaotic-reinjection one class) form one attractor when chained by mean-speed steps <= the "
-    "larger of the two starts' tolerances; unresolved or unsettled: -1"
+    "|mean speed| as the scale is measured again over the window doubled (its run "
+    "continued), up to `extend` times; settled starts of one class (regime + period + cycle "
+    "phases; chaotic and chaotic-reinjection one class) form one attractor when chained by "
+    "mean-speed steps <= the larger of the two starts' tolerances; unresolved or unsettled: -1"
 )
 #: Per-start variables of a shard: name -> (long name, units) (docs/formats.md "Basins file").
 START_VARS = {
@@ -320,6 +324,8 @@ class _StartValues:
         names = ("regime", "period_p", "period_q", "n_impacts")
         self.ints = {k: np.zeros(n, np.int64) for k in names}
         self.orbit = np.full((n, ORBIT_SLOTS), np.nan)
+        #: per start: (time after its switch-on its run has reached, the state there)
+        self.reached: list[tuple[float, dict] | None] = [None] * n
 
     def put(self, j: int, first, second, tail: dict, factor: float) -> None:
         """Start ``j``'s two halves over a window stretched ``factor`` times."""
@@ -346,41 +352,67 @@ class _StartValues:
         return resolved & np.isfinite(mean) & (d_half <= tol)
 
 
-def _futures(pool: ThreadPoolExecutor, tasks: Iterator[tuple], ahead: int) -> Iterator[Future]:
-    """:func:`run_member` of every task on ``pool``, the futures in the tasks' order, at most
-    ``ahead`` submitted and not yet taken (each future's failure is the caller's to handle)."""
-    pending: deque[Future] = deque()
-    for task in tasks:
-        pending.append(pool.submit(run_member, *task))
-        if len(pending) >= ahead:
-            yield pending.popleft()
-    yield from pending
+def _segment(cfg, init: InitialState, member: int, length: float, stats_from: float = 0.0):
+    """:func:`run_member` from ``init`` for ``length`` time units, averaged after
+    ``stats_from`` of them."""
+    run = dataclasses.replace(cfg, t_end=init.t + length)
+    return run_member(run, init, member, init.t + stats_from)
+
+
+def _longer_window(scene: Scene, cfg, init: InitialState, member: int, window, resume):
+    """Start ``member`` over ``window`` ``(a, b)`` (time after its switch-on, ``init``'s time),
+    continuing its run from ``resume`` ``(reached, state)`` when that is not past ``a``, else
+    from its start: a run to ``a``, then the halves ``[a, m]`` and ``[m, b]``, each continued
+    from the last state (:func:`~bouncedisk.studies.torque_speed.continued_state`). Returns
+    the halves' statistics, the second's tail and ``(b, state at b)``."""
+    from .torque_speed import continued_state
+
+    a, b = window
+    m = 0.5 * (a + b)
+    w = scene.params.omega_s
+    reached, state = resume if resume is not None and resume[0] <= a else (0.0, None)
+    here = init if state is None else continued_state(state, w)
+    if a > reached:
+        _, state, _ = _segment(cfg, here, member, a - reached)
+        here = continued_state(state, w)
+    first, state, _ = _segment(cfg, here, member, m - a)
+    second, state, tail = _segment(cfg, continued_state(state, w), member, b - m)
+    return first, second, tail, (b, state)
 
 
 def _extend(
     scene, grid, index, out: _StartValues, pool, ahead: int, extend: int, settle: float, progress
 ):
-    """Rule 2's longer windows: the starts not settled by their own speed run again from their
-    start over the window doubled, up to ``extend`` times; a start whose longer run stops at
-    ``stop.max_events`` keeps its last window (and stays unsettled)."""
+    """Rule 2's longer windows: the starts not settled by their own speed run on over the
+    window doubled, up to ``extend`` times (:func:`_longer_window`); a start whose longer run
+    stops at ``stop.max_events`` keeps its last window (and stays unsettled)."""
     discard, duration = check_scene(scene)
     half = 0.5 * (duration - discard)
     period = 2.0 * math.pi / scene.params.omega_s
+    cfg = engine_config(scene)
+    phase, speed, height = grid.flat()
     for k in range(1, extend + 1):
         todo = np.nonzero(~out.settled_alone(half, period, settle))[0]
         if not todo.size:
             return
         factor = 2.0**k
-        futures = _futures(pool, _tasks(scene, grid, index[todo], factor), ahead)
-        for done, j in enumerate(todo, 1):
-            halves = next(futures), next(futures)
-            try:
-                (first, _, _), (second, _, tail) = (f.result() for f in halves)
-            except CappedRun:
-                continue
-            out.put(int(j), first, second, tail, factor)
+        window = (factor * discard, factor * duration)
+        for block in np.array_split(todo, -(-len(todo) // ahead)):  # bounded memory
+            futures = []
+            for j in block:
+                i = int(index[j])
+                init = start_state(scene, float(phase[i]), float(speed[i]), float(height[i]))
+                args = (scene, cfg, init, i, window, out.reached[j])
+                futures.append(pool.submit(_longer_window, *args))
+            for j, future in zip(block, futures, strict=True):
+                try:
+                    first, second, tail, reached = future.result()
+                except CappedRun:
+                    continue
+                out.put(int(j), first, second, tail, factor)
+                out.reached[j] = reached
             if progress:
-                progress(done, len(todo))
+                progress(int(np.searchsorted(todo, block[-1])) + 1, len(todo))
 
 
 def run_starts(
@@ -396,9 +428,9 @@ def run_starts(
     """Run one shard of the starts (a contiguous block of start indices) and return their
     per-start values (:data:`START_VARS`) with the scene's provenance; join shards with
     :func:`join_shards`, or group one complete set with :func:`group`. A start not settled over
-    the scene's window runs again over windows twice, four times, ... as long, up to ``extend``
-    doublings (rule 2, ``settle`` its tolerance), each start on its own: its numbers do not
-    depend on the shard."""
+    the scene's window is measured again over windows twice, four times, ... as long, its run
+    continued, up to ``extend`` doublings (rule 2, ``settle`` its tolerance), each start on its
+    own: its numbers do not depend on the shard."""
     start = time.perf_counter()
     check_scene(scene)
     if (
@@ -419,13 +451,15 @@ def run_starts(
         runs = _capped_named(
             scene, _ordered_runs(pool, _tasks(scene, grid, index), 4 * max(1, cores))
         )
+        _, duration = check_scene(scene)
         for j in range(n):
             first, _, _ = next(runs)
-            second, _, tail = next(runs)
+            second, state, tail = next(runs)
             out.put(j, first, second, tail, 1.0)
+            out.reached[j] = (duration, state)
             if progress:
                 progress(j + 1, n)
-        _extend(scene, grid, index, out, pool, 4 * max(1, cores), extend, settle, progress)
+        _extend(scene, grid, index, out, pool, 16 * max(1, cores), extend, settle, progress)
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
     phase, speed, height = (a[index] for a in grid.flat())
