@@ -16,10 +16,15 @@ def format_basins(summary: dict) -> str:
     """A human-readable table of :func:`bouncedisk.studies.basins.summary`."""
     lo, hi = summary["window"]
     longer = sum(f > 1 for f in summary["per_start"]["window_factor"])
+    extend = summary["extend"]
+    again = (
+        f"{longer} not settled in it measured again over longer windows, up to {2**extend}x"
+        if extend
+        else "no longer windows: --extend 0"
+    )
     lines = [
         f"{summary['starts']} starts, averaged over [{lo:g}, {hi:g}] time units after switch-on "
-        f"({longer} not settled in it measured again over the window doubled, up to "
-        f"{2 ** summary['extend']}x)",
+        f"({again})",
         f"{'label':>5} {'mean speed':>12} {'regime':>22} {'starts':>7} {'fraction':>9} "
         f"{'95% CI (Wilson)':>18}",
     ]
