@@ -76,6 +76,7 @@ def test_a_legend_naming_what_is_not_drawn_is_found():
     ax.scatter([0, 1], [0, 1], c=[0, 1], cmap=ListedColormap(["C0", "C1"]))
     ax.scatter([], [], color="C1", marker="s", label="attractor 1")
     ax.plot([], [], ls="none", marker="none", label="not settled: 0 of 2")
+    ax.axvline(0.5, color="0.4", ls="--", label="a threshold")  # a reference line is drawn
     ax.legend()
     fig.legend(*ax.get_legend_handles_labels())  # a figure legend is read alike
     assert legend_ghosts(fig) == []

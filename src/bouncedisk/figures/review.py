@@ -205,9 +205,24 @@ def _drawn_colors(fig: Figure) -> set[tuple]:
             if isinstance(art, Collection) and art.get_array() is not None:
                 colors |= _mapped_colors(art)
                 continue
-            if len(_artist_points(ax, art)):
+            if _is_drawn(ax, art):
                 colors |= set(_colors_of(art))
     return colors
+
+
+def _is_drawn(ax: Axes, art) -> bool:
+    """Whether an artist shows anything: data points, or a reference line or band across the
+    axis (``axvline``, ``axhspan``: not data, but drawn)."""
+    if len(_artist_points(ax, art)):
+        return True
+    if isinstance(art, Line2D):
+        xy = np.column_stack(
+            [np.asarray(art.get_xdata(), float), np.asarray(art.get_ydata(), float)]
+        )
+        return bool(np.all(np.isfinite(xy), axis=1).any())
+    if isinstance(art, Collection) and art.get_offset_transform() is not ax.transData:
+        return any(len(p.vertices) for p in art.get_paths())  # a band, not markers at points
+    return False
 
 
 def _mapped_colors(art) -> set[tuple]:
