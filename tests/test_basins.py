@@ -3,6 +3,7 @@
 import dataclasses
 import json
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -254,7 +255,12 @@ def test_figures_draw_the_attractors_and_the_start_up_band(scene_file):
     loaded = load_scene(scene_file(FIG3))
     up = B.startup(loaded, [0.0, 0.1], B.start_grid(3, [0.0], [0.0]), 120.0)
     ax = fig_startup(up).axes[0]
-    assert len(ax.collections) == 2 and len(ax.lines) == 2  # two bands, two curves
+    assert len(ax.collections) == 3 and len(ax.lines) == 3  # three bands, three curves
+    # without load every start reaches the fast branch (144), at 0.1 the slow one (78): both drawn
+    drawn = {line.get_label().split(" (")[0]: line.get_ydata().tolist() for line in ax.lines}
+    assert drawn["settled on the fast branch"] == [1.0, 0.0]
+    assert drawn["settled on the slow branch"] == [0.0, 1.0]
+    assert drawn["not settled within the longest window"] == [0.0, 0.0]
 
 
 def test_a_chaotic_attractor_is_not_split_by_its_finite_time_means(scene_file):
@@ -272,3 +278,95 @@ def test_a_chaotic_attractor_is_not_split_by_its_finite_time_means(scene_file):
     low = ds["attractor_mean_speed_ci95_low"].values[0]
     high = ds["attractor_mean_speed_ci95_high"].values[0]
     assert low < means.mean() < high
+
+
+# the basins guide's example: Fig. 3's motor at load 0.075, where a start above the slow branch
+# (78) drifts down at about 2.3e-3 per unit time, through the scene's window of 8000
+GUIDE = FIG3.replace("load_torque: 0.0", "load_torque: 0.075")
+
+
+def test_a_drifting_start_runs_again_over_doubled_windows_until_it_settles(scene_file):
+    scene = load_scene(scene_file(GUIDE))
+    grid = B.start_grid(2, [0.0, 100.0])
+    once = B.basins(scene, grid, cores=2, extend=0)
+    assert once["label"].values.tolist() == [0, 0, -1, -1]
+    ds = B.basins(scene, grid, cores=2)
+    assert ds["label"].values.tolist() == [0, 0, 0, 0] and ds.attrs["unsettled_starts"] == 0
+    assert ds["window_factor"].values.tolist() == [1.0, 1.0, 4.0, 4.0]
+    assert np.ptp(ds["mean_omega"].values) < 0.01  # one slow orbit, 78.10
+    # each start doubles on its own: shards (one start each side of the drift) agree bit for bit
+    parts = [B.run_starts(scene, grid, shard=s, n_shards=2, cores=1) for s in (0, 1)]
+    joined = B.group(B.join_shards(parts))
+    for name in ("label", "window_factor", "mean_omega"):
+        assert joined[name].values.tobytes() == ds[name].values.tobytes(), name
+    # an extended start runs on from where its last window ended: its numbers are those of a
+    # start run over the longer window directly, to rounding (the continued clock restarts)
+    longer = load_scene(scene_file(GUIDE), ["stop.time=32000", "stats.discard=16000"])
+    direct = B.run_starts(longer, grid, extend=0)
+    for name in ("mean_omega_first_half", "mean_omega_second_half", "orbit_phases"):
+        assert np.allclose(ds[name][2:], direct[name][2:], rtol=1e-9, equal_nan=True), name
+    assert ds["regime"].values[2:].tolist() == direct["regime"].values[2:].tolist()
+    # the tolerance is the start's own: at factor 4 the periodic tolerance shrinks 4 times
+    ds["window_factor"].values[:] = 1.0
+    ds["mean_omega_first_half"].values[2] += 0.01  # within 0.01 x 78 x 0.021 only at factor 1
+    assert B.labels(ds)[0].tolist() == [0, 0, 0, 0]
+    ds["window_factor"].values[2] = 4.0
+    assert B.labels(ds)[0].tolist() == [0, 0, -1, 0]
+
+
+def test_the_guides_example_settles(scene_file):
+    """The guide's `--phases 48 --speeds 0,50,100,150` at load 0.075, one phase in six: every
+    start settles on the slow orbit (over the scene's window alone, half of them do not)."""
+    scene = load_scene(scene_file(GUIDE))
+    ds = B.basins(scene, B.start_grid(8, [0.0, 50.0, 100.0, 150.0]), cores=2)
+    assert ds.attrs["unsettled_starts"] == 0 and ds.sizes["attractor"] == 1
+    assert float(ds["attractor_mean_speed"][0]) == pytest.approx(78.10, abs=0.01)
+    assert ds["window_factor"].values.max() == 8.0
+
+
+def test_a_start_capped_in_a_longer_window_keeps_its_last_one(scene_file):
+    # the cap holds each run of 8000 time units (the scene's, and each half of the window
+    # four times as long) but not the halves of 16000 of the window eight times as long, which
+    # the start from 150 needs: it stays unsettled over its last window instead of failing
+    scene = load_scene(scene_file(GUIDE), ["stop.max_events=3000"])
+    ds = B.basins(scene, B.start_grid(1, [150.0]), cores=1)
+    assert ds["label"].values.tolist() == [-1] and ds["window_factor"].values.tolist() == [4.0]
+
+
+@pytest.mark.parametrize(
+    ("args", "expected"),
+    [
+        (
+            ["--speeds", "1e200"],
+            "--speeds: must be within ±1e+100 (a scene's bound on initial.omega",
+        ),
+        (["--speeds=-1e101,0"], "--speeds: must be within ±1e+100"),
+        (["--speeds", "1,,2"], "--speeds: has an empty speed in '1,,2'"),
+        (["--speeds", "1,1"], "--speeds: repeats a speed"),
+        (["--heights", "1e7"], "--heights: must be in [0, 1e+06]"),
+        (["--heights", ",1"], "--heights: has an empty height"),
+        (["--speeds", "0:-5:3"], "--speeds: STOP must be > START"),
+        (["--set", "model=clipped"], "model (from --set model): basins run the bouncing model"),
+        (["--set", "solver.method=rk45"], "solver.method (from --set solver.method)"),
+        (["--extend", "-1"], "--extend: must be a whole number in [0, 8]"),
+        (["--settle", "2"], "--settle: must be in (0, 1), got 2"),
+    ],
+)
+def test_bad_starts_and_models_are_named_in_one_line(scene_file, tmp_path, capsys, args, expected):
+    from cli_helpers import one_line
+
+    out = tmp_path / "b.nc"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no numpy warning reaches the user
+        assert main(["basins", str(scene_file(TWO)), "--phases", "2", *args, "-o", str(out)]) == 2
+    line = one_line(capsys)
+    assert line.startswith("bouncedisk: error: ") and expected in line, line
+    assert "load" not in line and "np.float64" not in line
+    assert not out.exists()
+
+
+def test_negative_initial_speeds_are_starts_like_any_other(scene_file, capsys):
+    assert main(["basins", str(scene_file(TWO)), "--phases", "2", "--speeds=-50,0", "--json"]) == 0
+    js = json.loads(capsys.readouterr().out)
+    assert js["per_start"]["speed"] == [-50.0, -50.0, 0.0, 0.0]
+    assert B.parse_values("-50:50:3", "--speeds", "speed") == [-50.0, 0.0, 50.0]

@@ -125,6 +125,14 @@ def test_cost_figures_hold_their_data_and_say_what_errors_are_against():
     fig = fig_scaling(table)
     assert panel_problems(fig) == []
     assert fig.axes[2].get_yscale() == "linear"  # 254–266 MB: no log axis over a few percent
+    # each panel names its motor; the effects' costs drawn when the table has them
+    effects = pd.DataFrame(
+        {"study": ["effects"] * 2, "effect": ["axial only", "+ torsion"], "e": [0.6, 0.6]}
+    ).assign(omega_s=1.5, s_per_impact=[1.4e-6, 1.6e-6])
+    fig = fig_scaling(pd.concat([table.assign(e=0.3), effects], ignore_index=True))
+    assert panel_problems(fig) == [] and len(fig.axes) == 4
+    assert "e = 0.3" in fig.axes[0].get_title() and r"$\omega_s$ = 1.5" in fig.axes[3].get_title()
+    assert fig.get_suptitle()
     cost = pd.DataFrame({
         "duration": [5000, 5000, 20000, 20000], "cpu_s": [0.01, 0.04, 0.02, 0.08],
         "half_width": [3.7, 1.0, 2.0, 0.6], "member_time": [1, 2, 3, 4], "members": [4, 16, 4, 16],

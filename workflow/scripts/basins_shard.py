@@ -3,16 +3,15 @@
 from bouncedisk.io.job_log import log_to
 from bouncedisk.io.netcdf import write_dataset
 from bouncedisk.model.scene import load_scene
-from bouncedisk.studies.basins import run_starts, start_grid
-from bouncedisk.studies.torque_speed import parse_loads
+from bouncedisk.studies.basins import parse_values, run_starts, start_grid
 
 with log_to(snakemake.log[0]) as log:
     spec = snakemake.params.spec
     scene = load_scene(snakemake.input.scene)
     grid = start_grid(
         spec["phases"],
-        parse_loads(spec["speeds"], "config", "basins.map.speeds"),
-        parse_loads(spec["heights"], "config", "basins.map.heights"),
+        parse_values(spec["speeds"], "basins.map.speeds", "speed", "config"),
+        parse_values(spec["heights"], "basins.map.heights", "height", "config"),
     )
     shard = int(snakemake.wildcards.shard)
     ds = run_starts(scene, grid, shard=shard, n_shards=spec["shards"], cores=snakemake.threads)

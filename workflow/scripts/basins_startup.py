@@ -3,14 +3,16 @@
 from bouncedisk.io.job_log import log_to
 from bouncedisk.io.netcdf import write_dataset
 from bouncedisk.model.scene import load_scene
-from bouncedisk.studies.basins import start_grid, startup
+from bouncedisk.studies.basins import parse_values, start_grid, startup
 from bouncedisk.studies.torque_speed import parse_loads
 
 with log_to(snakemake.log[0]) as log:
     spec = snakemake.params.spec
     scene = load_scene(snakemake.input.scene)
     grid = start_grid(
-        spec["phases"], [0.0], parse_loads(spec["heights"], "config", "basins.startup.heights")
+        spec["phases"],
+        [0.0],
+        parse_values(spec["heights"], "basins.startup.heights", "height", "config"),
     )
     loads = parse_loads(spec["loads"], "config", "basins.startup.loads")
     ds = startup(scene, loads, grid, spec["fast_above"], cores=snakemake.threads)

@@ -15,8 +15,16 @@ from .tracking_options import _add_track_options, _track, _tracking_store
 def format_basins(summary: dict) -> str:
     """A human-readable table of :func:`bouncedisk.studies.basins.summary`."""
     lo, hi = summary["window"]
+    longer = sum(f > 1 for f in summary["per_start"]["window_factor"])
+    extend = summary["extend"]
+    again = (
+        f"{longer} not settled in it measured again over longer windows, up to {2**extend}x"
+        if extend
+        else "no longer windows: --extend 0"
+    )
     lines = [
-        f"{summary['starts']} starts, averaged over [{lo:g}, {hi:g}] time units after switch-on",
+        f"{summary['starts']} starts, averaged over [{lo:g}, {hi:g}] time units after switch-on "
+        f"({again})",
         f"{'label':>5} {'mean speed':>12} {'regime':>22} {'starts':>7} {'fraction':>9} "
         f"{'95% CI (Wilson)':>18}",
     ]
@@ -38,13 +46,11 @@ def format_basins(summary: dict) -> str:
     return "\n".join(lines)
 
 
-def _values(text: str | None, field: str, default: list[float]) -> list[float]:
-    """Speeds or heights from ``A:B:K`` or ``a,b,c`` (:func:`parse_loads`'s forms)."""
-    from ..studies.torque_speed import parse_loads
+def _values(text: str | None, field: str, what: str, default: list[float]) -> list[float]:
+    """Speeds or heights from ``A:B:K`` or ``a,b,c`` (:func:`~bouncedisk.studies.basins.parse_values`)."""
+    from ..studies.basins import parse_values
 
-    if text is None:
-        return default
-    return [float(x) for x in parse_loads(text, "<arguments>", field)]
+    return default if text is None else parse_values(text, field, what)
 
 
 def basins_command(args: argparse.Namespace) -> dict:
@@ -52,18 +58,23 @@ def basins_command(args: argparse.Namespace) -> dict:
     from ..io.output_checks import check_output_path
     from ..model.scene import load_scene
     from ..run.runner import deferred_interrupts
-    from ..studies.basins import basins, check_scene, start_grid, summary
+    from ..studies.basins import EXTEND, SETTLE, basins, check_scene, start_grid, summary
 
+    settle = SETTLE if args.settle is None else args.settle
+    extend = EXTEND if args.extend is None else args.extend
     if args.cores is not None and args.cores < 1:
         raise InputError("<arguments>", "--cores", f"must be >= 1, got {args.cores}")
-    if not 0.0 < args.settle < 1.0:
-        raise InputError("<arguments>", "--settle", f"must be in (0, 1), got {args.settle}")
+    if not 0.0 < settle < 1.0:
+        raise InputError("<arguments>", "--settle", f"must be in (0, 1), got {settle:g}")
     if args.output is not None:
         check_output_path(args.output, "-o", inputs=[args.scene])
     scene = load_scene(args.scene, args.set or [])
-    check_scene(scene)
-    speeds = _values(args.speeds, "--speeds", [scene.initial.omega])
-    heights = _values(args.heights, "--heights", [0.0])
+    try:
+        check_scene(scene)
+    except InputError as ex:  # name the --set that gave the field at fault
+        raise named_override(ex, args.set) from None
+    speeds = _values(args.speeds, "--speeds", "speed", [scene.initial.omega])
+    heights = _values(args.heights, "--heights", "height", [0.0])
     grid = start_grid(args.phases, speeds, heights)
     cores = args.cores or available_cores()
     start = time.perf_counter()
@@ -74,7 +85,7 @@ def basins_command(args: argparse.Namespace) -> dict:
                 raise KeyboardInterrupt
 
         try:
-            ds = basins(scene, grid, cores=cores, settle=args.settle, progress=progress)
+            ds = basins(scene, grid, cores=cores, settle=settle, progress=progress, extend=extend)
         except InputError as ex:  # a capped start: name the --set that set the cap
             raise named_override(ex, args.set) from None
         wall = time.perf_counter() - start
@@ -90,7 +101,13 @@ def basins_command(args: argparse.Namespace) -> dict:
 def _cmd_basins(args: argparse.Namespace) -> int:
     store = _tracking_store(args)
     out = basins_command(args)
-    params = {"scene_file": args.scene, "set": args.set or [], "phases": args.phases}
+    params = {
+        "scene_file": args.scene,
+        "set": args.set or [],
+        "phases": args.phases,
+        "extend": out["extend"],
+        "settle": out["settle"],
+    }
     metrics = {"n_attractors": len(out["attractors"]), "unsettled": out["unsettled"]["fraction"]}
     _track(args, store, "basins", [args.output] if args.output else [], params, metrics)
     return 0
@@ -123,10 +140,20 @@ def _add_basins(sub) -> None:
     p.add_argument(
         "--settle",
         type=float,
-        default=0.01,
-        help="settle tolerance, as a fraction of the largest mean speed: a start has settled "
-        "when its halves' mean speeds differ by at most this, shrunk by 10 T_s / h for halves "
-        "h of more than 10 stator periods T_s (chaotic: 10x, not shrunk); default 0.01",
+        default=None,
+        help="settle tolerance: a start has settled when its halves' mean speeds differ by at "
+        "most settle x scale x min(1, 10 T_s / h) (scale: the largest |mean speed|, >= 1; h: "
+        "the start's half-window; T_s: the stator period; chaotic: 10 x settle x scale); "
+        "default 0.01 (bouncedisk.studies.basins.SETTLE)",
+    )
+    p.add_argument(
+        "--extend",
+        type=int,
+        default=None,
+        metavar="K",
+        help="a start not settled is measured again over the window doubled (its run "
+        "continued), up to K times (0: the scene's window only); default 3, up to 8x "
+        "(bouncedisk.studies.basins.EXTEND)",
     )
     p.add_argument("-o", "--output", help="write the starts and the attractors to this netCDF file")
     _add_set_option(p, "parameters.load_torque=0.075")

@@ -19,6 +19,15 @@ def _axis(ds: xr.Dataset) -> tuple[str, str]:
     return "height", "initial height above the stator"
 
 
+def _entry(ax, color: str, text: str, drawn: bool, why: str) -> None:
+    """A legend entry: a square of ``color`` when starts of that colour are drawn, else the
+    text alone with ``why`` (a legend names nothing that is not drawn)."""
+    if drawn:
+        ax.scatter([], [], color=color, marker="s", label=text)
+    else:
+        ax.plot([], [], ls="none", marker="none", label=f"{text} ({why})")
+
+
 def fig_basin_map(ds: xr.Dataset) -> Figure:
     """The basin map: every start over (stator phase at switch-on, initial speed or height),
     coloured by the attractor it reaches (grey: not settled), the first height (or speed) only;
@@ -37,6 +46,7 @@ def fig_basin_map(ds: xr.Dataset) -> Figure:
     ax = fig.subplots()
     x = sub["phase"].values
     y = sub[name].values
+    drawn = set(sub["label"].values.tolist())
     ax.scatter(x, y, c=sub["label"].values, cmap=cmap, norm=norm, s=40, marker="s")
     for k in range(n_att):
         a = ds.sel(attractor=k)
@@ -44,14 +54,15 @@ def fig_basin_map(ds: xr.Dataset) -> Figure:
         reg = REGIMES[int(a["attractor_regime"])]
         p, q = int(a["attractor_period_p"]), int(a["attractor_period_q"])
         reg += f" {p}/{q}" if p else ""
-        ax.scatter([], [], color=colors[k + 1], marker="s", label=(
+        text = (
             f"{k}: speed {float(a['attractor_mean_speed']):.4g}, {reg}, "
             f"{float(a['attractor_fraction']):.2f} [{lo:.2f}, {hi:.2f}]"
-        ))  # fmt: skip
+        )
+        _entry(ax, colors[k + 1], text, k in drawn, "reached from none of the starts drawn")
     u = ds.attrs.get("unsettled_fraction", np.nan)
     ulo, uhi = np.ravel(ds.attrs.get("unsettled_fraction_ci95", [np.nan, np.nan]))
-    ax.scatter([], [], color=UNSETTLED, marker="s",
-               label=f"not settled: {u:.2f} [{ulo:.2f}, {uhi:.2f}]")  # fmt: skip
+    text = f"not settled: {u:.2f} [{ulo:.2f}, {uhi:.2f}]"
+    _entry(ax, UNSETTLED, text, -1 in drawn, "none among the starts drawn")
     ax.set_xlabel("stator phase at switch-on [rad]")
     ax.set_ylabel(ylabel)
     ax.set_xlim(-0.2, 2 * np.pi)
@@ -63,15 +74,19 @@ def fig_basin_map(ds: xr.Dataset) -> Figure:
 
 
 def fig_startup(ds: xr.Dataset) -> Figure:
-    """Start-up under load: the fraction of starts from rest that settle on the fast branch
-    against the load torque, with its 95 % Wilson band, and the fraction not settled."""
+    """Start-up under load: the fractions of starts from rest that settle on the fast branch and
+    on a slower one (the slow branch) against the load torque, with their 95 % Wilson bands, and
+    the fraction not settled."""
     fig = Figure(figsize=(7.0, 4.2), layout="constrained")
     ax = fig.subplots()
     load = ds["load_torque"].values
-    for name, color, label in (
-        ("fast_fraction", "C0", f"settled on the fast branch (mean speed >= {ds.attrs.get('fast_above', np.nan):g})"),
-        ("unsettled_fraction", "0.5", "not settled within the window"),
-    ):  # fmt: skip
+    fast = f"{ds.attrs.get('fast_above', np.nan):g}"
+    curves = [
+        ("fast_fraction", "C0", rf"settled on the fast branch (mean speed $\geq$ {fast})"),
+        ("slow_fraction", "C1", f"settled on the slow branch (mean speed < {fast})"),
+        ("unsettled_fraction", "0.5", "not settled within the longest window"),
+    ]
+    for name, color, label in (c for c in curves if c[0] in ds):
         ax.fill_between(load, ds[f"{name}_ci95_low"], ds[f"{name}_ci95_high"], color=color,
                         alpha=0.25, lw=0)  # fmt: skip
         ax.plot(load, ds[name], "o-", ms=3, lw=1.0, color=color, label=label)
@@ -88,9 +103,13 @@ def fig_startup(ds: xr.Dataset) -> Figure:
 
 
 def _title(ax, ds: xr.Dataset, head: str, starts: str, bands: str) -> None:
-    """``head, N <starts>, window [a, b] (<bands>)`` over ``ax``."""
+    """``head, N <starts>, window [a, b]`` (doubled up to ``2^extend`` times for a start not
+    settled in it) ``(<bands>)`` over ``ax``."""
     window = np.ravel(ds.attrs.get("window", [np.nan, np.nan]))
+    extend = int(ds.attrs.get("extend", 0))
+    longer = f", doubled up to {2**extend}x until settled" if extend else ""
     ax.set_title(
-        f"{head}, {ds.sizes['start']} {starts}, window [{window[0]:g}, {window[1]:g}] ({bands})",
+        f"{head}, {ds.sizes['start']} {starts}\nwindow [{window[0]:g}, {window[1]:g}]{longer} "
+        f"({bands})",
         fontsize=9,
     )

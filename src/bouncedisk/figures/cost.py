@@ -46,15 +46,28 @@ def fig_work_precision(table: pd.DataFrame) -> Figure:
     return fig
 
 
+def _scene_of(rows: pd.DataFrame, swept: str = "") -> str:
+    """``e = …, ω_s = …`` of a study's rows (``ω_s`` left out when it is the swept one); the
+    bare engine, impacts and contact only, unless the rows say otherwise."""
+    parts = []
+    if "e" in rows and rows["e"].notna().any():
+        parts.append(f"e = {float(rows['e'].dropna().iloc[0]):g}")
+    if swept != "omega_s" and len(rows):
+        parts.append(rf"$\omega_s$ = {float(rows['omega_s'].iloc[0]):g}")
+    return ", ".join(parts)
+
+
 def fig_scaling(table: pd.DataFrame) -> Figure:
-    """Cost per impact against omega_s, total time and memory against the number of impacts."""
-    fig = Figure(figsize=(13.0, 4.0), layout="constrained")
-    a1, a2, a3 = fig.subplots(1, 3)
+    """Cost per impact against omega_s, total time and memory against the number of impacts,
+    and the cost per impact of each effect; each panel names its motor."""
+    fig = Figure(figsize=(17.0, 4.4), layout="constrained")
+    a1, a2, a3, a4 = fig.subplots(1, 4)
     w = table[table["study"] == "omega"]
     a1.semilogx(w["omega_s"], 1e9 * w["s_per_impact"], "o-")
-    a1.set_xlabel(r"$\omega_s$")
+    a1.set_xlabel(r"stator frequency $\omega_s$")
     a1.set_ylabel("time per impact [ns]")
     a1.set_ylim(bottom=0)
+    a1.set_title(f"cost per impact against $\\omega_s$ ({_scene_of(w, 'omega_s')})", fontsize=9)
     n = table[table["study"] == "impacts"]
     a2.loglog(n["n_impacts"], n["seconds"], "o-", label="measured")
     if len(n):
@@ -63,11 +76,39 @@ def fig_scaling(table: pd.DataFrame) -> Figure:
     a2.set_xlabel("impacts")
     a2.set_ylabel("wall time [s]")
     a2.legend(fontsize=8)
+    a2.set_title(f"time against run length ({_scene_of(n)})", fontsize=9)
     m = table[table["study"] == "memory"]
     # a narrow range (the imports dominate): a linear axis, not a log one with a single decade
     a3.semilogx(m["n_impacts"], m["peak_mb"], "o-")
     a3.set_xlabel("impacts (events only, streamed to netCDF)")
     a3.set_ylabel("peak memory of the process [MB]")
+    a3.set_title(f"memory against run length ({_scene_of(m)})", fontsize=9)
+    f = table[table["study"] == "effects"]
+    if "effect" in f and len(f):
+        ns = 1e9 * f["s_per_impact"].values
+        y = np.arange(len(f))
+        a4.semilogx(ns, y, "o", color="C0")
+        for yi, v, label in zip(y, ns, f["effect"].astype(str), strict=True):
+            a4.annotate(
+                f"{label}: {v:,.0f} ns",
+                (v, yi),
+                xytext=(0, 6),
+                textcoords="offset points",
+                ha="center",
+                fontsize=7,
+            )
+        a4.set_yticks([])
+        a4.set_ylim(len(f) - 0.4, -0.6)
+        a4.set_xlim(ns.min() / 4, ns.max() * 12)
+        a4.xaxis.set_minor_formatter(NullFormatter())
+        a4.set_xlabel("time per impact [ns] (log scale)")
+        a4.set_title(f"cost of each effect ({_scene_of(f)})", fontsize=9)
+    else:  # a table without the effects' rows
+        a4.remove()
+    fig.suptitle(
+        "Cost of the exact engine on one core: impacts and contact, torsion only where said",
+        fontsize=10,
+    )
     return fig
 
 

@@ -93,15 +93,26 @@ def fig_bifurcation(up: xr.Dataset, down: xr.Dataset) -> Figure:
                          color=color, alpha=0.25, lw=0)  # fmt: skip
         ax2.plot(e, lam, "-", color=color, lw=0.8, label=f"{label}, mean and 95% interval")
         reset = ds["lyapunov_reset_fraction"].values > 0.5
-        ax2.plot(e[reset], np.full(reset.sum(), -2.4), "v", ms=3, color=color)
+        down_label = f"{label}: −∞ (most members reset every cycle)"
+        ax2.plot(e[reset], np.full(reset.sum(), -2.4), "v", ms=3, color=color, label=down_label)
     top = max(float(np.nanmax(ds["lyapunov_ci_high"].values, initial=0.0)) for ds in (up, down))
     g = w * w
     e1 = _param_where(lambda e: period_n_threshold(1, e), g)
     epd = _param_where(lambda e: period_doubling_threshold(1, e), g)
-    for x, text in ((e1, r"$\Gamma_1$"), (epd, r"$\Gamma_{PD}$")):
+    thresholds = (
+        (e1, r"$\Gamma_1$", "exists"),
+        (epd, r"$\Gamma_{PD}$", "has doubled"),
+    )
+    for x, text, meaning in thresholds:
         if math.isfinite(x):
-            for a in (ax, ax2):
-                a.axvline(x, color="0.4", lw=0.7, ls="--")
+            ax.axvline(
+                x,
+                color="0.4",
+                lw=0.7,
+                ls="--",
+                label=f"{text}(e) = $\\Gamma$ at e = {x:.3g}: period-1 {meaning} to its right",
+            )
+            ax2.axvline(x, color="0.4", lw=0.7, ls="--")
             ax.text(x + 0.004, 3.0, text, ha="left", va="center", fontsize=8, color="0.3")
     ax.set_ylim(0, TWO_PI)
     ax.set_ylabel(r"impact phase $\omega_s t$ mod $2\pi$")
@@ -116,7 +127,8 @@ def fig_bifurcation(up: xr.Dataset, down: xr.Dataset) -> Figure:
     ax2.set_ylim(-2.6, max(1.5, 1.05 * top))  # holds every interval (the ▼ row at -2.4)
     ax2.set_ylabel("Lyapunov exponent\n(per impact; ▼ = −∞)")
     ax2.set_xlabel("coefficient of restitution $e$")
-    ax2.legend(loc="upper left", fontsize=7)
+    # below the panel: the exponents fill it from the left edge to the right
+    ax2.legend(loc="upper center", bbox_to_anchor=(0.5, -0.32), ncol=2, fontsize=7)
     return fig
 
 
@@ -130,8 +142,16 @@ REGIME_COLORS = {
 }
 
 
+#: Colour of the regime map's cells whose exponent is −∞ (reset every cycle): not a grey, which
+#: the regime panel gives to ``unresolved``.
+RESET_COLOR = "k"
+
+
 def fig_regime_map(ds: xr.Dataset) -> Figure:
-    """Regimes over ``(e, omega_s)``, the Lyapunov exponent and the chatter rate (ensembles)."""
+    """Regimes over ``(e, omega_s)``, the Lyapunov exponent and the chatter rate (ensembles).
+
+    The regime panel's colour bar lists only the regimes that occur; the exponent panel draws
+    an exponent of −∞ (no finite mean: a member reset every cycle) black, unlike any regime."""
     from ..analysis.observables import REGIMES
 
     fig = Figure(figsize=(15.0, 4.6), layout="constrained")
@@ -139,11 +159,12 @@ def fig_regime_map(ds: xr.Dataset) -> Figure:
     e = ds["e"].values
     w = ds["omega_s"].values
     reg = ds["regime"].transpose("omega_s", "e").values
-    codes = sorted(REGIME_COLORS)
+    codes = [c for c in sorted(REGIME_COLORS) if np.any(reg == c)]  # the classes drawn only
     cmap = ListedColormap([REGIME_COLORS[c] for c in codes])
     norm = BoundaryNorm(np.arange(-0.5, len(codes) + 0.5), cmap.N)
-    m = ax.pcolormesh(e, w, reg, cmap=cmap, norm=norm, shading="nearest")
-    cb = fig.colorbar(m, ax=ax, ticks=codes)
+    index = np.searchsorted(codes, reg)  # each cell's class, as its place in the colour bar
+    m = ax.pcolormesh(e, w, index, cmap=cmap, norm=norm, shading="nearest")
+    cb = fig.colorbar(m, ax=ax, ticks=range(len(codes)))
     cb.ax.set_yticklabels([REGIMES[c] for c in codes], fontsize=7)
     per = ds["period_p"].transpose("omega_s", "e").values
     for i, wi in enumerate(w):
@@ -157,8 +178,11 @@ def fig_regime_map(ds: xr.Dataset) -> Figure:
     vmax = np.nanmax(np.abs(lam)) if np.isfinite(lam).any() else 1.0
     m2 = ax2.pcolormesh(e, w, lam, cmap="RdBu_r", vmin=-vmax, vmax=vmax, shading="nearest")
     fig.colorbar(m2, ax=ax2, label="Lyapunov exponent per impact (ensemble mean)")
-    ax2.set_facecolor("0.8")
-    ax2.set_title("Lyapunov exponent between resets (grey: reset every cycle, −∞)", fontsize=9)
+    ax2.set_facecolor(RESET_COLOR)  # the cells without a finite mean
+    ax2.set_title(
+        "Lyapunov exponent between resets (black: every member resets every cycle, −∞)",
+        fontsize=9,
+    )
     rate = ds["chatter_rate"].transpose("omega_s", "e").values
     m3 = ax3.pcolormesh(e, w, rate, cmap="viridis", shading="nearest")
     fig.colorbar(m3, ax=ax3, label="complete chatters per unit time (ensemble mean)")

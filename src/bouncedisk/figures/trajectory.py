@@ -22,6 +22,19 @@ def _zero_width(low: np.ndarray, high: np.ndarray) -> bool:
     return bool(np.nanmax(high - low) <= 1e-3 * span)
 
 
+def _band_end(band_t: np.ndarray, run_t: np.ndarray, stop: str | None) -> str:
+    """The legend's word on a band that ends before the run: the band covers only the times
+    every member reached, and a run that stops at a number of impacts stops at its own time."""
+    if band_t[-1] >= run_t[-1] - 1e-6 * max(1.0, abs(run_t[-1])):
+        return ""
+    why = ""
+    if stop and str(stop).startswith("impacts = "):
+        why = f"; each run stops after {str(stop)[len('impacts = ') :]} impacts"
+    elif stop:
+        why = f"; each run stops at {stop}"
+    return f",\nto t = {band_t[-1]:.4g}, the end of the shortest member{why}"
+
+
 def fig_trajectory(ds: xr.Dataset, band: xr.Dataset | None = None, window: float = 40.0) -> Figure:
     """Paper Figs. 3–4: rotor and stator flight paths and the rotor angular velocity.
 
@@ -46,10 +59,11 @@ def fig_trajectory(ds: xr.Dataset, band: xr.Dataset | None = None, window: float
             k = band.sizes["member"]
             zero = _zero_width(band["omega_p025"].values, band["omega_p975"].values)
             note = " (zero width: the members coincide)" if zero else ""
+            note += _band_end(bt, t, band.attrs.get("stop"))
             _band(axes[2], bt, band["omega_p025"], band["omega_p975"], "0.6",
                   f"central 95% of {k} members{note}", alpha=0.3)  # fmt: skip
             _band(axes[2], bt, band["omega_ci_low"], band["omega_ci_high"], COLORS["fit"],
-                  f"95% interval of the ensemble mean{note}", alpha=0.45)  # fmt: skip
+                  "95% interval of the ensemble mean", alpha=0.45)  # fmt: skip
         axes[2].plot(t, ds["omega_rotor"].values, color=COLORS["rotor"], lw=0.8, label="this run")
         if "t_impact" in ds:
             axes[2].plot(

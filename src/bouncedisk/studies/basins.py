@@ -20,16 +20,24 @@ the mean of its two halves' means and its regime that of the window's end:
    ``unresolved`` is not a class: the start has **not settled**;
 2. a start has **settled** when its two halves' mean speeds differ by at most the class's
    tolerance: ``settle x scale x min(1, 10 T_s / h)`` (``scale``: the largest absolute mean
-   speed of all starts, at least 1; ``h`` the half-window, ``T_s`` the stator period: a periodic
-   orbit's halves differ by its ripple over part of a cycle, which falls as ``1/h``, a drifting
-   start's by its drift rate times ``h``), ``10 x settle x scale`` for the chaotic class, whose
-   finite-time means fluctuate; a start that has not settled is labelled ``-1`` (a drifting
-   speed: run longer);
+   speed of all starts, at least 1; ``h`` the start's half-window, ``T_s`` the stator period: a
+   periodic orbit's halves differ by its ripple over part of a cycle, which falls as ``1/h``, a
+   drifting start's by its drift rate times ``h``), ``10 x settle x scale`` for the chaotic
+   class, whose finite-time means fluctuate. A start not settled by this rule with its own
+   speed as the scale (``max(1, |mean speed|)``: as strict as the grouping's or stricter) is
+   measured again over the scene's window doubled (``[2 discard, 2 stop]`` after its
+   switch-on), then four times, ..., up to ``extend`` doublings (:data:`EXTEND`), and keeps
+   the first window it settles in (``window_factor``), else the longest it ran to its end; a
+   start that has not settled even then is labelled ``-1`` (a drifting speed: run longer).
+   A longer window continues the start's run from where its last window ended (when that is
+   not past the new window's start; else from the start), in segments each continued from
+   the last state at the same stator phase: the same orbit to rounding, at the cost of the
+   added time only; each segment draws start ``i``'s noise stream afresh;
 3. settled starts of one class (and, for periodic classes, one cycle of impact phases within
    :data:`PHASE_TOL`) belong to one attractor when a chain of them joins their mean speeds with
-   steps of at most the class's tolerance. A chaotic attractor is not split by its finite-time
-   means: each start's halves differ by less than the tolerance, and the means of its starts
-   spread less than that, so consecutive means are closer still;
+   steps of at most the larger of the two starts' tolerances. A chaotic attractor is not split
+   by its finite-time means: each start's halves differ by less than the tolerance, and the
+   means of its starts spread less than that, so consecutive means are closer still;
 4. attractors are numbered by decreasing mean speed (label 0: the fastest).
 
 The basin fraction of an attractor is its starts over all starts, with the Wilson score interval
@@ -50,14 +58,14 @@ import numpy as np
 import xarray as xr
 
 from ..analysis import observables as ob
-from ..analysis.ensembles import CappedRun
+from ..analysis.ensembles import CappedRun, run_member
 from ..analysis.statistics import capped_error, confidence_interval, ensemble_window
 from ..analysis.sweeps import _ordered_runs, shard_slice, with_params
 from ..engine import InitialState
 from ..io.provenance import base_attrs, new_run_id
 from ..model.engine_config import engine_config
 from ..model.errors import InputError
-from ..model.scene import Scene
+from ..model.scene import MAX_INITIAL_OMEGA, Scene
 from ..run.runner import scene_attrs
 
 #: The settle tolerance's default, relative to the largest mean speed (rule 2).
@@ -70,6 +78,13 @@ CHAOTIC_FACTOR = 10.0
 #: which falls as ``1/h``; a start still drifting towards its attractor differs by its drift
 #: rate times ``h``: the shrinking tolerance keeps a short window from calling a drift settled.
 HALF_PERIODS = 10.0
+#: Default number of doublings of the window for the starts that have not settled (rule 2):
+#: up to 8 times the scene's window.
+EXTEND = 3
+#: Most doublings one computation may ask for.
+MAX_EXTEND = 8
+#: Regime codes of the chaotic class (rule 1).
+CHAOTIC_CODES = (ob.REGIME_CODES["chaotic"], ob.REGIME_CODES["chaotic-reinjection"])
 #: Fewest stator periods in each half-window (:func:`check_scene`).
 MIN_HALF_PERIODS = 10.0
 #: Largest difference of two cycles' impact phases (rad) of one periodic attractor (rule 3).
@@ -78,15 +93,22 @@ PHASE_TOL = 1e-4
 ORBIT_SLOTS = 33
 #: Largest number of starts one computation may ask for.
 MAX_STARTS = 100_000
+#: Largest number of initial speeds or heights one list may give (:func:`parse_values`).
+MAX_VALUES = 10_000
+#: Largest initial height above the stator: a fall of about 1400 time units, longer than any
+#: window a basin computation can tell settling in.
+MAX_HEIGHT = 1e6
 #: Standard normal quantile of the 95 % Wilson interval.
 Z95 = 1.959963984540054
 #: The grouping rule, as the files and ``--json`` state it.
 RULE = (
     "start settled when its two half-window mean speeds differ by <= settle * scale * "
-    "min(1, 10 T_s / h) (h: the half-window, T_s: the stator period; chaotic class: "
-    "10 settle * scale; scale = max |mean speed|, >= 1); settled starts of one class "
-    "(regime + period + cycle phases; chaotic and chaotic-reinjection one class) form one "
-    "attractor when chained by mean-speed steps <= that tolerance; unresolved or unsettled: -1"
+    "min(1, 10 T_s / h) (h: the start's half-window, T_s: the stator period; chaotic class: "
+    "10 settle * scale; scale = max |mean speed|, >= 1); a start not settled with its own "
+    "|mean speed| as the scale is measured again over the window doubled (its run "
+    "continued), up to `extend` times; settled starts of one class (regime + period + cycle "
+    "phases; chaotic and chaotic-reinjection one class) form one attractor when chained by "
+    "mean-speed steps <= the larger of the two starts' tolerances; unresolved or unsettled: -1"
 )
 #: Per-start variables of a shard: name -> (long name, units) (docs/formats.md "Basins file").
 START_VARS = {
@@ -101,6 +123,7 @@ START_VARS = {
     "period_q": ("stator periods per cycle (periodic regimes; 0 otherwise)", "1"),
     "lyapunov": ("largest Lyapunov exponent per impact, between resets (second half)", "1"),
     "n_impacts": ("impacts over the window", "1"),
+    "window_factor": ("the start's window over the scene's (2^k: doubled k times, rule 2)", "1"),
     "orbit_phases": ("sorted impact phases of one cycle (periodic regimes; NaN otherwise)", "rad"),
 }
 
@@ -126,6 +149,59 @@ class StartGrid:
         return p.ravel(), s.ravel(), h.ravel()
 
 
+def parse_values(text: str, field: str, what: str, source: str = "<arguments>") -> list[float]:
+    """Initial speeds or heights from ``START:STOP:N`` (``N`` evenly spaced, ends included) or
+    ``a,b,c`` (any sign: :func:`start_grid` checks the range); ``what`` (``speed``,
+    ``height``) names one value in the messages.
+
+    Raises
+    ------
+    InputError
+        Naming ``source`` and ``field``: empty, an empty item (``1,,2``), not numbers, ``N < 2``
+        or above :data:`MAX_VALUES`, ``STOP <= START``, or a value repeated.
+    """
+    from ..model.params import number, whole_number
+
+    text = str(text).strip()
+    form = f"give START:STOP:N or a,b,c {what}s"
+    if not text:
+        raise InputError(source, field, f"is empty; {form}")
+    if ":" in text:
+        parts = text.split(":")
+        if len(parts) != 3:
+            raise InputError(source, field, f"{form}, got {text!r}")
+        start, stop = (number(source, field, x) for x in parts[:2])
+        n = whole_number(source, field, parts[2], minimum=2)
+        if n > MAX_VALUES:
+            raise InputError(source, field, f"asks for {n} {what}s, more than {MAX_VALUES}")
+        if not stop > start:
+            raise InputError(source, field, f"STOP must be > START, got {text!r}")
+        return np.linspace(start, stop, n).tolist()
+    items = text.split(",")
+    if any(not x.strip() for x in items):
+        raise InputError(source, field, f"has an empty {what} in {text!r}; {form}")
+    if len(items) > MAX_VALUES:
+        raise InputError(source, field, f"gives {len(items)} {what}s, more than {MAX_VALUES}")
+    values = [number(source, field, x) for x in items]
+    if len(set(values)) != len(values):
+        raise InputError(source, field, f"repeats a {what}: {text!r}")
+    return sorted(values)
+
+
+def _check_values(
+    source: str, field: str, values: Sequence[float], low: float, high: float, why: str
+):
+    """Finite values within ``[low, high]`` (one of them at least), else an input error."""
+    arr = np.asarray(values, float)
+    shown = "[" + ", ".join(f"{float(x):g}" for x in arr.ravel()) + "]"
+    if arr.size == 0 or not np.all(np.isfinite(arr)):
+        raise InputError(source, field, f"must be finite values, got {shown}")
+    bad = arr[(arr < low) | (arr > high)]
+    if bad.size:
+        within = f"within ±{high:g}" if low == -high else f"in [{low:g}, {high:g}]"
+        raise InputError(source, field, f"must be {within} ({why}), got {float(bad[0]):g}")
+
+
 def start_grid(
     n_phases: int,
     speeds: Sequence[float],
@@ -138,15 +214,15 @@ def start_grid(
     Raises
     ------
     InputError
-        No phase, a negative or non-finite height, a non-finite speed, or more than :data:`MAX_STARTS`.
+        No phase, a speed beyond the scene's bound on ``initial.omega`` (``±MAX_INITIAL_OMEGA``),
+        a negative height or one above :data:`MAX_HEIGHT`, a non-finite value, or more than
+        :data:`MAX_STARTS` starts.
     """
     if isinstance(n_phases, bool) or not isinstance(n_phases, int | np.integer) or n_phases < 1:
         raise InputError(source, "--phases", f"must be a whole number >= 1, got {n_phases!r}")
-    for name, values, low in (("--speeds", speeds, -math.inf), ("--heights", heights, 0.0)):
-        arr = np.asarray(values, float)
-        if arr.size == 0 or not np.all(np.isfinite(arr)) or np.any(arr < low):
-            what = "finite values" if low == -math.inf else f"finite values >= {low:g}"
-            raise InputError(source, name, f"must be {what}, got {list(values)}")
+    bound = MAX_INITIAL_OMEGA
+    _check_values(source, "--speeds", speeds, -bound, bound, "a scene's bound on initial.omega")
+    _check_values(source, "--heights", heights, 0.0, MAX_HEIGHT, "above the stator, 0: on it")
     grid = StartGrid(
         2.0 * math.pi * np.arange(n_phases) / n_phases,
         np.asarray(speeds, float),
@@ -179,8 +255,10 @@ def check_scene(scene: Scene) -> tuple[float, float]:
     t_from, t_end = ensemble_window(scene)
     if "torsion" not in scene.effects:
         raise InputError(scene.source, "effects", "basins compare rotor speeds: add 'torsion'")
-    if scene.solver.method != "exact" or scene.model != "bouncing":
-        raise InputError(scene.source, "solver.method", "basins run the exact bouncing model only")
+    if scene.model != "bouncing":
+        raise InputError(scene.source, "model", "basins run the bouncing model only")
+    if scene.solver.method != "exact":
+        raise InputError(scene.source, "solver.method", "basins run the exact solver only")
     half = 0.5 * (t_end - t_from)
     periods = half * scene.params.omega_s / (2.0 * math.pi)
     if periods < MIN_HALF_PERIODS:
@@ -194,9 +272,13 @@ def check_scene(scene: Scene) -> tuple[float, float]:
     return t_from - scene.initial.t, t_end - scene.initial.t
 
 
-def _tasks(scene: Scene, grid: StartGrid, index: np.ndarray) -> Iterator[tuple]:
-    """:func:`run_member`'s arguments: two per start (the window's halves), in start order."""
-    discard, duration = check_scene(scene)
+def _tasks(
+    scene: Scene, grid: StartGrid, index: np.ndarray, factor: float = 1.0
+) -> Iterator[tuple]:
+    """:func:`run_member`'s arguments: two per start (the window's halves), in start order, over
+    the scene's window stretched ``factor`` times (``[factor discard, factor stop]`` after the
+    start's switch-on)."""
+    discard, duration = (factor * x for x in check_scene(scene))
     cfg = engine_config(scene)
     mid = discard + 0.5 * (duration - discard)
     phase, speed, height = grid.flat()
@@ -232,6 +314,107 @@ def _capped_named(scene: Scene, runs: Iterator) -> Iterator:
         raise capped_error(scene, ex, " (a start of the basins)") from None
 
 
+class _StartValues:
+    """The per-start values of one shard (:data:`START_VARS`), filled pass by pass."""
+
+    def __init__(self, n: int):
+        names = ("mean_omega", "mean_omega_first_half", "mean_omega_second_half", "lyapunov")
+        self.vals = {k: np.full(n, np.nan) for k in names}
+        self.vals["window_factor"] = np.ones(n)
+        names = ("regime", "period_p", "period_q", "n_impacts")
+        self.ints = {k: np.zeros(n, np.int64) for k in names}
+        self.orbit = np.full((n, ORBIT_SLOTS), np.nan)
+        #: per start: (time after its switch-on its run has reached, the state there)
+        self.reached: list[tuple[float, dict] | None] = [None] * n
+
+    def put(self, j: int, first, second, tail: dict, factor: float) -> None:
+        """Start ``j``'s two halves over a window stretched ``factor`` times."""
+        self.vals["mean_omega_first_half"][j] = first.mean_omega
+        self.vals["mean_omega_second_half"][j] = second.mean_omega
+        self.vals["mean_omega"][j] = 0.5 * (first.mean_omega + second.mean_omega)
+        self.vals["lyapunov"][j] = second.lyapunov
+        self.vals["window_factor"][j] = factor
+        self.ints["regime"][j] = second.regime
+        self.ints["period_p"][j], self.ints["period_q"][j] = second.period_p, second.period_q
+        self.ints["n_impacts"][j] = first.n_impacts + second.n_impacts
+        self.orbit[j] = _orbit(second, tail)
+
+    def settled_alone(self, half_window: float, period: float, settle: float) -> np.ndarray:
+        """Which starts have settled by rule 2 with their own speed as the scale
+        (``max(1, |mean speed|)``, never above the grouping's: as strict or stricter)."""
+        mean = self.vals["mean_omega"]
+        scale = np.maximum(1.0, np.abs(mean))
+        shrink = np.minimum(1.0, HALF_PERIODS * period / (half_window * self.vals["window_factor"]))
+        chaotic = np.isin(self.ints["regime"], CHAOTIC_CODES)
+        tol = settle * scale * np.where(chaotic, CHAOTIC_FACTOR, shrink)
+        d_half = np.abs(self.vals["mean_omega_second_half"] - self.vals["mean_omega_first_half"])
+        resolved = self.ints["regime"] != ob.REGIME_CODES["unresolved"]
+        return resolved & np.isfinite(mean) & (d_half <= tol)
+
+
+def _segment(cfg, init: InitialState, member: int, length: float, stats_from: float = 0.0):
+    """:func:`run_member` from ``init`` for ``length`` time units, averaged after
+    ``stats_from`` of them."""
+    run = dataclasses.replace(cfg, t_end=init.t + length)
+    return run_member(run, init, member, init.t + stats_from)
+
+
+def _longer_window(scene: Scene, cfg, init: InitialState, member: int, window, resume):
+    """Start ``member`` over ``window`` ``(a, b)`` (time after its switch-on, ``init``'s time),
+    continuing its run from ``resume`` ``(reached, state)`` when that is not past ``a``, else
+    from its start: a run to ``a``, then the halves ``[a, m]`` and ``[m, b]``, each continued
+    from the last state (:func:`~bouncedisk.studies.torque_speed.continued_state`). Returns
+    the halves' statistics, the second's tail and ``(b, state at b)``."""
+    from .torque_speed import continued_state
+
+    a, b = window
+    m = 0.5 * (a + b)
+    w = scene.params.omega_s
+    reached, state = resume if resume is not None and resume[0] <= a else (0.0, None)
+    here = init if state is None else continued_state(state, w)
+    if a > reached:
+        _, state, _ = _segment(cfg, here, member, a - reached)
+        here = continued_state(state, w)
+    first, state, _ = _segment(cfg, here, member, m - a)
+    second, state, tail = _segment(cfg, continued_state(state, w), member, b - m)
+    return first, second, tail, (b, state)
+
+
+def _extend(
+    scene, grid, index, out: _StartValues, pool, ahead: int, extend: int, settle: float, progress
+):
+    """Rule 2's longer windows: the starts not settled by their own speed run on over the
+    window doubled, up to ``extend`` times (:func:`_longer_window`); a start whose longer run
+    stops at ``stop.max_events`` keeps its last window (and stays unsettled)."""
+    discard, duration = check_scene(scene)
+    half = 0.5 * (duration - discard)
+    period = 2.0 * math.pi / scene.params.omega_s
+    cfg = engine_config(scene)
+    phase, speed, height = grid.flat()
+    for k in range(1, extend + 1):
+        todo = np.nonzero(~out.settled_alone(half, period, settle))[0]
+        if not todo.size:
+            return
+        factor = 2.0**k
+        window = (factor * discard, factor * duration)
+        for block in np.array_split(todo, -(-len(todo) // ahead)):  # bounded memory
+            futures = []
+            for j in block:
+                i = int(index[j])
+                init = start_state(scene, float(phase[i]), float(speed[i]), float(height[i]))
+                args = (scene, cfg, init, i, window, out.reached[j])
+                futures.append(pool.submit(_longer_window, *args))
+            for j, future in zip(block, futures, strict=True):
+                try:
+                    first, second, tail, reached = future.result()
+                except CappedRun:
+                    continue
+                out.put(int(j), first, second, tail, factor)
+                out.reached[j] = reached
+            if progress:
+                progress(int(np.searchsorted(todo, block[-1])) + 1, len(todo))
+
+
 def run_starts(
     scene: Scene,
     grid: StartGrid,
@@ -239,42 +422,51 @@ def run_starts(
     n_shards: int = 1,
     cores: int = 1,
     progress: Callable[[int, int], None] | None = None,
+    extend: int = EXTEND,
+    settle: float = SETTLE,
 ) -> xr.Dataset:
     """Run one shard of the starts (a contiguous block of start indices) and return their
     per-start values (:data:`START_VARS`) with the scene's provenance; join shards with
-    :func:`join_shards`, or group one complete set with :func:`group`."""
+    :func:`join_shards`, or group one complete set with :func:`group`. A start not settled over
+    the scene's window is measured again over windows twice, four times, ... as long, its run
+    continued, up to ``extend`` doublings (rule 2, ``settle`` its tolerance), each start on its
+    own: its numbers do not depend on the shard."""
     start = time.perf_counter()
     check_scene(scene)
+    if (
+        isinstance(extend, bool)
+        or not isinstance(extend, int | np.integer)
+        or not 0 <= extend <= MAX_EXTEND
+    ):
+        raise InputError(
+            "<arguments>",
+            "--extend",
+            f"must be a whole number in [0, {MAX_EXTEND}], got {extend!r}",
+        )
     index = np.arange(grid.size)[shard_slice(grid.size, shard, n_shards)]
     n = len(index)
-    speeds = ("mean_omega", "mean_omega_first_half", "mean_omega_second_half", "lyapunov")
-    vals = {k: np.full(n, np.nan) for k in speeds}
-    ints = {k: np.zeros(n, np.int64) for k in ("regime", "period_p", "period_q", "n_impacts")}
-    orbit = np.full((n, ORBIT_SLOTS), np.nan)
+    out = _StartValues(n)
     pool = ThreadPoolExecutor(max_workers=max(1, cores))
     try:
         runs = _capped_named(
             scene, _ordered_runs(pool, _tasks(scene, grid, index), 4 * max(1, cores))
         )
+        _, duration = check_scene(scene)
         for j in range(n):
             first, _, _ = next(runs)
-            second, _, tail = next(runs)
-            vals["mean_omega_first_half"][j] = first.mean_omega
-            vals["mean_omega_second_half"][j] = second.mean_omega
-            vals["mean_omega"][j] = 0.5 * (first.mean_omega + second.mean_omega)
-            vals["lyapunov"][j] = second.lyapunov
-            ints["regime"][j] = second.regime
-            ints["period_p"][j], ints["period_q"][j] = second.period_p, second.period_q
-            ints["n_impacts"][j] = first.n_impacts + second.n_impacts
-            orbit[j] = _orbit(second, tail)
+            second, state, tail = next(runs)
+            out.put(j, first, second, tail, 1.0)
+            out.reached[j] = (duration, state)
             if progress:
                 progress(j + 1, n)
+        _extend(scene, grid, index, out, pool, 16 * max(1, cores), extend, settle, progress)
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
     phase, speed, height = (a[index] for a in grid.flat())
-    ds = _start_dataset(index, phase, speed, height, vals, ints, orbit)
+    ds = _start_dataset(index, phase, speed, height, out.vals, out.ints, out.orbit)
     ds.attrs.update(_attrs(scene, grid, start, f"basins{shard}"))
     ds.attrs.update({"shard": shard, "n_shards": n_shards, "n_impacts": int(ds["n_impacts"].sum())})
+    ds.attrs.update({"extend": int(extend), "extend_settle": float(settle)})
     return ds
 
 
@@ -387,15 +579,16 @@ def _same_cycle(a: np.ndarray, b: np.ndarray) -> bool:
     return bool(np.all(d.min(axis=1) <= PHASE_TOL) and np.all(d.min(axis=0) <= PHASE_TOL))
 
 
-def _tolerances(ds: xr.Dataset, settle: float, scale: float) -> Callable[[tuple], float]:
-    """The settle tolerance of a class (rule 2), from the file's window and stator period."""
+def _tolerances(ds: xr.Dataset, settle: float, scale: float) -> Callable[[tuple, int], float]:
+    """The settle tolerance of a class at start ``i`` (rule 2), from the file's window, the
+    start's window factor (1 when the file has none) and the stator period."""
     discard, duration = (float(x) for x in np.ravel(ds.attrs["window"]))
     half = 0.5 * (duration - discard)
     period = 2.0 * math.pi / float(ds.attrs["omega_s"])
-    shrink = min(1.0, HALF_PERIODS * period / half)
+    shrink = np.minimum(1.0, HALF_PERIODS * period / (half * _window_factors(ds)))
 
-    def tolerance(cls: tuple) -> float:
-        return settle * scale * (CHAOTIC_FACTOR if cls[0] == "chaotic" else shrink)
+    def tolerance(cls: tuple, i: int) -> float:
+        return settle * scale * (CHAOTIC_FACTOR if cls[0] == "chaotic" else float(shrink[i]))
 
     return tolerance
 
@@ -413,7 +606,7 @@ def labels(ds: xr.Dataset, settle: float = SETTLE) -> tuple[np.ndarray, float]:
         cls = _class_of(ds["regime"].values[i], ds["period_p"].values[i], ds["period_q"].values[i])
         if cls is None or not math.isfinite(mean[i]):
             continue
-        if not d_half[i] <= tolerance(cls):
+        if not d_half[i] <= tolerance(cls, i):
             continue
         cycles = groups.setdefault(cls, [])
         orbit = ds["orbit_phases"].values[i]
@@ -426,12 +619,11 @@ def labels(ds: xr.Dataset, settle: float = SETTLE) -> tuple[np.ndarray, float]:
             home.append(i)
     found: list[list[int]] = []
     for cls, cycles in groups.items():
-        tol = tolerance(cls)
         for members in cycles:
             order = sorted(members, key=lambda i: (mean[i], i))
             chain = [order[0]]
             for a, b in zip(order, order[1:], strict=False):
-                if mean[b] - mean[a] > tol:
+                if mean[b] - mean[a] > max(tolerance(cls, a), tolerance(cls, b)):
                     found.append(chain)
                     chain = []
                 chain.append(b)
@@ -520,9 +712,19 @@ def basins(
     cores: int = 1,
     settle: float = SETTLE,
     progress: Callable[[int, int], None] | None = None,
+    extend: int = EXTEND,
 ) -> xr.Dataset:
-    """Every start of ``grid`` run and grouped (:func:`run_starts`, :func:`group`)."""
-    return group(run_starts(scene, grid, cores=cores, progress=progress), settle)
+    """Every start of ``grid`` run (its window doubled up to ``extend`` times while it has not
+    settled) and grouped (:func:`run_starts`, :func:`group`)."""
+    ds = run_starts(scene, grid, cores=cores, progress=progress, extend=extend, settle=settle)
+    return group(ds, settle)
+
+
+def _window_factors(ds: xr.Dataset) -> np.ndarray:
+    """Each start's window over the scene's (1 in a file without ``window_factor``)."""
+    if "window_factor" in ds:
+        return ds["window_factor"].values
+    return np.ones(ds.sizes["start"])
 
 
 def _num(x: float) -> float | None:
@@ -559,6 +761,7 @@ def summary(ds: xr.Dataset) -> dict:
         "window": [float(x) for x in np.ravel(at["window"])],
         "rule": at["rule"],
         "settle": float(at["settle"]),
+        "extend": int(at.get("extend", 0)),
         "speed_scale": float(at["speed_scale"]),
         "attractors": attractors,
         "unsettled": {
@@ -572,6 +775,7 @@ def summary(ds: xr.Dataset) -> dict:
             "height": ds["height"].values.tolist(),
             "label": ds["label"].values.tolist(),
             "mean_speed": [_num(x) for x in ds["mean_omega"].values.tolist()],
+            "window_factor": _window_factors(ds).tolist(),
             "regime": [ob.REGIMES[int(r)] for r in ds["regime"].values],
         },
     }
@@ -582,12 +786,15 @@ STARTUP_FRACTIONS = {
     "fast_fraction": "fraction of starts settled on the fast branch",
     "fast_fraction_ci95_low": "lower end of the 95% Wilson interval of fast_fraction",
     "fast_fraction_ci95_high": "upper end of the 95% Wilson interval of fast_fraction",
+    "slow_fraction": "fraction of starts settled on an attractor slower than fast_above",
+    "slow_fraction_ci95_low": "lower end of the 95% Wilson interval of slow_fraction",
+    "slow_fraction_ci95_high": "upper end of the 95% Wilson interval of slow_fraction",
     "unsettled_fraction": "fraction of starts not settled within the window",
     "unsettled_fraction_ci95_low": "lower end of the 95% Wilson interval of unsettled_fraction",
     "unsettled_fraction_ci95_high": "upper end of the 95% Wilson interval of unsettled_fraction",
 }
 #: Per-load, per-start variables of the start-up file (those of :func:`group`'s file).
-STARTUP_PER_START = ("label", "mean_omega", "regime", "period_p", "period_q")
+STARTUP_PER_START = ("label", "mean_omega", "regime", "period_p", "period_q", "window_factor")
 
 
 def startup(
@@ -597,10 +804,12 @@ def startup(
     fast_above: float,
     cores: int = 1,
     settle: float = SETTLE,
+    extend: int = EXTEND,
 ) -> xr.Dataset:
     """Start-up under load: at each load torque, the starts of ``grid`` (from rest: speed 0)
     grouped (:func:`basins`), and the fraction that settles on the fast branch, an attractor
-    whose mean speed is ``fast_above`` or more, with its Wilson interval; starts that have not
+    whose mean speed is ``fast_above`` or more, and on a slower one (the slow branch), each
+    with its Wilson interval; starts that have not
     settled within the window count as not reaching it (docs/formats.md "Basins file")."""
     if "load" not in scene.effects:
         raise InputError(scene.source, "effects", "start-up under load needs the 'load' effect")
@@ -608,11 +817,11 @@ def startup(
     rows, impacts = [], 0
     per_start: dict[str, list] = {k: [] for k in STARTUP_PER_START}
     for load in loads:
-        ds = basins(with_params(scene, load_torque=float(load)), grid, cores, settle)
+        ds = basins(with_params(scene, load_torque=float(load)), grid, cores, settle, extend=extend)
         fast_labels = ds["attractor"].values[ds["attractor_mean_speed"].values >= fast_above]
         k = int(np.isin(ds["label"].values, fast_labels).sum())
-        n = int(ds.sizes["start"])
-        rows.append((*_fraction(k, n), *_fraction(int(ds.attrs["unsettled_starts"]), n)))
+        n, unsettled = int(ds.sizes["start"]), int(ds.attrs["unsettled_starts"])
+        rows.append((*_fraction(k, n), *_fraction(n - k - unsettled, n), *_fraction(unsettled, n)))
         impacts += int(ds.attrs["n_impacts"])
         for name, values in per_start.items():
             values.append(ds[name])
@@ -643,6 +852,7 @@ def startup(
             "title": f"bouncedisk start-up under load of scene '{scene.name}'",
             "fast_above": float(fast_above),
             "n_impacts": impacts,
+            "extend": int(extend),
             "rule": RULE,
             "settle": settle,
             "confidence_level": 0.95,

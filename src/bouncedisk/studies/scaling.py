@@ -103,6 +103,7 @@ def scaling(
         rows.append(
             {
                 "study": "omega",
+                "e": 0.3,
                 "omega_s": w,
                 "n_impacts": n,
                 "seconds": sec,
@@ -116,6 +117,7 @@ def scaling(
         rows.append(
             {
                 "study": "impacts",
+                "e": 0.6,
                 "omega_s": 1.5,
                 "n_impacts": n,
                 "seconds": sec,
@@ -126,7 +128,7 @@ def scaling(
             progress(f"{n_ev} impacts: {sec:.4g} s")
     for n_ev in memory_sizes:
         mb = peak_memory_mb(n_ev)
-        rows.append({"study": "memory", "omega_s": 1.5, "n_impacts": n_ev, "peak_mb": mb})
+        rows.append({"study": "memory", "e": 0.6, "omega_s": 1.5, "n_impacts": n_ev, "peak_mb": mb})
         if progress:
             progress(f"{n_ev} impacts streamed: peak {mb:.0f} MB")
     effects = {
@@ -141,6 +143,7 @@ def scaling(
             {
                 "study": "effects",
                 "effect": label,
+                "e": 0.6,
                 "omega_s": 1.5,
                 "n_impacts": n,
                 "seconds": sec,
