@@ -91,9 +91,15 @@ def _fit(lo, hi, gen=GENERATING, identified=1):
             "generating_value": ("parameter", gen),
         },
         coords={"data_set": sets, "parameter": names},
-        attrs={"chi2": 17.7, "n_statistics": 16, "chi2_p_value": 0.34175456894060413, "fit_adequate": 1,
-               "identified": "yes", "load_curve_synthetic": int(np.isfinite(gen).any())},
-    )  # fmt: skip
+        attrs={
+            "chi2": 17.7,
+            "n_statistics": 16,
+            "chi2_p_value": 0.34175456894060413,
+            "fit_adequate": 1,
+            "identified": "yes",
+            "load_curve_synthetic": int(np.isfinite(gen).any()),
+        },
+    )
 
 
 def test_identifiability_needs_every_interval_to_hold_the_generating_value():
@@ -127,13 +133,28 @@ def test_the_checks_adequacy_is_the_fits():
 
 # ----------------------------------------------------------------------------- a results folder
 def _member(k, omega, regime="periodic", lyapunov=-0.5, period=(2, 2), load=0.0):
-    return MemberStats(member=k, mean_omega=omega, mean_slip=0.0, impact_rate=1.0,
-                       chatter_rate=0.0, chatter_interval=math.nan, lyapunov=lyapunov,
-                       regime=ob.REGIME_CODES[regime], period_p=period[0], period_q=period[1],
-                       n_impacts=100, n_chatter=0, duration=5000.0, power_out=load * omega,
-                       power_torsion_in=1.0, power_axial_in=1.0, power_chatter_axial=0.0,
-                       efficiency_torsion=load * omega, audit_residual_axial=1e-12,
-                       audit_residual_torsion=1e-12)  # fmt: skip
+    return MemberStats(
+        member=k,
+        mean_omega=omega,
+        mean_slip=0.0,
+        impact_rate=1.0,
+        chatter_rate=0.0,
+        chatter_interval=math.nan,
+        lyapunov=lyapunov,
+        regime=ob.REGIME_CODES[regime],
+        period_p=period[0],
+        period_q=period[1],
+        n_impacts=100,
+        n_chatter=0,
+        duration=5000.0,
+        power_out=load * omega,
+        power_torsion_in=1.0,
+        power_axial_in=1.0,
+        power_chatter_axial=0.0,
+        efficiency_torsion=load * omega,
+        audit_residual_axial=1e-12,
+        audit_residual_torsion=1e-12,
+    )
 
 
 def _ensemble(omegas, **kw) -> EnsembleStats:
@@ -176,7 +197,7 @@ def _results(tmp_path):
         "stats_e03": _ensemble([144.0] * 4),
         "stats_e06": _ensemble(
             steady + np.array([-1.0, 0.0, 0.5, 1.0]), regime="chaotic", lyapunov=0.8, period=(0, 0)
-        ),  # fmt: skip
+        ),
         "stats_locked": _ensemble([50.0] * 4, regime="chattering-periodic", lyapunov=-math.inf),
     }
     for name, ens in ensembles.items():
@@ -262,17 +283,34 @@ def _set(name, value):
     ("file", "which", "change", "named"),
     [
         # stats: per-member regime, speed and Lyapunov exponent against the attributes
-        ("stats/stats_e03.nc", "stats_e03",
-         _set("regime", lambda v: np.full_like(v, ob.REGIME_CODES["chaotic"])), "regime"),
-        ("stats/stats_e03.nc", "stats_e03", _set("mean_omega", lambda v: v + 1.0),
-         "stats_mean_omega"),
+        (
+            "stats/stats_e03.nc",
+            "stats_e03",
+            _set("regime", lambda v: np.full_like(v, ob.REGIME_CODES["chaotic"])),
+            "regime",
+        ),
+        (
+            "stats/stats_e03.nc",
+            "stats_e03",
+            _set("mean_omega", lambda v: v + 1.0),
+            "stats_mean_omega",
+        ),
         ("stats/stats_e06.nc", "stats_e06", _set("lyapunov", lambda v: -v), "stats_lyapunov"),
         ("stats/stats_e06.nc", "stats_e06", _set("stats_regime", "periodic"), "stats_regime"),
-        ("stats/stats_locked.nc", "stats_locked",
-         _set("lyapunov", lambda v: np.full_like(v, 0.3)), "stats_lyapunov"),
+        (
+            "stats/stats_locked.nc",
+            "stats_locked",
+            _set("lyapunov", lambda v: np.full_like(v, 0.3)),
+            "stats_lyapunov",
+        ),
         # load curves: the stall torque and the per-load means against the members
         ("load/load_fig3.nc", "load_fig3", _set("stall_torque", 2.0), "stall_torque 2 vs"),
-        ("load/load_fig3.nc", "load_fig3", _set("stall_torque_ci95", [0.9, 0.95]), "stall_torque_ci95"),
+        (
+            "load/load_fig3.nc",
+            "load_fig3",
+            _set("stall_torque_ci95", [0.9, 0.95]),
+            "stall_torque_ci95",
+        ),
         ("load/load_fig4.nc", "load_fig4", _set("mean_omega", lambda v: v + 1000.0), "mean_omega["),
         ("load/load_fig4.nc", "load_fig4", _set("mean_omega", lambda v: -v), "mean_omega["),
         ("load/load_fig4.nc", "load_fig4", _set("mean_omega_member", lambda v: -v), "not found"),
@@ -281,14 +319,22 @@ def _set(name, value):
         ("simulations/fig5.nc", "fig5", _set("omega_rotor", lambda v: -v), "inside"),
         ("bands/fig5.nc", "fig5", _set("mean_trend_r2", 0.99), "mean_trend_r2"),
         # the fit: a dropped load curve, an inadequate fit, a tampered p-value
-        ("fit/prototype.nc", "fit", lambda ds: ds.drop_vars("load_speed_measured"),
-         "no load_speed_measured"),
+        (
+            "fit/prototype.nc",
+            "fit",
+            lambda ds: ds.drop_vars("load_speed_measured"),
+            "no load_speed_measured",
+        ),
         ("fit/prototype.nc", "fit", _set("identified", "no"), "identified"),
         ("fit/prototype.nc", "fit", _set("chi2", 80.0), "chi2_p_value"),
-        ("fit/prototype.nc", "fit", _set("generating_value", lambda v: v + 1.0),
-         "excludes its generating value"),
+        (
+            "fit/prototype.nc",
+            "fit",
+            _set("generating_value", lambda v: v + 1.0),
+            "excludes its generating value",
+        ),
     ],
-)  # fmt: skip
+)
 def test_a_tampered_file_fails_its_claim_naming_what_disagrees(
     results, tmp_path, file, which, change, named
 ):
@@ -374,8 +420,10 @@ def test_the_speed_may_not_rise_with_the_load_below_the_bound_only():
 
 
 def test_the_stored_summary_is_compared_with_the_members_it_summarises():
-    same = inp.disagreements({"a": 1.0, "b": [1.0, math.nan], "c": "x"},
-                             {"a": 1.0 + 1e-12, "b": [1.0, math.nan], "c": "x"})  # fmt: skip
+    same = inp.disagreements(
+        {"a": 1.0, "b": [1.0, math.nan], "c": "x"},
+        {"a": 1.0 + 1e-12, "b": [1.0, math.nan], "c": "x"},
+    )
     assert same == []
     differ = inp.disagreements({"m": np.array([1.0, 2.0, 3.0])}, {"m": np.array([1.0, 2.5, 3.0])})
     assert differ == ["m[1] 2 vs 2.5 from the arrays"]

@@ -26,15 +26,38 @@ SAME = 1e-9
 #: "Statistics file").
 STATS_VARIABLES = ("mean_omega", "lyapunov", "regime", "period_p", "period_q")
 #: The summary fields the checks use, each stored as the attribute ``stats_<field>``.
-STATS_FIELDS = ("members", "mean_omega", "mean_omega_ci95", "regime", "regime_fraction", "period",
-                "lyapunov", "lyapunov_ci95", "lyapunov_reset_fraction")  # fmt: skip
+STATS_FIELDS = (
+    "members",
+    "mean_omega",
+    "mean_omega_ci95",
+    "regime",
+    "regime_fraction",
+    "period",
+    "lyapunov",
+    "lyapunov_ci95",
+    "lyapunov_reset_fraction",
+)
 STATS_ATTRS = tuple(f"stats_{k}" for k in STATS_FIELDS)
 #: Variables of a load curve the checks recompute from (per member) and compare (per load).
-LOAD_VARIABLES = ("branch", "load_torque", "mean_omega_member", "power_out_member", "mean_omega",
-                  "mean_omega_ci95_low", "mean_omega_ci95_high", "audit_residual_axial",
-                  "audit_residual_torsion")  # fmt: skip
-LOAD_ATTRS = ("e", "stall_torque", "stall_torque_ci95", "stall_torque_state", "stats_discard",
-              "stats_duration")  # fmt: skip
+LOAD_VARIABLES = (
+    "branch",
+    "load_torque",
+    "mean_omega_member",
+    "power_out_member",
+    "mean_omega",
+    "mean_omega_ci95_low",
+    "mean_omega_ci95_high",
+    "audit_residual_axial",
+    "audit_residual_torsion",
+)
+LOAD_ATTRS = (
+    "e",
+    "stall_torque",
+    "stall_torque_ci95",
+    "stall_torque_state",
+    "stats_discard",
+    "stats_duration",
+)
 
 
 def _short(v) -> str:
@@ -154,12 +177,23 @@ def member_stats(ds, where: str) -> EnsembleStats:
         )
     nan = math.nan
     members = [
-        MemberStats(member=k, mean_omega=cols["mean_omega"][k], mean_slip=nan, impact_rate=nan,
-                    chatter_rate=nan, chatter_interval=nan, lyapunov=cols["lyapunov"][k],
-                    regime=int(codes[k]), period_p=int(cols["period_p"][k]),
-                    period_q=int(cols["period_q"][k]), n_impacts=0, n_chatter=0, duration=nan)
+        MemberStats(
+            member=k,
+            mean_omega=cols["mean_omega"][k],
+            mean_slip=nan,
+            impact_rate=nan,
+            chatter_rate=nan,
+            chatter_interval=nan,
+            lyapunov=cols["lyapunov"][k],
+            regime=int(codes[k]),
+            period_p=int(cols["period_p"][k]),
+            period_q=int(cols["period_q"][k]),
+            n_impacts=0,
+            n_chatter=0,
+            duration=nan,
+        )
         for k in range(len(codes))
-    ]  # fmt: skip
+    ]
     if not members:
         raise InputError(where, "member", "has no members")
     return EnsembleStats(members, nan, nan)
@@ -235,7 +269,7 @@ def load_from_file(ds, where: str) -> tuple[dict, list[str]]:
         "high": per_load[:, 2],
         "residual": max(
             float(np.nanmax(array(ds, where, f"audit_residual_{k}"))) for k in ("axial", "torsion")
-        ),  # fmt: skip
+        ),
         "stall": nan if got["stall_torque"] is None else got["stall_torque"],
         "stall_ci95": stall_ci,
         "state": got["stall_torque_state"],
@@ -251,6 +285,11 @@ def load_from_file(ds, where: str) -> tuple[dict, list[str]]:
         "stall_torque_ci95": pair(ds.attrs, where, "stall_torque_ci95"),
         "stall_torque_state": text(ds.attrs, where, "stall_torque_state"),
     }
-    recomputed = dict(zip(stored, (out["mean"], out["low"], out["high"], out["stall"],
-                                   out["stall_ci95"], out["state"]), strict=True))  # fmt: skip
+    recomputed = dict(
+        zip(
+            stored,
+            (out["mean"], out["low"], out["high"], out["stall"], out["stall_ci95"], out["state"]),
+            strict=True,
+        )
+    )
     return out, disagreements(stored, recomputed)

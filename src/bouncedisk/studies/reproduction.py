@@ -134,8 +134,12 @@ class _Source:
             if not path.is_file():
                 raise InputError(str(path), "", "missing: the results folder lacks this run")
             ds = open_simulation(path)
-            ev = {"t": ds["t_impact"].values, "phase": ds["phase"].values,
-                  "v_rel": ds["v_rel"].values, "kind": ds["kind"].values}  # fmt: skip
+            ev = {
+                "t": ds["t_impact"].values,
+                "phase": ds["phase"].values,
+                "v_rel": ds["v_rel"].values,
+                "kind": ds["kind"].values,
+            }
             traj = None
             if "omega_rotor" in ds:
                 t, om = (inp.array(ds, str(path), v) for v in ("time", "omega_rotor"))
@@ -156,8 +160,12 @@ class _Source:
             return self.cache[key]
         path = self.results / "stats" / f"{name}.nc" if self.results else None
         if path is not None and path.exists():
-            ds = open_checked(path, required=inp.STATS_VARIABLES,
-                              required_attrs=inp.STATS_ATTRS, what="statistics")  # fmt: skip
+            ds = open_checked(
+                path,
+                required=inp.STATS_VARIABLES,
+                required_attrs=inp.STATS_ATTRS,
+                what="statistics",
+            )
             summary, notes = inp.stats_from_file(ds, str(path))
             out = (summary, str(path), notes)
         else:
@@ -176,8 +184,9 @@ class _Source:
             return self.cache[key]
         path = self.results / "bands" / f"{name}.nc" if self.results else None
         if path is not None and path.exists():
-            ds = open_checked(path, required=BAND_VARIABLES, required_attrs=("mean_trend_r2",),
-                              what="band")  # fmt: skip
+            ds = open_checked(
+                path, required=BAND_VARIABLES, required_attrs=("mean_trend_r2",), what="band"
+            )
             where = str(path)
         else:
             from ..analysis.bands import omega_band
@@ -200,9 +209,13 @@ def band_from(ds, where: str) -> tuple[dict, list[str]]:
 
     t, mean = inp.array(ds, where, "time"), inp.array(ds, where, "omega_mean")
     _, r2 = mean_trend_fit(t, mean)
-    out = {"time": t, "r2": r2, "steady": inp.array(ds, where, "trend_steady"),
-           "p025": inp.array(ds, where, "omega_p025"),
-           "p975": inp.array(ds, where, "omega_p975")}  # fmt: skip
+    out = {
+        "time": t,
+        "r2": r2,
+        "steady": inp.array(ds, where, "trend_steady"),
+        "p025": inp.array(ds, where, "omega_p025"),
+        "p975": inp.array(ds, where, "omega_p975"),
+    }
     stored = {"mean_trend_r2": inp.number(ds.attrs, where, "mean_trend_r2")}
     return out, inp.disagreements(stored, {"mean_trend_r2": r2})
 
@@ -215,8 +228,9 @@ def _load_curve(src: _Source, name: str) -> tuple[dict, str, list[str]]:
         return src.cache[key]
     path = src.results / "load" / f"{name}.nc" if src.results else None
     if path is not None and path.exists():
-        ds = open_checked(path, required=inp.LOAD_VARIABLES, required_attrs=inp.LOAD_ATTRS,
-                          what="load curve")  # fmt: skip
+        ds = open_checked(
+            path, required=inp.LOAD_VARIABLES, required_attrs=inp.LOAD_ATTRS, what="load curve"
+        )
         where = str(path)
     else:
         from .torque_speed import parse_loads, refined_torque_speed, to_dataset
@@ -264,8 +278,10 @@ def _stall_check(name: str, c: dict, where: str) -> CheckResult:
     found = found and lo <= stall <= hi
     if name in AT_BOUND:
         ok = found and lo <= 1.0 <= hi and hi <= 1.0 + c["window"] + RESOLUTION_SLACK
-        expected = (f"1 in the interval, its upper end <= 1 + the {res} + "
-                    f"{RESOLUTION_SLACK:g} (units of the friction torque)")  # fmt: skip
+        expected = (
+            f"1 in the interval, its upper end <= 1 + the {res} + "
+            f"{RESOLUTION_SLACK:g} (units of the friction torque)"
+        )
         claim = f"e = {e:g}: the motor stalls at the momentum bound (mean N = 1, docs/model.md)"
     else:
         ok = found and lo <= 1.0 + c["window"]
@@ -300,19 +316,31 @@ def _load_checks(src: _Source, names: tuple[str, ...] = LOAD_CURVES) -> list[Che
     for name in names:
         c, where, notes = _load_curve(src, name)
         e = c["e"]
-        out.append(CheckResult(
-            f"e = {e:g}: the energy audit closes to round-off on every load (docs/model.md)",
-            f"largest relative residual {c['residual']:.2g} over both balances, branches, loads",
-            "<= 1e-9", c["residual"] <= 1e-9, where,
-        ))  # fmt: skip
+        out.append(
+            CheckResult(
+                f"e = {e:g}: the energy audit closes to round-off on every load (docs/model.md)",
+                f"largest relative residual {c['residual']:.2g} over both balances, branches, loads",
+                "<= 1e-9",
+                c["residual"] <= 1e-9,
+                where,
+            )
+        )
         out.append(audited(_stall_check(name, c, where), notes))
         rises = _rises(c)
-        out.append(audited(CheckResult(
-            f"e = {e:g}: the mean speed does not rise with the load up to the momentum bound "
-            "(up branch; past it no speed is stationary, docs/model.md)",
-            "rises beyond the 95% intervals at loads " + (", ".join(f"{x:g}" for x in rises) or "none"),
-            "none", not rises, where,
-        ), notes))  # fmt: skip
+        out.append(
+            audited(
+                CheckResult(
+                    f"e = {e:g}: the mean speed does not rise with the load up to the momentum bound "
+                    "(up branch; past it no speed is stationary, docs/model.md)",
+                    "rises beyond the 95% intervals at loads "
+                    + (", ".join(f"{x:g}" for x in rises) or "none"),
+                    "none",
+                    not rises,
+                    where,
+                ),
+                notes,
+            )
+        )
     return out
 
 
@@ -327,40 +355,52 @@ def _period_check(src: _Source) -> CheckResult:
     width = high - low
     ok = st["regime"] == "periodic" and st["period"] == [2, 2] and st["regime_fraction"] == 1.0
     ok = ok and width <= 1e-6 * abs(st["mean_omega"])
-    return audited(CheckResult(
-        "e = 0.3, omega_s = 1.5 settles on a period-2 orbit (paper §3, Fig. 3; "
-        "docs/model.md 'Long-run statistics of chaotic motion')",
-        f"regime {st['regime']} {st['period']} in {100 * st['regime_fraction']:.0f}% of "
-        f"{st['members']} members; mean Omega {_ci(st, 'mean_omega')}",
-        "periodic [2 impacts, 2 stator periods] in every member; interval of zero width",
-        ok, where,
-    ), notes)  # fmt: skip
+    return audited(
+        CheckResult(
+            "e = 0.3, omega_s = 1.5 settles on a period-2 orbit (paper §3, Fig. 3; "
+            "docs/model.md 'Long-run statistics of chaotic motion')",
+            f"regime {st['regime']} {st['period']} in {100 * st['regime_fraction']:.0f}% of "
+            f"{st['members']} members; mean Omega {_ci(st, 'mean_omega')}",
+            "periodic [2 impacts, 2 stator periods] in every member; interval of zero width",
+            ok,
+            where,
+        ),
+        notes,
+    )
 
 
 def _chaos_check(src: _Source) -> CheckResult:
     st, where, notes = src.stats("stats_e06")
     ok = st["lyapunov_ci95"][0] > 0.0  # False for nan
     ok = ok and st["regime"] in ("chaotic", "chaotic-reinjection")
-    return audited(CheckResult(
-        "e = 0.6, omega_s = 1.5 is chaotic (paper §3, Fig. 4; docs/model.md, Long-run statistics "
-        "of chaotic motion)",
-        f"regime {st['regime']} ({100 * st['regime_fraction']:.0f}% of members); Lyapunov "
-        f"exponent between resets {_ci(st, 'lyapunov')} per impact",
-        "chaotic, the 95% interval of the Lyapunov exponent above 0",
-        ok, where,
-    ), notes)  # fmt: skip
+    return audited(
+        CheckResult(
+            "e = 0.6, omega_s = 1.5 is chaotic (paper §3, Fig. 4; docs/model.md, Long-run statistics "
+            "of chaotic motion)",
+            f"regime {st['regime']} ({100 * st['regime_fraction']:.0f}% of members); Lyapunov "
+            f"exponent between resets {_ci(st, 'lyapunov')} per impact",
+            "chaotic, the 95% interval of the Lyapunov exponent above 0",
+            ok,
+            where,
+        ),
+        notes,
+    )
 
 
 def _locked_check(src: _Source) -> CheckResult:
     st, where, notes = src.stats("stats_locked")
     ok = st["regime"] == "chattering-periodic" and st["lyapunov_reset_fraction"] == 1.0
-    return audited(CheckResult(
-        "e = 0.5, omega_s = 1.126 is a locked chattering cycle, not chaos (docs/model.md, Regimes)",
-        f"regime {st['regime']} {st['period']} in {100 * st['regime_fraction']:.0f}% of "
-        f"members; {100 * st['lyapunov_reset_fraction']:.0f}% reset every cycle (exponent -inf)",
-        "chattering-periodic in the majority, every member's exponent -inf (reset)",
-        ok, where,
-    ), notes)  # fmt: skip
+    return audited(
+        CheckResult(
+            "e = 0.5, omega_s = 1.126 is a locked chattering cycle, not chaos (docs/model.md, Regimes)",
+            f"regime {st['regime']} {st['period']} in {100 * st['regime_fraction']:.0f}% of "
+            f"members; {100 * st['lyapunov_reset_fraction']:.0f}% reset every cycle (exponent -inf)",
+            "chattering-periodic in the majority, every member's exponent -inf (reset)",
+            ok,
+            where,
+        ),
+        notes,
+    )
 
 
 def _threshold_checks(_src: _Source) -> list[CheckResult]:
@@ -421,8 +461,9 @@ def _rise_check(src: _Source) -> CheckResult:
         "psi = 0)"
     )
     if traj is None or len(traj) < 10:
-        return CheckResult(claim, "no omega_rotor trajectory", "a trajectory with omega_rotor",
-                           False, where)  # fmt: skip
+        return CheckResult(
+            claim, "no omega_rotor trajectory", "a trajectory with omega_rotor", False, where
+        )
     t, om = traj[:, 0], traj[:, 1]
     trend = ob.first_order_trend(t, om)
     ripple = trend.ripple_rms / abs(trend.steady) if trend.steady else math.inf
@@ -441,13 +482,18 @@ def _rise_check(src: _Source) -> CheckResult:
         f"{band['r2']:.3f}; long-run mean {_ci(long_run, 'mean_omega')}; one run's ripple RMS "
         f"{100 * ripple:.2f}% of steady, {100 * inside:.0f}% of it inside the members' central 95%"
     )
-    return audited(CheckResult(
-        claim, measured,
-        "R^2 > 0.8, ripple 0.5%-30% of steady, run longer than 2 time constants, steady-speed "
-        f"interval overlapping the long-run ensemble mean's, >= {100 * IN_BAND:.0f}% of the run "
-        "inside the band",
-        ok, f"{where}; {band_where}; {lr_where}",
-    ), notes + lr_notes)  # fmt: skip
+    return audited(
+        CheckResult(
+            claim,
+            measured,
+            "R^2 > 0.8, ripple 0.5%-30% of steady, run longer than 2 time constants, steady-speed "
+            f"interval overlapping the long-run ensemble mean's, >= {100 * IN_BAND:.0f}% of the run "
+            "inside the band",
+            ok,
+            f"{where}; {band_where}; {lr_where}",
+        ),
+        notes + lr_notes,
+    )
 
 
 #: Fewest readings of the load curve within the fitted members' 95 % band (13 readings: 11).
@@ -457,11 +503,27 @@ FIT_IN_BAND = 0.8
 #: import; tests/test_checks.py holds the two equal).
 FIT_P_MIN = 1e-3
 #: What the fit checks read from the fit file; a file without one is refused, naming it.
-FIT_VARIABLES = ("load_speed_measured", "load_speed_band_low", "load_speed_band_high",
-                 "interval_low", "interval_high", "interval_identified", "search_low",
-                 "search_high", "generating_value", "data_set", "parameter")  # fmt: skip
-FIT_ATTRS = ("chi2", "n_statistics", "chi2_p_value", "fit_adequate", "identified",
-             "load_curve_synthetic")  # fmt: skip
+FIT_VARIABLES = (
+    "load_speed_measured",
+    "load_speed_band_low",
+    "load_speed_band_high",
+    "interval_low",
+    "interval_high",
+    "interval_identified",
+    "search_low",
+    "search_high",
+    "generating_value",
+    "data_set",
+    "parameter",
+)
+FIT_ATTRS = (
+    "chi2",
+    "n_statistics",
+    "chi2_p_value",
+    "fit_adequate",
+    "identified",
+    "load_curve_synthetic",
+)
 _FIT_CLAIMS = (
     "the model fitted to the run-up and the load curve together reproduces the load curve "
     "(docs/user_guide/fitting.md)",
@@ -500,11 +562,16 @@ def fit_verdict(ds, where: str) -> tuple[dict, list[str]]:
     chi2, n = inp.number(a, where, "chi2"), inp.number(a, where, "n_statistics")
     p = float(chdtrc(n, chi2)) if n >= 1 and chi2 >= 0 else math.nan
     adequate = p > FIT_P_MIN
-    stored = {"chi2_p_value": inp.number(a, where, "chi2_p_value"),
-              "fit_adequate": inp.number(a, where, "fit_adequate"),
-              "identified": inp.text(a, where, "identified")}  # fmt: skip
-    recomputed = {"chi2_p_value": p, "fit_adequate": float(adequate),
-                  "identified": "yes" if adequate else "no"}  # fmt: skip
+    stored = {
+        "chi2_p_value": inp.number(a, where, "chi2_p_value"),
+        "fit_adequate": inp.number(a, where, "fit_adequate"),
+        "identified": inp.text(a, where, "identified"),
+    }
+    recomputed = {
+        "chi2_p_value": p,
+        "fit_adequate": float(adequate),
+        "identified": "yes" if adequate else "no",
+    }
     verdict = {"chi2": chi2, "n": n, "p": p, "adequate": adequate}
     return verdict, inp.disagreements(stored, recomputed)
 
@@ -516,13 +583,17 @@ def _reproduces_check(ds, where: str) -> CheckResult:
     inside = (y >= lo) & (y <= hi)
     frac = float(np.mean(inside)) if len(y) else 0.0
     v, notes = fit_verdict(ds, where)
-    return audited(CheckResult(
-        _FIT_CLAIMS[0],
-        f"{100 * frac:.0f}% of {len(y)} readings within the fitted members' 95% band; joint "
-        f"chi2 {v['chi2']:.4g} on {v['n']:g} statistics (p = {v['p']:.2g})",
-        f">= {100 * FIT_IN_BAND:.0f}% within the band, fit adequate (p > {FIT_P_MIN:g})",
-        frac >= FIT_IN_BAND and v["adequate"], where,
-    ), notes)  # fmt: skip
+    return audited(
+        CheckResult(
+            _FIT_CLAIMS[0],
+            f"{100 * frac:.0f}% of {len(y)} readings within the fitted members' 95% band; joint "
+            f"chi2 {v['chi2']:.4g} on {v['n']:g} statistics (p = {v['p']:.2g})",
+            f">= {100 * FIT_IN_BAND:.0f}% within the band, fit adequate (p > {FIT_P_MIN:g})",
+            frac >= FIT_IN_BAND and v["adequate"],
+            where,
+        ),
+        notes,
+    )
 
 
 def _identifiability_check(ds, both: int, where: str) -> CheckResult:
