@@ -318,13 +318,7 @@ def _set(name, value):
         ("simulations/fig5.nc", "fig5", _set("omega_rotor", lambda v: 10 * v), "inside"),
         ("simulations/fig5.nc", "fig5", _set("omega_rotor", lambda v: -v), "inside"),
         ("bands/fig5.nc", "fig5", _set("mean_trend_r2", 0.99), "mean_trend_r2"),
-        # the fit: a dropped load curve, an inadequate fit, a tampered p-value
-        (
-            "fit/prototype.nc",
-            "fit",
-            lambda ds: ds.drop_vars("load_speed_measured"),
-            "no load_speed_measured",
-        ),
+        # the fit: an inadequate fit, a tampered p-value, generating values moved
         ("fit/prototype.nc", "fit", _set("identified", "no"), "identified"),
         ("fit/prototype.nc", "fit", _set("chi2", 80.0), "chi2_p_value"),
         (
@@ -359,6 +353,7 @@ def test_a_tampered_file_fails_its_claim_naming_what_disagrees(
         ("fit/prototype.nc", "identified"),
         ("fit/prototype.nc", "load_speed_band_low"),
         ("fit/prototype.nc", "generating_value"),
+        ("fit/prototype.nc", "load_speed_measured"),
         ("bands/fig5.nc", "mean_trend_r2"),
         ("bands/fig5.nc", "omega_p975"),
     ],
@@ -407,6 +402,38 @@ def test_check_results_with_a_file_missing_a_field_is_one_line_and_exit_2(
     lines = out.err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("bouncedisk: error: ")
     assert "prototype.nc" in lines[0] and "chi2" in lines[0] and "Traceback" not in out.err
+
+
+#: Everything only a joint fit writes (the small fit file's share of checks.JOINT_MARKERS).
+JOINT_ONLY = (
+    "load_speed_measured",
+    "load_speed_band_low",
+    "load_speed_band_high",
+    "interval_low",
+    "interval_high",
+    "interval_identified",
+    "generating_value",
+    "data_set",
+    "load_curve_synthetic",
+)
+
+
+def test_a_run_up_only_fit_fails_the_fit_claims_where_a_joint_fit_was_made(results, tmp_path):
+    res = _copy(results, tmp_path)
+
+    def run_up_only(ds):
+        ds = ds.drop_vars([v for v in JOINT_ONLY if v in ds.variables])
+        ds.attrs = {k: v for k, v in ds.attrs.items() if k not in JOINT_ONLY}
+        return ds
+
+    _edit(res / "fit" / "prototype.nc", run_up_only)
+    # the pipeline made a joint fit: both claims fail, saying why
+    got = checks._fit_checks(checks._Source(res, joint_fit=True))
+    assert len(got) == 2 and not any(r.passed for r in got)
+    assert all("run-up-only fit" in r.measured for r in got)
+    # a run-up-only config (or unknown, and nothing of a joint fit in the file): nothing to check
+    assert checks._fit_checks(checks._Source(res, joint_fit=False)) == []
+    assert checks._fit_checks(checks._Source(res)) == []
 
 
 def test_the_speed_may_not_rise_with_the_load_below_the_bound_only():

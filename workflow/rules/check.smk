@@ -20,6 +20,8 @@ rule reproduction_checks:
     params:
         # the results folder: each file read is <results>/<kind>/<name>.nc
         results=lambda wildcards, input: str(Path(input.read[0]).parents[1]),
+        # the checks fail a run-up-only fit file when the config asked for a joint fit
+        joint_fit=bool(config["prototype"].get("load_curve")),
     script:
         "../scripts/reproduction_checks.py"
 
