@@ -389,6 +389,7 @@ def test_check_results_with_a_field_of_the_wrong_type_is_one_line_and_exit_2(
     lines = out.err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("bouncedisk: error: "), out.err
     assert file.split("/")[-1] in lines[0] and field in lines[0] and "Traceback" not in out.err
+    assert "np." not in lines[0]  # the value as written, not numpy's repr
 
 
 def test_check_results_with_a_file_missing_a_field_is_one_line_and_exit_2(

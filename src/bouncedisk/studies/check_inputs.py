@@ -61,7 +61,8 @@ LOAD_ATTRS = (
 
 
 def _short(v) -> str:
-    text = repr(v.tolist() if isinstance(v, np.ndarray) else v)
+    """A value as a user wrote it (``0.5``, ``'abc'``, ``[1, 2]``: no numpy type names)."""
+    text = repr(v.tolist() if isinstance(v, np.ndarray | np.generic) else v)
     return text if len(text) <= 40 else text[:37] + "..."
 
 
@@ -135,8 +136,10 @@ def _same(stored, recomputed) -> bool:
     return bool(np.all(both_nan | close))
 
 
-def disagreements(stored: Mapping, recomputed: Mapping, prefix: str = "") -> list[str]:
-    """``"<prefix><key> <stored> vs <recomputed> from the arrays"`` for each key of ``stored``
+def disagreements(
+    stored: Mapping, recomputed: Mapping, prefix: str = "", source: str = "the arrays"
+) -> list[str]:
+    """``"<prefix><key> <stored> vs <recomputed> from <source>"`` for each key of ``stored``
     whose value differs from ``recomputed[key]`` (numbers within :data:`SAME`)."""
     out = []
     for key, value in stored.items():
@@ -146,7 +149,7 @@ def disagreements(stored: Mapping, recomputed: Mapping, prefix: str = "") -> lis
         if np.ndim(value) == 1 and len(value) > 2 and np.shape(value) == np.shape(other):
             k = next(i for i in range(len(value)) if not _same(value[i], other[i]))
             key, value, other = f"{key}[{k}]", value[k], other[k]
-        out.append(f"{prefix}{key} {_shown(value)} vs {_shown(other)} from the arrays")
+        out.append(f"{prefix}{key} {_shown(value)} vs {_shown(other)} from {source}")
     return out
 
 

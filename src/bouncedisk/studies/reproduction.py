@@ -599,7 +599,7 @@ def fit_verdict(ds, where: str) -> tuple[dict, list[str]]:
         "identified": "yes" if adequate else "no",
     }
     verdict = {"chi2": chi2, "n": n, "p": p, "adequate": adequate}
-    return verdict, inp.disagreements(stored, recomputed)
+    return verdict, inp.disagreements(stored, recomputed, source="chi2")
 
 
 def _reproduces_check(ds, where: str) -> CheckResult:
