@@ -8,7 +8,7 @@ from scipy.optimize import brentq
 
 from bouncedisk.analysis import observables as ob
 from bouncedisk.engine import KIND_CHATTER, EngineConfig, InitialState, simulate_arrays
-from bouncedisk.studies import reproduction as checks
+from bouncedisk.studies import thresholds
 
 W_REST = 1e-9  # a stator that is practically at rest over the test's time span
 
@@ -91,22 +91,22 @@ def test_impact_map_jacobian_at_period_1_fixed_point():
 @pytest.mark.parametrize("n", [1, 2])
 def test_period_n_existence_threshold_within_1e_3(n):
     """Bisect Γ on 'a run started at the orbit's phase settles on it' (docs/model.md Γ_n), with the
-    reproduction check's own bisection (bouncedisk.studies.reproduction)."""
+    reproduction check's own bisection (bouncedisk.studies.thresholds)."""
     e = 0.3
     g_n = ob.period_n_threshold(n, e)
     # the bracket the bisection starts from is a real bracket: below, no orbit; above, stable
-    assert not checks.settles_on_period(e, 0.9 * g_n, n, 0.0, 4000)
-    assert checks.settles_on_period(e, 1.1 * g_n, n, math.acos(1 / 1.1), 4000)
-    assert abs(checks.engine_existence_threshold(n, e) - g_n) < 1e-3
+    assert not thresholds.settles_on_period(e, 0.9 * g_n, n, 0.0, 4000)
+    assert thresholds.settles_on_period(e, 1.1 * g_n, n, math.acos(1 / 1.1), 4000)
+    assert abs(thresholds.engine_existence_threshold(n, e) - g_n) < 1e-3
 
 
 def test_period_doubling_threshold_within_1e_3():
     """Bisect Γ on 'the period-1 orbit is stable' using the engine's long-run behaviour."""
     e = 0.3
     g_pd = ob.period_doubling_threshold(1, e)
-    assert checks.period_one_is_stable(e, g_pd - 0.05)
-    assert not checks.period_one_is_stable(e, g_pd + 0.05)
-    assert abs(checks.engine_doubling_threshold(e) - g_pd) < 1e-3
+    assert thresholds.period_one_is_stable(e, g_pd - 0.05)
+    assert not thresholds.period_one_is_stable(e, g_pd + 0.05)
+    assert abs(thresholds.engine_doubling_threshold(e) - g_pd) < 1e-3
 
 
 def test_seed_claim_e03_is_period_2():

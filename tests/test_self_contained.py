@@ -145,3 +145,24 @@ def test_the_check_catches_every_kind_of_bad_reference(tmp_path):
     found = problems(tmp_path, ["a.py"])
     lines = sorted({int(p.split(":")[1]) for p in found})
     assert lines == list(range(2, 3 + len(bad))), found
+
+
+def test_the_scenes_are_one_copy_that_the_package_ships():
+    """``workflow/config/scenes`` is a relative link to the package's ``scenes`` folder, every
+    scene there is package data (pyproject.toml), and the checks find theirs in it
+    (importlib.resources), so an installed package runs ``bouncedisk check`` (.ci/wheel)."""
+    import fnmatch
+    import os
+    import tomllib
+
+    from bouncedisk.studies import reproduction_files as files
+
+    link, shipped = ROOT / "workflow" / "config" / "scenes", ROOT / "src" / "bouncedisk" / "scenes"
+    assert link.is_symlink() and not os.path.isabs(os.readlink(link))
+    assert link.resolve() == shipped.resolve()
+    data = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    patterns = data["tool"]["setuptools"]["package-data"]["bouncedisk"]
+    scenes = sorted(p.name for p in shipped.glob("*.yaml"))
+    assert scenes and all(any(fnmatch.fnmatch(f"scenes/{s}", p) for p in patterns) for s in scenes)
+    for name in ("fig5", "basins_fig3", *files.STATS_SCENES, *files.LOAD_CURVES):
+        assert files.scene_file(name).is_file(), name

@@ -5,11 +5,8 @@ rule reproduction_checks:
     """Verify the paper's claims from the built results: results/reproduction.md."""
     input:
         compiled=rules.compile_engine.output,
-        sims=[f"{RES}/simulations/fig5.nc"],
-        stats=expand(f"{RES}/stats/{{s}}.nc", s=CHECKED_STATS),
-        band=f"{RES}/bands/fig5.nc",
-        load=expand(f"{RES}/load/{{c}}.nc", c=CHECKED_LOAD_CURVES),
-        fit=f"{RES}/fit/prototype.nc",
+        # every built file the checks read (bouncedisk.studies.reproduction_files.RESULT_FILES)
+        read=[f"{RES}/{name}" for name in _checked.RESULT_FILES],
         basins=[f"{RES}/basins/startup.nc"] if "basins" in config else [],
     output:
         report(f"{RES}/reproduction.md", caption="../report/reproduction.rst",
@@ -21,7 +18,10 @@ rule reproduction_checks:
     benchmark:
         f"{RES}/benchmarks/reproduction_checks.tsv"
     params:
-        results=lambda wildcards, input: str(Path(input.sims[0]).parents[1]),
+        # the results folder: each file read is <results>/<kind>/<name>.nc
+        results=lambda wildcards, input: str(Path(input.read[0]).parents[1]),
+        # the checks fail a run-up-only fit file when the config asked for a joint fit
+        joint_fit=bool(config["prototype"].get("load_curve")),
     script:
         "../scripts/reproduction_checks.py"
 

@@ -2,6 +2,8 @@
 import math
 import os
 
+from bouncedisk.studies import reproduction_files as _checked
+
 RES = config["results"]
 # who made the files (ACDD creator/institution attributes of every netCDF file): the jobs read
 # them from the environment (bouncedisk.io.provenance.METADATA_ENV); unset keys keep the defaults
@@ -85,10 +87,10 @@ def _check_config():
         )
 
 
-# ensemble statistics the reproduction checks read (bouncedisk.studies.reproduction.STATS_SCENES)
-CHECKED_STATS = ["stats_e03", "stats_e06", "stats_locked"]
-# load curves the reproduction checks read (bouncedisk.studies.reproduction.LOAD_CURVES)
-CHECKED_LOAD_CURVES = ["load_fig3", "load_fig4"]
+# ensemble statistics and load curves the reproduction checks read: their one list is
+# bouncedisk.studies.reproduction_files (standard library only, cheap to import here)
+CHECKED_STATS = list(_checked.STATS_SCENES)
+CHECKED_LOAD_CURVES = list(_checked.LOAD_CURVES)
 _check_config()
 
 

@@ -90,6 +90,15 @@ def _band_dataset(t: np.ndarray, om: np.ndarray) -> xr.Dataset:
     )
 
 
+def mean_trend_fit(t: np.ndarray, mean: np.ndarray) -> tuple[ob.FirstOrderTrend, float]:
+    """The first-order trend of the ensemble mean ``Ω̄(t)`` and its ``R²``, the share of the
+    mean's variance it explains (``nan`` for a constant mean)."""
+    trend = ob.first_order_trend(t, mean)
+    resid = mean - trend(t)
+    r2 = 1.0 - float(np.var(resid) / np.var(mean)) if np.var(mean) > 0 else float("nan")
+    return trend, r2
+
+
 def omega_band(
     scene: Scene,
     members: int,
@@ -116,10 +125,7 @@ def omega_band(
     start = time.perf_counter()
     t, om = member_speeds(scene, members, seed, e_sigma, cores)
     ds = _band_dataset(t, om)
-    mean = ds["omega_mean"].values
-    mean_trend = ob.first_order_trend(t, mean)
-    resid = mean - mean_trend(t)
-    r2 = 1.0 - float(np.var(resid) / np.var(mean)) if np.var(mean) > 0 else float("nan")
+    mean_trend, r2 = mean_trend_fit(t, ds["omega_mean"].values)
     ds.attrs.update(
         base_attrs(f"bouncedisk ensemble band of the rotor speed, scene '{scene.name}'")
     )
