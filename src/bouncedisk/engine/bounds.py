@@ -27,7 +27,7 @@ Where the bounds come from (docs/model.md "Things that are easy to get wrong"):
   them over a run: :data:`MAX_SPEED` ``= 1e100`` keeps the squares (1e200) far from overflow
   (1.8e308, reached at 1.3e154).
 - **The stator's scales.** ``ω_s²`` (the stator's peak acceleration in ``g``) and ``1/ω_s²``
-  (the stator position where contact ends, docs/model.md "Separation") must be normal doubles:
+  (the stator position where contact ends, docs/model.md "Events") must be normal doubles:
   :data:`OMEGA_S_MIN` ``= 2⁻⁵⁰⁰`` (3e-151; at 1e-300, ``ω_s²`` is 0 and ``1/ω_s²`` a division
   by zero).
 - **Counts.** ``max_events`` is the kernel's int64 counter: a whole number in
@@ -60,16 +60,23 @@ MAX_SAMPLE_INDEX = 2.0**62
 
 def is_real(x: Any) -> bool:
     """A real number (Python or numpy), not a boolean."""
+    t = type(x)
+    if t is float or t is int:  # the common case, without the slower checks of the ABCs
+        return True
     return isinstance(x, Real) and not isinstance(x, bool | np.bool_)
 
 
 def is_count(x: Any, low: int, high: int) -> bool:
     """A whole number (Python or numpy int, not a boolean) in ``[low, high]``."""
-    return isinstance(x, Integral) and not isinstance(x, bool) and low <= x <= high
+    if type(x) is int or (isinstance(x, Integral) and not isinstance(x, bool)):
+        return low <= x <= high
+    return False
 
 
 def finite(source: str, field: str, x: Any, limit: float = math.inf) -> float:
     """``x`` as a float when it is a finite real number with ``|x| <= limit``."""
+    if type(x) is float and math.isfinite(x) and abs(x) <= limit:  # the common case
+        return x
     if not is_real(x) or not math.isfinite(x):
         raise InputError(source, field, f"must be a finite number, got {plain(x)}")
     if abs(x) > limit:
@@ -194,7 +201,7 @@ def check_config(cfg: Any, source: str = "EngineConfig") -> None:
             raise InputError(source, name, f"{text}, got {plain(value)}")
     for name in _FLAGS:
         value = getattr(cfg, name)
-        if not (isinstance(value, bool | np.bool_) or value in (0, 1)):
+        if not (value is True or value is False or isinstance(value, np.bool_) or value in (0, 1)):
             raise InputError(source, name, f"must be true or false, got {plain(value)}")
     w = check_omega_s(source, "omega_s", cfg.omega_s)
     check_time(source, "t_end", cfg.t_end, w, inf_ok=True)

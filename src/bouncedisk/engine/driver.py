@@ -273,7 +273,7 @@ def _may_run_without_events(cfg: EngineConfig) -> bool:
     window too shallow to fly, :func:`~.kernel._separation_constants`). Every other run has an
     event at least every stator period or flight, and each kernel call ends after a bounded
     number of events; such a run would be one call to its end, deaf to SIGINT and SIGTERM
-    (docs/internals.md), so :func:`_kernel_calls` ends its calls every :data:`_SLICE_PERIODS`
+    (Python runs signal handlers between calls only), so :func:`_kernel_calls` ends its calls every :data:`_SLICE_PERIODS`
     periods through the stroboscopic buffer, which the kernel resumes exactly where it stopped.
     """
     if math.isinf(cfg.t_end):
