@@ -32,7 +32,7 @@ from bouncedisk.model.scene import scene_from_mapping
 )
 def test_engine_config_refuses_what_cannot_run(field, value):
     kw = {"e": 0.6, "omega_s": 1.5, "max_events": 10, "t_end": 100.0, field: value}
-    with pytest.raises(ValueError, match=f"EngineConfig.{field} = "):
+    with pytest.raises(InputError, match=f"^EngineConfig: {field}: "):
         bd.EngineConfig(**kw)
 
 

@@ -13,6 +13,7 @@ previous point's final state, up or down, so coexisting attractors both appear.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import time
 from collections import deque
@@ -26,13 +27,19 @@ from ..engine import EngineConfig, InitialState
 from ..io.provenance import base_attrs, new_run_id
 from ..model import stator
 from ..model.engine_config import engine_config
-from ..model.errors import InputError
+from ..model.errors import InputError, plain
 from ..model.params import Parameters
 from ..model.scene import Scene
 from ..run.runner import scene_attrs
 from . import observables as ob
-from .ensembles import run_member
-from .statistics import QUANTITIES, EnsembleStats, confidence_interval, ensemble_window
+from .ensembles import CappedRun, run_member
+from .statistics import (
+    QUANTITIES,
+    EnsembleStats,
+    capped_error,
+    confidence_interval,
+    ensemble_window,
+)
 
 SWEEPABLE = ("e", "omega_s", "r_phi", "psi")
 #: Quantities a sweep records per point, each with ``<name>_ci_low`` and ``<name>_ci_high``.
@@ -88,6 +95,18 @@ def _point_result(scene: Scene, runs: Sequence[tuple]) -> PointResult:
     stats = EnsembleStats([st for st, _, _ in runs], scene.stats.discard, t_end - t_from)
     _, final, tail = runs[0]
     return PointResult(stats, tail, final)
+
+
+@contextlib.contextmanager
+def _point_named(scene: Scene, names: Sequence[str]) -> Iterator[None]:
+    """A member of the point ``scene`` that stops at ``stop.max_events`` before its window ends:
+    an input error naming the scene, the field and the point's swept values
+    (:func:`~bouncedisk.analysis.statistics.capped_error`)."""
+    try:
+        yield
+    except CappedRun as ex:
+        point = ", ".join(f"{n} = {plain(getattr(scene.params, n))}" for n in names)
+        raise capped_error(scene, ex, f" at the sweep point {point}") from None
 
 
 def _ordered_runs(
@@ -259,7 +278,8 @@ def run_sweep(
     try:
         runs = _ordered_runs(pool, tasks(), ahead=2 * max(1, cores) * members)
         for count in range(total):
-            point_runs = [next(runs) for _ in range(members)]
+            with _point_named(made[0][1] if made else scene, names):
+                point_runs = [next(runs) for _ in range(members)]
             idx, sc = made.popleft()
             grid.put(idx, _point_result(sc, point_runs))
             if progress:
@@ -324,7 +344,9 @@ def run_continuation(
     init = None
     start = time.perf_counter()
     for i, x in enumerate(order):
-        pt = run_point(with_params(scene, **{name: float(x)}), init)
+        sc = with_params(scene, **{name: float(x)})
+        with _point_named(sc, [name]):
+            pt = run_point(sc, init)
         grid.put((i,), pt)
         init = _continued(pt.final, scene)
         if progress:

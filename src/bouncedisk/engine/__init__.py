@@ -1,7 +1,8 @@
 """The exact event-driven engine (numba): no I/O, no xarray.
 
 Public entry points: :class:`EngineConfig`, :class:`InitialState`, :func:`iterate` (chunked,
-streaming) and :func:`simulate_arrays` (in memory).
+streaming) and :func:`simulate_arrays` (in memory). They refuse a configuration or state out of
+the bounds of :mod:`bouncedisk.engine.bounds` with an :class:`InputError` before the kernel runs.
 
 The compiled functions are cached on disk by numba, keyed on all of the engine's sources
 (:mod:`bouncedisk.engine._cache`, which every compiled module imports before it decorates
@@ -14,6 +15,7 @@ from __future__ import annotations
 from importlib import import_module
 from typing import TYPE_CHECKING, Any
 
+from .errors import InputError
 from .layout import KIND_CHATTER, KIND_IMPACT
 
 if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs only
@@ -32,6 +34,7 @@ __all__ = [
     "EngineConfig",
     "EngineError",
     "InitialState",
+    "InputError",
     "RunResult",
     "iterate",
     "simulate_arrays",
@@ -39,7 +42,7 @@ __all__ = [
     "KIND_CHATTER",
 ]
 #: The entry points that live in :mod:`bouncedisk.engine.driver` (imported on first use).
-_FROM_DRIVER = frozenset(__all__) - {"KIND_IMPACT", "KIND_CHATTER"}
+_FROM_DRIVER = frozenset(__all__) - {"KIND_IMPACT", "KIND_CHATTER", "InputError"}
 
 
 def __getattr__(name: str) -> Any:

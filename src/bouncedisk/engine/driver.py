@@ -10,12 +10,12 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Generator, Iterator
 from dataclasses import dataclass, field
-from numbers import Integral, Real
 from typing import Generic, TypeVar
 
 import numpy as np
 
 from . import kernel as K
+from .bounds import MAX_SPEED, check_config, check_run, finite
 from .layout import OK_STATUSES, STATUS_TEXT
 
 Y = TypeVar("Y")
@@ -29,7 +29,10 @@ class EngineConfig:
     Parameters
     ----------
     e, omega_s, r_phi, psi : float
-        Nondimensional parameters (docs/model.md).
+        Nondimensional parameters (docs/model.md), ``omega_s`` within the bounds of
+        :mod:`.bounds`. A fast stator launches the rotor at about its own speed ``omega_s``,
+        for a flight of about ``2 omega_s``: at ``omega_s = 1e4`` the first impact of the
+        default start comes at ``t ≈ 2e4``, and a run stopped before has no event.
     contact, torsion, impulse_cap : bool
         Effects (docs/model.md "Optional effects").
     inertia_ratio : float
@@ -91,53 +94,9 @@ class EngineConfig:
     load_torque: float = 0.0
 
     def __post_init__(self) -> None:
-        """Refuse what the kernel cannot run: a ``nan`` or out-of-range parameter would make its
-        event searches spin without end (``e = nan``, ``e = 2``) instead of failing."""
-        for name, ok in _CONFIG_RANGES.items():
-            value = getattr(self, name)
-            if not ok(value):
-                raise ValueError(f"EngineConfig.{name} = {value!r}: {_CONFIG_TEXT[name]}")
-
-
-def _finite(x: float) -> bool:
-    return isinstance(x, Real) and math.isfinite(x)
-
-
-#: The ranges :class:`EngineConfig` accepts (docs/model.md), field by field.
-_CONFIG_RANGES: dict[str, Callable[[float], bool]] = {
-    "e": lambda x: _finite(x) and 0.0 <= x <= 1.0,
-    "omega_s": lambda x: _finite(x) and x > 0.0,
-    "r_phi": lambda x: _finite(x) and x > 0.0,
-    "psi": _finite,
-    "inertia_ratio": lambda x: isinstance(x, Real) and x > 0.0,
-    "mu_ratio": lambda x: _finite(x) and x >= 1.0,
-    "tol": lambda x: _finite(x) and x > 0.0,
-    "t_end": lambda x: isinstance(x, Real) and not math.isnan(x),
-    "max_events": lambda x: isinstance(x, Integral) and x >= 1,
-    "traj_dt": lambda x: _finite(x) and x >= 0.0,
-    "e_sigma": lambda x: _finite(x) and x >= 0.0,
-    "seed": lambda x: isinstance(x, Integral) and 0 <= x < 2**63,
-    "member": lambda x: isinstance(x, Integral) and 0 <= x < 2**63,
-    "stats_from": lambda x: isinstance(x, Real) and not math.isnan(x),
-    "load_torque": _finite,  # the engine also runs a driving torque (< 0)
-}
-_CONFIG_TEXT = {
-    "e": "must be a number in [0, 1]",
-    "omega_s": "must be a finite number > 0",
-    "r_phi": "must be a finite number > 0",
-    "psi": "must be a finite number (radians)",
-    "inertia_ratio": "must be > 0 (inf for a stator not moved by impacts)",
-    "mu_ratio": "must be a finite number >= 1",
-    "tol": "must be a finite number > 0",
-    "t_end": "must be a number or inf, not nan",
-    "max_events": "must be a whole number >= 1",
-    "traj_dt": "must be a finite number >= 0",
-    "e_sigma": "must be a finite number >= 0",
-    "seed": "must be a whole number in [0, 2**63)",
-    "member": "must be a whole number in [0, 2**63)",
-    "stats_from": "must be a number or inf, not nan",
-    "load_torque": "must be a finite number",
-}
+        """Refuse what the kernel cannot run (:func:`.bounds.check_config`): an
+        :class:`~.errors.InputError` naming the field."""
+        check_config(self)
 
 
 @dataclass(frozen=True)
@@ -152,6 +111,18 @@ class InitialState:
     omega: float = 0.0
     u: float | None = None
     v: float | None = None
+
+    def __post_init__(self) -> None:
+        """Refuse a value no run can start from (:mod:`.bounds`): ``nan``, an infinity, a
+        speed or height beyond :data:`~.bounds.MAX_SPEED`. The bounds that depend on
+        ``omega_s`` (the time, the first flight) are checked when a run starts
+        (:func:`.bounds.check_run`)."""
+        src = "InitialState"
+        finite(src, "t", self.t)
+        finite(src, "omega", self.omega, MAX_SPEED)
+        for name in ("u", "v"):
+            if getattr(self, name) is not None:
+                finite(src, name, getattr(self, name), MAX_SPEED)
 
 
 @dataclass
@@ -294,6 +265,25 @@ class Returning(Generic[Y, V]):
         self.value = yield from self._gen
 
 
+#: Stator periods of one kernel call in a run that may go on without events
+#: (:func:`_may_run_without_events`): a few milliseconds to some tens of milliseconds.
+_SLICE_PERIODS = 1 << 12
+
+
+def _may_run_without_events(cfg: EngineConfig) -> bool:
+    """Whether the rotor may ride the stator until a finite ``t_end`` without an event: the
+    clipped model (it has none), or contact that never ends (``omega_s <= 1``, or a separation
+    window too shallow to fly, :func:`~.kernel._separation_constants`). Every other run has an
+    event at least every stator period or flight, and each kernel call ends after a bounded
+    number of events; such a run would be one call to its end, deaf to SIGINT and SIGTERM
+    (Python runs signal handlers between calls only), so :func:`_kernel_calls` ends its calls every :data:`_SLICE_PERIODS`
+    periods through the stroboscopic buffer, which the kernel resumes exactly where it stopped.
+    """
+    if math.isinf(cfg.t_end):
+        return False
+    return cfg.clipped or (cfg.contact and bool(K._separation_constants(cfg.omega_s)[0]))
+
+
 def _kernel_calls(
     cfg: EngineConfig,
     init: InitialState,
@@ -307,12 +297,25 @@ def _kernel_calls(
     every call, so the buffers of the last call may be reallocated then. Yields
     ``(events, traj, strobe, n_events_total, t_now)`` after each call that wrote anything: the
     number of event rows written and views of the sample rows. The generator's return value is
-    ``(status_code, final_state)``.
+    ``(status_code, final_state)``. ``init`` is checked against ``cfg`` first
+    (:func:`.bounds.check_run`). A run that may go on without events ends its calls every
+    :data:`_SLICE_PERIODS` stator periods (:func:`_may_run_without_events`), so that the caller
+    regains control (an interrupt, a progress report) whatever the run does.
+
+    Raises
+    ------
+    InputError
+        When ``init`` is out of the bounds of :mod:`.bounds` under ``cfg``.
     """
+    check_run(cfg, init)
     prm, flg = _pack(cfg)
     st, ist = initial_state(cfg, init)
     traj = np.empty((chunk_samples if cfg.traj_dt > 0 else 0, K.TRAJ_COLS))
-    strobe = np.empty((chunk_samples if cfg.stroboscopic else 0, K.STROBE_COLS))
+    sliced = not cfg.stroboscopic and _may_run_without_events(cfg)
+    if sliced:  # stroboscopic samples nobody asked for, to end a call every few periods
+        flg[K.F_STROBE] = 1
+    n_strobe = _SLICE_PERIODS if sliced else chunk_samples if cfg.stroboscopic else 0
+    strobe = np.empty((n_strobe, K.STROBE_COLS))
     # status, rows written, rows still needed (kernel's O_* slots)
     info = np.zeros(K.N_OUT, dtype=np.int64)
     w = cfg.omega_s
@@ -325,7 +328,8 @@ def _kernel_calls(
             n_tr, n_sb = int(info[K.O_TRAJ_PARTIAL]), int(info[K.O_STROBE_PARTIAL])
         t_now = (ist[K.I_PERIOD] * K.TWO_PI + st[K.S_PHASE]) / w
         if n_ev or n_tr or n_sb:
-            yield n_ev, traj[:n_tr], strobe[:n_sb], int(ist[K.I_EVENTS]), t_now
+            sb = strobe[:0] if sliced else strobe[:n_sb]
+            yield n_ev, traj[:n_tr], sb, int(ist[K.I_EVENTS]), t_now
         if status in (K.ST_CHUNK, K.ST_NEED_TRAJ, K.ST_NEED_STROBE):
             continue
         if status in (K.ST_NEED_CONTACT, K.ST_NUMERICAL):
@@ -341,7 +345,7 @@ def _final_state(
 ) -> dict:
     """The state at the end of a run (:func:`iterate`'s ``final_state``)."""
     final = {
-        "t": t_now,
+        "t": float(t_now),
         "u": float(st[K.S_U]),
         "v": float(st[K.S_V]),
         "omega": float(st[K.S_OMEGA]),

@@ -12,7 +12,8 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, fields
 
-from .errors import InputError
+from ..engine.bounds import check_omega_s
+from .errors import InputError, plain
 
 #: Restitution noise that samples the natural measure (docs/model.md "Long-run statistics of
 #: chaotic motion"), for ensembles whose scene states none: physically meaningless, a periodic
@@ -46,20 +47,20 @@ def number(
         try:
             x = float(value.strip())
         except ValueError:
-            raise InputError(source, name, f"must be a number, got {value!r}") from None
+            raise InputError(source, name, f"must be a number, got {plain(value)}") from None
     elif isinstance(value, bool) or not isinstance(value, int | float):
-        raise InputError(source, name, f"must be a number, got {value!r}")
+        raise InputError(source, name, f"must be a number, got {plain(value)}")
     else:
         try:
             x = float(value)
         except OverflowError:
-            raise InputError(source, name, f"must be finite, got {value!r}") from None
+            raise InputError(source, name, f"must be finite, got {plain(value)}") from None
     if not math.isfinite(x):
-        raise InputError(source, name, f"must be finite, got {value!r}")
+        raise InputError(source, name, f"must be finite, got {plain(value)}")
     if positive and not x > 0:
-        raise InputError(source, name, f"must be > 0, got {value!r}")
+        raise InputError(source, name, f"must be > 0, got {plain(value)}")
     if nonneg and x < 0:
-        raise InputError(source, name, f"must be >= 0, got {value!r}")
+        raise InputError(source, name, f"must be >= 0, got {plain(value)}")
     return x
 
 
@@ -76,7 +77,7 @@ def whole_number(source: str, name: str, value: object, *, minimum: int = 1) -> 
     if isinstance(value, float) and value.is_integer():
         value = int(value)
     if isinstance(value, bool) or not isinstance(value, int):
-        raise InputError(source, name, f"must be a whole number, got {value!r}")
+        raise InputError(source, name, f"must be a whole number, got {plain(value)}")
     if value < minimum:
         raise InputError(source, name, f"must be >= {minimum}, got {value}")
     return value
@@ -156,9 +157,8 @@ class Parameters:
         if not 0.0 <= self.e <= 1.0:
             raise InputError(source, f"{prefix}.e", f"must be in [0, 1], got {self.e}")
         if not self.omega_s > 0.0:
-            raise InputError(source, f"{prefix}.omega_s", f"must be > 0, got {self.omega_s}")
-        if self.omega_s > 1e4:
-            raise InputError(source, f"{prefix}.omega_s", f"must be <= 1e4, got {self.omega_s}")
+            raise InputError(source, f"{prefix}.omega_s", f"must be > 0, got {plain(self.omega_s)}")
+        check_omega_s(source, f"{prefix}.omega_s", self.omega_s)
         if not self.r_phi > 0.0:
             raise InputError(source, f"{prefix}.r_phi", f"must be > 0, got {self.r_phi}")
         if not self.inertia_ratio > 0.0:

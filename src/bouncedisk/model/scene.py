@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import yaml
 
+from ..engine.bounds import MAX_EVENTS, check_state, check_time
 from . import stator, yamlio
 from .errors import InputError
 from .params import Parameters, PhysicalParameters, Scales, number, whole_number
@@ -179,16 +180,17 @@ def _bool(src: str, name: str, v: Any) -> bool:
 EXCLUSIVE_KEYS: dict[str, tuple[str, ...]] = {"stop": ("impacts", "time", "periods")}
 
 
-def apply_overrides(raw: dict, overrides: list[str], source: str = "--set") -> dict:
+def apply_overrides(raw: dict, overrides: list[str] | str, source: str = "--set") -> dict:
     """Apply ``key.sub=value`` overrides (values parsed as YAML) to a copy of ``raw``.
 
     The rules (docs/user_guide/scenes.md "Overrides"): ``key.sub=value`` sets one field and
     keeps the mapping's other fields; ``key={a: 1}`` (a YAML mapping as the value) replaces the
     whole mapping ``key``; setting one of the exclusive keys of :data:`EXCLUSIVE_KEYS` (``stop``'s
     ``impacts``, ``time``, ``periods``) removes its siblings; an empty value gives ``None``.
+    One string is one override (:func:`override_items`).
     """
     out = json.loads(json.dumps(raw, default=str)) if raw else {}
-    for item in overrides:
+    for item in override_items(overrides, source):
         if "=" not in item:
             raise InputError(source, item, "expected KEY=VALUE, e.g. parameters.e=0.6")
         key, _, text = item.partition("=")
@@ -298,7 +300,7 @@ def scene_from_mapping(raw: dict, source: str = "<scene>") -> Scene:
     _check_effect_parameters(src, raw, effects, params)
     initial = _initial(src, raw.get("initial"), params)
     stop = _stop(src, raw.get("stop"), initial, params)
-    outputs = _outputs(src, raw.get("outputs"), initial, stop)
+    outputs = _outputs(src, raw.get("outputs"), initial, stop, params)
     solver = _solver(src, raw.get("solver"))
     model = _model(src, raw.get("model", "bouncing"), stop, solver)
     ensemble = _ensemble(src, raw.get("ensemble"), effects, params)
@@ -375,12 +377,9 @@ def _check_effect_parameters(
     _check_paired(src, raw, effects)
 
 
-#: Largest ``|initial.omega|``: far beyond any motor (a few hundred), far below overflow.
-MAX_INITIAL_OMEGA = 1e100
-
-
 def _initial(src: str, v: Any, params: Parameters) -> InitialState:
-    """``initial: {t, omega, u, v}``; ``u >= u_s(t)`` (eq. 1) for a start in flight.
+    """``initial: {t, omega, u, v}``; ``u >= u_s(t)`` (eq. 1) for a start in flight; every
+    value within the engine's bounds (:func:`bouncedisk.engine.bounds.check_state`).
 
     The scene holds the engine's own :class:`~bouncedisk.engine.InitialState`.
     """
@@ -403,15 +402,7 @@ def _initial(src: str, v: Any, params: Parameters) -> InitialState:
             raise InputError(
                 src, "initial.u", f"must be >= u_s(t) = {us:.12g} (rotor above the stator)"
             )
-    if abs(t0) > 1e12:
-        raise InputError(src, "initial.t", "must be within ±1e12")
-    if abs(om0) > MAX_INITIAL_OMEGA:
-        raise InputError(
-            src,
-            "initial.omega",
-            f"must be within ±{MAX_INITIAL_OMEGA:g} (the rotor's kinetic energy in the energy "
-            f"audit overflows near 1e154), got {om0:g}",
-        )
+    check_state(src, "initial.", params.omega_s, (t0, om0, u0, v0))
     return InitialState(t=t0, omega=om0, u=u0, v=v0)
 
 
@@ -422,6 +413,8 @@ def _stop(src: str, v: Any, initial: InitialState, params: Parameters) -> Stop:
     if len(given) != 1:
         raise InputError(src, "stop", "give exactly one of impacts, time or periods")
     max_ev = whole_number(src, "stop.max_events", sm.get("max_events", DEFAULT_MAX_EVENTS))
+    if max_ev > MAX_EVENTS:
+        raise InputError(src, "stop.max_events", f"must be <= 2**63 - 1, got {max_ev}")
     if given[0] == "impacts":
         n = whole_number(src, "stop.impacts", sm["impacts"])
         if n > max_ev:
@@ -434,22 +427,31 @@ def _stop(src: str, v: Any, initial: InitialState, params: Parameters) -> Stop:
         return Stop(impacts=n, max_events=max_ev)
     if given[0] == "time":
         t_stop = number(src, "stop.time", sm["time"], positive=True)
-        return Stop(time=initial.t + t_stop, max_events=max_ev)
+        return Stop(time=_end_time(src, "stop.time", initial.t + t_stop, params), max_events=max_ev)
     periods = number(src, "stop.periods", sm["periods"], positive=True)
-    return Stop(time=initial.t + periods * 2.0 * math.pi / params.omega_s, max_events=max_ev)
+    t_end = initial.t + periods * 2.0 * math.pi / params.omega_s
+    return Stop(time=_end_time(src, "stop.periods", t_end, params), max_events=max_ev)
 
 
-def _outputs(src: str, v: Any, initial: InitialState, stop: Stop) -> Outputs:
+def _end_time(src: str, name: str, t_end: float, params: Parameters) -> float:
+    """The run's end time ``t_end`` within the engine's bounds (``name`` gave it)."""
+    return check_time(src, name, t_end, params.omega_s)
+
+
+def _outputs(src: str, v: Any, initial: InitialState, stop: Stop, params: Parameters) -> Outputs:
     """``outputs: {events, trajectory, stroboscopic}``."""
     om = _mapping(src, "outputs", v, ("events", "trajectory", "stroboscopic"))
     events = _bool(src, "outputs.events", om.get("events", True))
-    traj = _trajectory(src, om.get("trajectory"), initial, stop)
+    traj = _trajectory(src, om.get("trajectory"), initial, stop, params.omega_s)
     strobe = _bool(src, "outputs.stroboscopic", om.get("stroboscopic", False))
     return Outputs(events=events, trajectory=traj, stroboscopic=strobe)
 
 
-def _trajectory(src: str, tm: Any, initial: InitialState, stop: Stop) -> Trajectory | None:
-    """``outputs.trajectory``: ``true`` (``dt = 0.01``) or ``{dt, t_start, t_stop}``."""
+def _trajectory(
+    src: str, tm: Any, initial: InitialState, stop: Stop, w: float
+) -> Trajectory | None:
+    """``outputs.trajectory``: ``true`` (``dt = 0.01``) or ``{dt, t_start, t_stop}``, its times
+    within the engine's bounds at ``omega_s = w``."""
     if tm is None or tm is False:
         return None
     if tm is True:
@@ -458,16 +460,18 @@ def _trajectory(src: str, tm: Any, initial: InitialState, stop: Stop) -> Traject
     if "dt" not in tm:
         raise InputError(src, "outputs.trajectory.dt", "is required")
     dt = number(src, "outputs.trajectory.dt", tm["dt"], positive=True)
-    ts = tm.get("t_start")
-    te = tm.get("t_stop")
-    ts = None if ts is None else number(src, "outputs.trajectory.t_start", ts)
-    te = None if te is None else number(src, "outputs.trajectory.t_stop", te)
+    ts, te = (_time(src, f"outputs.trajectory.{k}", tm.get(k), w) for k in ("t_start", "t_stop"))
     if ts is not None and te is not None and te < ts:
         raise InputError(src, "outputs.trajectory.t_stop", "must be >= t_start")
     horizon = te if te is not None else stop.time
     if horizon is not None and (horizon - (ts if ts is not None else initial.t)) / dt > 5e8:
         raise InputError(src, "outputs.trajectory.dt", "would produce more than 5e8 samples")
     return Trajectory(dt=dt, t_start=ts, t_stop=te)
+
+
+def _time(src: str, name: str, value: Any, w: float) -> float | None:
+    """An optional time field within the engine's bounds at ``omega_s = w``."""
+    return None if value is None else check_time(src, name, number(src, name, value), w)
 
 
 def _solver(src: str, v: Any) -> Solver:
@@ -564,8 +568,11 @@ def _stats(src: str, v: Any, stop: Stop, initial: InitialState) -> StatsSettings
     return StatsSettings(discard=discard)
 
 
-def load_scene(path: str | Path, overrides: list[str] | None = None) -> Scene:
+def load_scene(path: str | Path, overrides: list[str] | str | None = None) -> Scene:
     """Read, override and validate a scene file.
+
+    ``overrides`` are ``--set`` items, ``KEY=VALUE`` (:func:`apply_overrides`); one string is
+    one item.
 
     Raises
     ------
@@ -574,6 +581,7 @@ def load_scene(path: str | Path, overrides: list[str] | None = None) -> Scene:
         field inside it) also names the option: ``parameters.e (from --set parameters.e)``.
     """
     raw = read_yaml(path)
+    overrides = override_items(overrides)
     if not overrides:
         return scene_from_mapping(raw, str(path))
     raw = apply_overrides(raw, overrides)
@@ -584,6 +592,30 @@ def load_scene(path: str | Path, overrides: list[str] | None = None) -> Scene:
         if key is None:
             raise
         raise InputError(ex.source, f"{ex.field} (from --set {key})", ex.message) from None
+
+
+def override_items(overrides: object, source: str = "--set") -> list[str]:
+    """``overrides`` as a list of ``KEY=VALUE`` items: one string is one item (not its
+    characters), ``None`` none.
+
+    Raises
+    ------
+    InputError
+        For anything else than strings.
+    """
+    if overrides is None:
+        return []
+    items = [overrides] if isinstance(overrides, str) else overrides
+    try:
+        items = list(items)
+    except TypeError:
+        items = [items]
+    for item in items:
+        if not isinstance(item, str):
+            raise InputError(
+                source, "", f"an override is a string KEY=VALUE, got {type(item).__name__}"
+            )
+    return items
 
 
 def override_of(field: str, overrides: list[str]) -> str | None:
