@@ -62,10 +62,11 @@ from ..analysis.ensembles import CappedRun, run_member
 from ..analysis.statistics import capped_error, confidence_interval, ensemble_window
 from ..analysis.sweeps import _ordered_runs, shard_slice, with_params
 from ..engine import InitialState
+from ..engine.bounds import MAX_SPEED
 from ..io.provenance import base_attrs, new_run_id
 from ..model.engine_config import engine_config
 from ..model.errors import InputError
-from ..model.scene import MAX_INITIAL_OMEGA, Scene
+from ..model.scene import Scene
 from ..run.runner import scene_attrs
 
 #: The settle tolerance's default, relative to the largest mean speed (rule 2).
@@ -214,13 +215,13 @@ def start_grid(
     Raises
     ------
     InputError
-        No phase, a speed beyond the scene's bound on ``initial.omega`` (``±MAX_INITIAL_OMEGA``),
+        No phase, a speed beyond the scene's bound on ``initial.omega`` (:data:`bouncedisk.engine.bounds.MAX_SPEED`),
         a negative height or one above :data:`MAX_HEIGHT`, a non-finite value, or more than
         :data:`MAX_STARTS` starts.
     """
     if isinstance(n_phases, bool) or not isinstance(n_phases, int | np.integer) or n_phases < 1:
         raise InputError(source, "--phases", f"must be a whole number >= 1, got {n_phases!r}")
-    bound = MAX_INITIAL_OMEGA
+    bound = MAX_SPEED
     _check_values(source, "--speeds", speeds, -bound, bound, "a scene's bound on initial.omega")
     _check_values(source, "--heights", heights, 0.0, MAX_HEIGHT, "above the stator, 0: on it")
     grid = StartGrid(
