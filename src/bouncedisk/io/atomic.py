@@ -11,7 +11,8 @@
   output renamed into place is remembered, so that a later failure or interrupt (stdout on a
   full disk, Ctrl-C while printing) removes it again: nothing is left behind on any error.
 - :func:`stop_checks` lets a caller veto the rename (a pending SIGINT/SIGTERM, see
-  :func:`bouncedisk.run.runner.deferred_interrupts`): an interrupt before the rename leaves no output.
+  :func:`bouncedisk.run.runner.deferred_interrupts`): an interrupt before the rename leaves no
+  output.
 """
 
 from __future__ import annotations

@@ -285,7 +285,7 @@ def open_checked(
     """Open a netCDF file fully into memory, validating that it is readable and complete.
 
     With ``lazy`` the data stay on disk (memory stays flat whatever the file's size: a summary
-    of a 4 GB file reads its header only); the caller closes the Dataset. String labels stored
+    reads the header only); the caller closes the Dataset. String labels stored
     as CF labels are the index of their dimension again (:func:`labels_from_cf`).
 
     Raises
@@ -478,7 +478,7 @@ def labels_to_cf(ds: xr.Dataset) -> xr.Dataset:
 
 def labels_from_cf(ds: xr.Dataset) -> xr.Dataset:
     """Labels stored by :func:`labels_to_cf` as ``X(X_index)``, back as the dimension ``X``
-    with its index (files written before have ``X(X)`` and are returned as they are)."""
+    with its index (a file that stores the labels as ``X(X)`` is returned as it is)."""
     for dim in [str(d) for d in ds.dims if str(d).endswith(LABEL_DIM_SUFFIX)]:
         name = dim[: -len(LABEL_DIM_SUFFIX)]
         if name in ds.variables and ds[name].dims == (dim,) and name not in ds.dims:

@@ -22,9 +22,9 @@ from ..model.params import NATURAL_E_SIGMA
 def _stream(cfg: EngineConfig) -> int:
     """Run ``cfg`` chunk by chunk, dropping the output; returns the number of events.
 
-    Memory stays at one chunk whatever the run's size: the "+ trajectory" case (200,000 impacts
-    at ``dt = 0.01``, about 84 million samples) held 3.4 GB of samples, and 9.7 GB at the peak
-    while they were joined, when the run was collected in memory.
+    Memory stays at one chunk whatever the run's size, where a run collected in memory holds
+    every sample of its trajectory (eight bytes per column and sample) and more while the
+    chunks are joined.
     """
     n = 0
     for chunk in iterate(cfg):
@@ -46,9 +46,9 @@ def _rate(cfg: EngineConfig, repeat: int = 2) -> tuple[float, int]:
 def peak_memory_mb(n_events: int, e: float = 0.6, omega_s: float = 1.5) -> float:
     """Peak RSS (MB) of a fresh process streaming an events-only run of ``n_events`` to netCDF.
 
-    The child (``python -m bouncedisk.run.memory_probe``, the same interpreter and the same package as
-    this process) runs :func:`bouncedisk.run.memory_probe.stream_events_peak_mb` and reports its own
-    ``VmHWM`` (``ru_maxrss`` would include this process's high-water mark, which Linux keeps
+    The child (``python -m bouncedisk.run.memory_probe``, the same interpreter and the same
+    package as this process) runs :func:`bouncedisk.run.memory_probe.stream_events_peak_mb` and
+    reports its own ``VmHWM`` (``ru_maxrss`` would include this process's high-water mark, which Linux keeps
     across fork and exec). Its file goes to a temporary folder, removed whatever happens.
 
     Raises

@@ -1,4 +1,5 @@
-"""Writing runs: the provenance tags every run carries, and a tracked command's one top-level run."""
+"""Writing runs: the provenance tags every run carries, and a tracked command's one top-level
+run."""
 
 from __future__ import annotations
 
