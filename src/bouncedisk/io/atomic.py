@@ -40,7 +40,8 @@ def _host() -> str:
     return re.sub(r"[^A-Za-z0-9]", "_", socket.gethostname())[:40] or "host"
 
 
-def _alive(pid: int) -> bool:
+def pid_alive(pid: int) -> bool:
+    """Whether a process ``pid`` runs on this host (another user's included)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
@@ -65,7 +66,7 @@ def clean_stale_temporaries(target: Path) -> list[Path]:
             m = pattern.match(entry.name)
             if not m or ".tmp" not in entry.name[m.end() :] or m["host"] != host:
                 continue
-            if int(m["pid"]) == os.getpid() or _alive(int(m["pid"])):
+            if int(m["pid"]) == os.getpid() or pid_alive(int(m["pid"])):
                 continue
             with contextlib.suppress(OSError):
                 os.unlink(entry.path)

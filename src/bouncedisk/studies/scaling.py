@@ -43,6 +43,19 @@ def _rate(cfg: EngineConfig, repeat: int = 2) -> tuple[float, int]:
     return best, n
 
 
+def _rate_row(study: str, cfg: EngineConfig, repeat: int = 2, **labels: str) -> dict:
+    """One row of the scaling table: :func:`_rate` of ``cfg``, per run and per impact."""
+    sec, n = _rate(cfg, repeat)
+    return {
+        "study": study,
+        **labels,
+        "omega_s": cfg.omega_s,
+        "n_impacts": n,
+        "seconds": sec,
+        "s_per_impact": sec / n,
+    }
+
+
 def peak_memory_mb(n_events: int, e: float = 0.6, omega_s: float = 1.5) -> float:
     """Peak RSS (MB) of a fresh process streaming an events-only run of ``n_events`` to netCDF.
 
@@ -99,31 +112,15 @@ def scaling(
     """
     rows = []
     for w in omegas:
-        sec, n = _rate(EngineConfig(e=0.3, omega_s=w, max_events=per_omega))
-        rows.append(
-            {
-                "study": "omega",
-                "omega_s": w,
-                "n_impacts": n,
-                "seconds": sec,
-                "s_per_impact": sec / n,
-            }
-        )
+        row = _rate_row("omega", EngineConfig(e=0.3, omega_s=w, max_events=per_omega))
+        rows.append(row)
         if progress:
-            progress(f"omega_s = {w:g}: {1e9 * sec / n:.0f} ns per impact")
+            progress(f"omega_s = {w:g}: {1e9 * row['s_per_impact']:.0f} ns per impact")
     for n_ev in sizes:
-        sec, n = _rate(EngineConfig(e=0.6, omega_s=1.5, max_events=n_ev), repeat=1)
-        rows.append(
-            {
-                "study": "impacts",
-                "omega_s": 1.5,
-                "n_impacts": n,
-                "seconds": sec,
-                "s_per_impact": sec / n,
-            }
-        )
+        row = _rate_row("impacts", EngineConfig(e=0.6, omega_s=1.5, max_events=n_ev), repeat=1)
+        rows.append(row)
         if progress:
-            progress(f"{n_ev} impacts: {sec:.4g} s")
+            progress(f"{n_ev} impacts: {row['seconds']:.4g} s")
     for n_ev in memory_sizes:
         mb = peak_memory_mb(n_ev)
         rows.append({"study": "memory", "omega_s": 1.5, "n_impacts": n_ev, "peak_mb": mb})
@@ -136,17 +133,9 @@ def scaling(
         "+ torsion + trajectory (dt = 0.01)": dict(torsion=True, r_phi=0.01, traj_dt=0.01),
     }
     for label, kw in effects.items():
-        sec, n = _rate(EngineConfig(e=0.6, omega_s=1.5, max_events=effect_events, **kw))
-        rows.append(
-            {
-                "study": "effects",
-                "effect": label,
-                "omega_s": 1.5,
-                "n_impacts": n,
-                "seconds": sec,
-                "s_per_impact": sec / n,
-            }
-        )
+        cfg = EngineConfig(e=0.6, omega_s=1.5, max_events=effect_events, **kw)
+        row = _rate_row("effects", cfg, effect=label)
+        rows.append(row)
         if progress:
-            progress(f"{label}: {1e9 * sec / n:.0f} ns per impact")
+            progress(f"{label}: {1e9 * row['s_per_impact']:.0f} ns per impact")
     return pd.DataFrame(rows)

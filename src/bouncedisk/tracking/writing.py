@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import __version__
+from ..io.atomic import pid_alive
 from ..io.provenance import TAG_GIT_COMMIT, TAG_GIT_DIRTY, TAG_VERSION, sha256_file
 from .extraction import _keys, _netcdf_run_id, _number, describe_output, flatten
 from .store import Store, _client, _log_batch, experiment_id, store_lock
@@ -66,12 +67,8 @@ def _process_start(pid: int) -> str:
 
 def process_alive(pid: int, start: str = "") -> bool:
     """Whether process ``pid`` (started at ``start``, if known) still runs on this host."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
+    if not pid_alive(pid):
         return False
-    except PermissionError:
-        return True
     return not start or not _process_start(pid) or _process_start(pid) == start
 
 
