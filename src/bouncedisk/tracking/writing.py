@@ -8,7 +8,6 @@ import json
 import os
 import platform
 import socket
-import subprocess
 import tempfile
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -16,7 +15,7 @@ from typing import Any
 
 from .. import __version__
 from ..io.atomic import pid_alive
-from ..io.provenance import TAG_GIT_COMMIT, TAG_GIT_DIRTY, TAG_VERSION, sha256_file
+from ..io.provenance import TAG_GIT_COMMIT, TAG_GIT_DIRTY, TAG_VERSION, git_state, sha256_file
 from .extraction import _keys, _netcdf_run_id, _number, describe_output, flatten
 from .store import Store, _client, _log_batch, experiment_id, store_lock
 
@@ -35,25 +34,6 @@ COPIED = {".png", ".pdf", ".svg", ".md", ".csv", ".json", ".txt", ".html", ".yam
 # ------------------------------------------------------------------------------------------
 # Provenance of the invocation
 # ------------------------------------------------------------------------------------------
-
-
-def _git(*args: str, cwd: Path | None = None) -> str | None:
-    try:
-        r = subprocess.run(["git", *args], cwd=cwd, capture_output=True, text=True, timeout=10)
-    except (OSError, subprocess.SubprocessError):
-        return None
-    return r.stdout.strip() if r.returncode == 0 else None
-
-
-def git_state(cwd: Path | None = None) -> dict[str, str]:
-    """Commit of the working tree at ``cwd`` (default: the package's source tree) and whether
-    tracked files differ from it."""
-    cwd = cwd or Path(__file__).resolve().parents[1]
-    commit = _git("rev-parse", "HEAD", cwd=cwd)
-    if commit is None:
-        return {"git_commit": "unknown", "git_dirty": "unknown"}
-    dirty = _git("status", "--porcelain", "--untracked-files=no", cwd=cwd)
-    return {"git_commit": commit, "git_dirty": "true" if dirty else "false"}
 
 
 def _process_start(pid: int) -> str:
