@@ -5,19 +5,18 @@ Fit a velocity–time curve and show the profiles
 :doc:`/user_guide/fitting` fits the model to a motor's measured run-up by comparing the curve's
 statistics with their distribution under the model's ensemble, then profiles each parameter.
 
-**This example reads a stored fit instead of running one.** A fit that means anything does not
-run in the ten seconds a gallery example may take: the smallest settings of the tests
-(``FitSettings(scan=16, zoom=4, zoom_centres=2, members=4, pilot_members=8, band_members=8,
-local_nfev=4, bootstrap=4)``) took 12–20 s of CPU on a 0.015–0.03 s synthetic curve and landed
-in a wrong basin (``e`` 0.69 for a true 0.31). The stored file
-``docs/examples/data/prototype_fit_small.nc`` is the fit of the shipped curve with the pipeline
-tests' small search, made by::
+**This example reads a stored fit instead of running one.** A fit searches a four-dimensional
+space with an ensemble at every point it reads: more than the few seconds a gallery example may
+take, and a search small enough for them can end in a wrong basin. The stored file
+``docs/examples/data/prototype_fit_small.nc`` is the fit of the shipped curve with a small
+search, made by::
 
-    bouncedisk fit data/prototype/synthetic_motor.csv -o docs/examples/data/prototype_fit_small.nc \\
+    bouncedisk fit data/prototype/synthetic_motor.csv \\
+        -o docs/examples/data/prototype_fit_small.nc \\
         --scan 32 --zoom 4 --seed 20261121 --cores 2
 
-The pipeline fits the same curve with the defaults (``--scan 192 --zoom 16``, about a minute on
-two cores). To run a fit from Python::
+The pipeline fits the same curve with its own search sizes (``workflow/config/config.yaml``).
+To run a fit from Python::
 
     from bouncedisk.io.runup_curves import read_curve
     from bouncedisk.fitting import FitSettings, fit_curve, fit_dataset

@@ -70,7 +70,7 @@ def tracking_start():
     try:
         tracker.start(_tracking_jobs())
     except _store.TrackingError as ex:
-        _store.print_error(ex)
+        print(_store.error_report(ex), file=sys.stderr, flush=True)
         raise SystemExit(1)
     _TRACKER.append(tracker)
     _note_interrupt(signal.SIGINT)
@@ -82,7 +82,7 @@ def tracking_finish():
         try:
             run_id = tracker.finish()
         except _store.TrackingError as ex:
-            _store.print_error(ex)
+            print(_store.error_report(ex), file=sys.stderr, flush=True)
             raise SystemExit(1)
         t = tracker.timings
         spent = t.get("tracking.start_s", 0) + t.get("tracking.finish_s", 0)
@@ -98,4 +98,4 @@ def tracking_fail():
         try:
             tracker.fail()
         except _store.TrackingError as ex:
-            _store.print_error(ex)
+            print(_store.error_report(ex), file=sys.stderr, flush=True)

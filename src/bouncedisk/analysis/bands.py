@@ -4,7 +4,7 @@ A single run of a chaotic scene is one realization; the band shows where the oth
 members are the scene's runs with restitution noise (docs/model.md "Long-run statistics of chaotic
 motion"), sampled on the scene's trajectory grid. Per time: the ensemble mean with its 95 %
 Student-t interval, and the central 95 % of the members. Per member: the first-order trend of
-its rise (steady speed, time constant, ripple; :func:`bouncedisk.analysis.observables.first_order_trend`).
+its rise (steady speed, time constant, ripple; :func:`.observables.first_order_trend`).
 """
 
 from __future__ import annotations
@@ -75,13 +75,13 @@ def _band_dataset(t: np.ndarray, om: np.ndarray) -> xr.Dataset:
             "omega_p975": var(hi, "97.5th percentile of the members"),
             "trend_steady": per_member(
                 [x.steady for x in trends], "steady speed of the first-order trend"
-            ),  # fmt: skip
+            ),
             "trend_tau": per_member(
                 [x.tau for x in trends], "time constant of the first-order trend"
-            ),  # fmt: skip
+            ),
             "ripple_rms": per_member(
                 [x.ripple_rms for x in trends], "RMS of the ripple about the trend"
-            ),  # fmt: skip
+            ),
         },
         coords={
             "time": ("time", t, {"long_name": "time", "units": "1"}),

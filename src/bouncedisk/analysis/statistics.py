@@ -1,4 +1,5 @@
-"""Ensemble statistics with confidence intervals (``bouncedisk stats``; docs/formats.md "Statistics").
+"""Ensemble statistics with confidence intervals (``bouncedisk stats``, docs/formats.md
+"Statistics").
 
 A long-run number of a chaotic scene is an ensemble average (docs/model.md "Long-run statistics of
 chaotic motion"): every member's time average over ``[t0 + discard, t_end]`` is one sample, and
@@ -83,8 +84,8 @@ def t_quantile(dof: int, level: float = LEVEL) -> float:
     """Student's quantile ``t_{(1+level)/2, dof}`` of a two-sided ``level`` interval.
 
     docs/model.md "Long-run statistics of chaotic motion". This is ``scipy.stats.t.ppf``'s own
-    formula, bit for bit, without importing ``scipy.stats`` (about half a second of every
-    pipeline job that reads an ensemble).
+    formula, bit for bit, without the import of ``scipy.stats``, which would weigh on every
+    pipeline job that reads an ensemble.
     """
     return float(stdtrit(dof, 0.5 + level / 2.0))
 

@@ -58,7 +58,7 @@ def _track(args, store, kind: str, outputs=(), params=None, metrics=None) -> Non
         ex.kept_outputs = kept
         raise
     except Exception as ex:  # noqa: BLE001 - drivers and REST raise their own types
-        reason = tracking_store._one_line(ex)
+        reason = tracking_store.one_line(ex)
         raise tracking_store.TrackingError(
             store.uri, f"recording failed (the outputs were written): {reason}"
         ) from None

@@ -11,7 +11,8 @@
   output renamed into place is remembered, so that a later failure or interrupt (stdout on a
   full disk, Ctrl-C while printing) removes it again: nothing is left behind on any error.
 - :func:`stop_checks` lets a caller veto the rename (a pending SIGINT/SIGTERM, see
-  :func:`bouncedisk.run.runner.deferred_interrupts`): an interrupt before the rename leaves no output.
+  :func:`bouncedisk.run.runner.deferred_interrupts`): an interrupt before the rename leaves no
+  output.
 """
 
 from __future__ import annotations
@@ -39,7 +40,8 @@ def _host() -> str:
     return re.sub(r"[^A-Za-z0-9]", "_", socket.gethostname())[:40] or "host"
 
 
-def _alive(pid: int) -> bool:
+def pid_alive(pid: int) -> bool:
+    """Whether a process ``pid`` runs on this host (another user's included)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
@@ -64,7 +66,7 @@ def clean_stale_temporaries(target: Path) -> list[Path]:
             m = pattern.match(entry.name)
             if not m or ".tmp" not in entry.name[m.end() :] or m["host"] != host:
                 continue
-            if int(m["pid"]) == os.getpid() or _alive(int(m["pid"])):
+            if int(m["pid"]) == os.getpid() or pid_alive(int(m["pid"])):
                 continue
             with contextlib.suppress(OSError):
                 os.unlink(entry.path)

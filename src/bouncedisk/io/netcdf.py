@@ -53,6 +53,22 @@ VARIABLES: dict[str, tuple[str, str]] = {
     "strobe_v": ("rotor axial velocity at phase 0", "1"),
     "strobe_omega": ("rotor angular velocity at phase 0", "1"),
 }
+#: Variables of the trajectory's and the stroboscopic section's samples: name -> column of the
+#: engine's records (``time_s`` is ``time`` in seconds, written apart).
+TRAJ_VARIABLES = {
+    "time": TrajColumn.T,
+    "u_rotor": TrajColumn.U,
+    "v_rotor": TrajColumn.V,
+    "u_stator": TrajColumn.U_STATOR,
+    "omega_rotor": TrajColumn.OMEGA,
+}
+STROBE_VARIABLES = {
+    "period": StrobeColumn.PERIOD,
+    "strobe_t": StrobeColumn.T,
+    "strobe_u": StrobeColumn.U,
+    "strobe_v": StrobeColumn.V,
+    "strobe_omega": StrobeColumn.OMEGA,
+}
 REQUIRED_SIMULATION = ("t_impact", "phase", "v_rel", "kind")
 REQUIRED_ATTRS = ("e", "omega_s", "status")
 
@@ -222,30 +238,24 @@ class SimulationWriter:
                 nc["omega_before"][a:b] = c.omega_before
                 nc["omega_after"][a:b] = c.omega_after
         self.n_events += n
-        m = len(c.traj)
-        if m and self.trajectory:
-            a, b = self.n_traj, self.n_traj + m
-            col = TrajColumn
-            nc["time"][a:b] = c.traj[:, col.T]
+        if len(c.traj) and self.trajectory:
             if self.t_c is not None:
-                nc["time_s"][a:b] = c.traj[:, col.T] * self.t_c
-            nc["u_rotor"][a:b] = c.traj[:, col.U]
-            nc["v_rotor"][a:b] = c.traj[:, col.V]
-            nc["u_stator"][a:b] = c.traj[:, col.U_STATOR]
-            if self.torsion:
-                nc["omega_rotor"][a:b] = c.traj[:, col.OMEGA]
-            self.n_traj = b
-        m = len(c.strobe)
-        if m and self.strobe:
-            a, b = self.n_strobe, self.n_strobe + m
-            col = StrobeColumn
-            nc["period"][a:b] = c.strobe[:, col.PERIOD].astype(np.int64)
-            nc["strobe_t"][a:b] = c.strobe[:, col.T]
-            nc["strobe_u"][a:b] = c.strobe[:, col.U]
-            nc["strobe_v"][a:b] = c.strobe[:, col.V]
-            if self.torsion:
-                nc["strobe_omega"][a:b] = c.strobe[:, col.OMEGA]
-            self.n_strobe = b
+                a, b = self.n_traj, self.n_traj + len(c.traj)
+                nc["time_s"][a:b] = c.traj[:, TrajColumn.T] * self.t_c
+            self.n_traj = self._put_samples(self.n_traj, c.traj, TRAJ_VARIABLES)
+        if len(c.strobe) and self.strobe:
+            self.n_strobe = self._put_samples(self.n_strobe, c.strobe, STROBE_VARIABLES)
+
+    def _put_samples(self, start: int, rows: np.ndarray, columns: dict[str, int]) -> int:
+        """Write the columns of ``rows`` from sample ``start`` into the variables of ``columns``
+        the file holds (an integer variable takes its column truncated); returns the end."""
+        assert self._nc is not None
+        end = start + len(rows)
+        for name, col in columns.items():
+            if name in self._nc.variables:
+                var = self._nc[name]
+                var[start:end] = rows[:, col].astype(var.dtype)
+        return end
 
     def set_attrs(self, attrs: dict[str, Any]) -> None:
         """Set global attributes (call before leaving the block)."""
@@ -285,7 +295,7 @@ def open_checked(
     """Open a netCDF file fully into memory, validating that it is readable and complete.
 
     With ``lazy`` the data stay on disk (memory stays flat whatever the file's size: a summary
-    of a 4 GB file reads its header only); the caller closes the Dataset. String labels stored
+    reads the header only); the caller closes the Dataset. String labels stored
     as CF labels are the index of their dimension again (:func:`labels_from_cf`).
 
     Raises
@@ -478,7 +488,7 @@ def labels_to_cf(ds: xr.Dataset) -> xr.Dataset:
 
 def labels_from_cf(ds: xr.Dataset) -> xr.Dataset:
     """Labels stored by :func:`labels_to_cf` as ``X(X_index)``, back as the dimension ``X``
-    with its index (files written before have ``X(X)`` and are returned as they are)."""
+    with its index (a file that stores the labels as ``X(X)`` is returned as it is)."""
     for dim in [str(d) for d in ds.dims if str(d).endswith(LABEL_DIM_SUFFIX)]:
         name = dim[: -len(LABEL_DIM_SUFFIX)]
         if name in ds.variables and ds[name].dims == (dim,) and name not in ds.dims:

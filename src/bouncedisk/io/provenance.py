@@ -21,27 +21,38 @@ REFERENCES = (
 )
 
 
+#: The package's own source tree (``src/bouncedisk`` in a checkout).
+PACKAGE_DIR = Path(__file__).resolve().parents[1]
+
+
+def _git(*args: str, cwd: Path) -> str | None:
+    """The output of ``git ARGS`` run in ``cwd``, or None where git fails or is missing."""
+    try:
+        r = subprocess.run(["git", *args], cwd=cwd, capture_output=True, text=True, timeout=10)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return r.stdout.strip() if r.returncode == 0 else None
+
+
+def git_state(cwd: Path | None = None, under: str | None = None) -> dict[str, str]:
+    """``git_commit`` of the working tree at ``cwd`` (default: the package's source tree) and
+    ``git_dirty``, whether tracked files (those under ``under``, if given) differ from it;
+    both ``unknown`` outside a checkout."""
+    cwd = cwd or PACKAGE_DIR
+    commit = _git("rev-parse", "HEAD", cwd=cwd)
+    if commit is None:
+        return {"git_commit": "unknown", "git_dirty": "unknown"}
+    scope = ("--", under) if under else ()
+    dirty = _git("status", "--porcelain", "--untracked-files=no", *scope, cwd=cwd)
+    return {"git_commit": commit, "git_dirty": "true" if dirty else "false"}
+
+
 @functools.lru_cache(maxsize=1)
 def git_commit() -> str:
-    """Commit of the source tree this package runs from (``unknown`` outside a checkout)."""
-    here = Path(__file__).resolve().parents[1]
-    try:
-        out = subprocess.run(
-            ["git", "rev-parse", "HEAD"], cwd=here, capture_output=True, text=True, timeout=5
-        )
-        if out.returncode != 0:
-            return "unknown"
-        commit = out.stdout.strip()
-        dirty = subprocess.run(
-            ["git", "status", "--porcelain", "--untracked-files=no", "--", "."],
-            cwd=here,
-            capture_output=True,
-            text=True,
-            timeout=5,
-        )
-        return commit + ("-dirty" if dirty.stdout.strip() else "")
-    except (OSError, subprocess.SubprocessError):
-        return "unknown"
+    """Commit of the source tree this package runs from, ``-dirty`` when its files differ from
+    it (``unknown`` outside a checkout)."""
+    state = git_state(PACKAGE_DIR, under=".")
+    return state["git_commit"] + ("-dirty" if state["git_dirty"] == "true" else "")
 
 
 def new_run_id(scene_name: str, scene_sha256: str) -> str:

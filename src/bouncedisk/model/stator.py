@@ -7,9 +7,9 @@ contact is ``N = 1 + a_s`` (eq. 17, corrected in docs/model.md).
 
 Every function takes the stator phase ``θ = w t`` (the engine records events by their phase), so
 a caller with a time passes ``w * t``. A Python ``float`` goes through :mod:`math` (fast in
-scalar loops such as a ``solve_ivp`` right-hand side), anything else through numpy (on the
-reference machine both give the same bits). All code outside the compiled engine uses this
-module; compiled code (the kernel, the Moreau–Jean comparator) uses :mod:`bouncedisk.engine.laws`.
+scalar loops such as a ``solve_ivp`` right-hand side), anything else through numpy. All code
+outside the compiled engine uses this module; compiled code (the kernel, the Moreau–Jean
+comparator) uses :mod:`bouncedisk.engine.laws`.
 """
 
 from __future__ import annotations

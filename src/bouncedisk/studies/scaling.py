@@ -22,9 +22,9 @@ from ..model.params import NATURAL_E_SIGMA
 def _stream(cfg: EngineConfig) -> int:
     """Run ``cfg`` chunk by chunk, dropping the output; returns the number of events.
 
-    Memory stays at one chunk whatever the run's size: the "+ trajectory" case (200,000 impacts
-    at ``dt = 0.01``, about 84 million samples) held 3.4 GB of samples, and 9.7 GB at the peak
-    while they were joined, when the run was collected in memory.
+    Memory stays at one chunk whatever the run's size, where a run collected in memory holds
+    every sample of its trajectory (eight bytes per column and sample) and more while the
+    chunks are joined.
     """
     n = 0
     for chunk in iterate(cfg):
@@ -43,12 +43,26 @@ def _rate(cfg: EngineConfig, repeat: int = 2) -> tuple[float, int]:
     return best, n
 
 
+def _rate_row(study: str, cfg: EngineConfig, repeat: int = 2, **labels: str) -> dict:
+    """One row of the scaling table: :func:`_rate` of ``cfg``, per run and per impact."""
+    sec, n = _rate(cfg, repeat)
+    return {
+        "study": study,
+        **labels,
+        "e": cfg.e,
+        "omega_s": cfg.omega_s,
+        "n_impacts": n,
+        "seconds": sec,
+        "s_per_impact": sec / n,
+    }
+
+
 def peak_memory_mb(n_events: int, e: float = 0.6, omega_s: float = 1.5) -> float:
     """Peak RSS (MB) of a fresh process streaming an events-only run of ``n_events`` to netCDF.
 
-    The child (``python -m bouncedisk.run.memory_probe``, the same interpreter and the same package as
-    this process) runs :func:`bouncedisk.run.memory_probe.stream_events_peak_mb` and reports its own
-    ``VmHWM`` (``ru_maxrss`` would include this process's high-water mark, which Linux keeps
+    The child (``python -m bouncedisk.run.memory_probe``, the same interpreter and the same
+    package as this process) runs :func:`bouncedisk.run.memory_probe.stream_events_peak_mb` and
+    reports its own ``VmHWM`` (``ru_maxrss`` would include this process's high-water mark, which Linux keeps
     across fork and exec). Its file goes to a temporary folder, removed whatever happens.
 
     Raises
@@ -99,33 +113,15 @@ def scaling(
     """
     rows = []
     for w in omegas:
-        sec, n = _rate(EngineConfig(e=0.3, omega_s=w, max_events=per_omega))
-        rows.append(
-            {
-                "study": "omega",
-                "e": 0.3,
-                "omega_s": w,
-                "n_impacts": n,
-                "seconds": sec,
-                "s_per_impact": sec / n,
-            }
-        )
+        row = _rate_row("omega", EngineConfig(e=0.3, omega_s=w, max_events=per_omega))
+        rows.append(row)
         if progress:
-            progress(f"omega_s = {w:g}: {1e9 * sec / n:.0f} ns per impact")
+            progress(f"omega_s = {w:g}: {1e9 * row['s_per_impact']:.0f} ns per impact")
     for n_ev in sizes:
-        sec, n = _rate(EngineConfig(e=0.6, omega_s=1.5, max_events=n_ev), repeat=1)
-        rows.append(
-            {
-                "study": "impacts",
-                "e": 0.6,
-                "omega_s": 1.5,
-                "n_impacts": n,
-                "seconds": sec,
-                "s_per_impact": sec / n,
-            }
-        )
+        row = _rate_row("impacts", EngineConfig(e=0.6, omega_s=1.5, max_events=n_ev), repeat=1)
+        rows.append(row)
         if progress:
-            progress(f"{n_ev} impacts: {sec:.4g} s")
+            progress(f"{n_ev} impacts: {row['seconds']:.4g} s")
     for n_ev in memory_sizes:
         mb = peak_memory_mb(n_ev)
         rows.append({"study": "memory", "e": 0.6, "omega_s": 1.5, "n_impacts": n_ev, "peak_mb": mb})
@@ -138,18 +134,9 @@ def scaling(
         "+ torsion + trajectory (dt = 0.01)": dict(torsion=True, r_phi=0.01, traj_dt=0.01),
     }
     for label, kw in effects.items():
-        sec, n = _rate(EngineConfig(e=0.6, omega_s=1.5, max_events=effect_events, **kw))
-        rows.append(
-            {
-                "study": "effects",
-                "effect": label,
-                "e": 0.6,
-                "omega_s": 1.5,
-                "n_impacts": n,
-                "seconds": sec,
-                "s_per_impact": sec / n,
-            }
-        )
+        cfg = EngineConfig(e=0.6, omega_s=1.5, max_events=effect_events, **kw)
+        row = _rate_row("effects", cfg, effect=label)
+        rows.append(row)
         if progress:
-            progress(f"{label}: {1e9 * sec / n:.0f} ns per impact")
+            progress(f"{label}: {1e9 * row['s_per_impact']:.0f} ns per impact")
     return pd.DataFrame(rows)

@@ -170,7 +170,7 @@ def work_precision(
 
 
 def work_precision_summary(table: pd.DataFrame, target: float = 1e-8) -> dict[str, float | bool]:
-    """The issue's targets, as ratios from one run.
+    """The study's two findings, as ratios from one run.
 
     ``speedup``: CPU time of the fastest solve_ivp configuration reaching ``target`` over that of
     the cheapest exact configuration reaching it (periodic case). ``dominates``: for every

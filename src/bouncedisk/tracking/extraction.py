@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ..io.provenance import sha256_file
-from .store import _one_line
+from .store import one_line
 
 HASH_CACHE = ".tracking-hashes.json"
 
@@ -174,8 +174,8 @@ def _param_value(v: Any) -> str:
 def netcdf_fields(path: Path) -> tuple[dict[str, str], dict[str, float]]:
     """Params and metrics of one netCDF file (global attributes, scalar data variables).
 
-    Reads attributes and scalars only, with netCDF4 directly: opening through xarray costs
-    tenths of a second per file, and a pipeline has dozens.
+    Reads attributes and scalars only, with netCDF4 directly: xarray would decode every
+    variable's metadata and build indexes, for each of a pipeline's outputs.
     """
     import netCDF4
 
@@ -324,12 +324,13 @@ def describe_output(path: str | Path) -> tuple[dict[str, str], dict[str, float]]
         if p.suffix == ".md":
             return {}, checks_metrics(p)
     except Exception as ex:  # noqa: BLE001 - a damaged output must not lose the whole record
-        return {"tracking_warning": f"{p.name}: {_one_line(ex)}"}, {}
+        return {"tracking_warning": f"{p.name}: {one_line(ex)}"}, {}
     return {}, {}
 
 
 class _HashCache:
-    """sha256 of files, reused while (size, mtime) are unchanged (``<results>/.tracking-hashes.json``)."""
+    """sha256 of files, reused while (size, mtime) are unchanged
+    (``<results>/.tracking-hashes.json``)."""
 
     def __init__(self, path: Path | None):
         self.path = path

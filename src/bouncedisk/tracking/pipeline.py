@@ -30,8 +30,8 @@ from .store import (
     TrackingError,
     _client,
     _log_batch,
-    _one_line,
     experiment_id,
+    one_line,
     preflight,
     resolve_store,
     store_lock,
@@ -244,7 +244,7 @@ class PipelineTracker:
             err, self._error = self._error, None
             if isinstance(err, TrackingError):
                 raise err
-            raise TrackingError(self.store.uri, f"recording failed: {_one_line(err)}") from None
+            raise TrackingError(self.store.uri, f"recording failed: {one_line(err)}") from None
 
     # -- end -------------------------------------------------------------------------------
 

@@ -47,7 +47,7 @@ class Runs:
             raise
         except Exception as ex:  # noqa: BLE001 - drivers and REST raise their own types
             raise store.TrackingError(
-                self.store.uri, f"cannot be read: {store._one_line(ex)}"
+                self.store.uri, f"cannot be read: {store.one_line(ex)}"
             ) from None
         self.runs.sort(key=lambda r: r.info.start_time or 0)
 
@@ -209,7 +209,10 @@ def format_list(rows: list[dict]) -> str:
     """The listing for a terminal, newest first."""
     if not rows:
         return "(no runs recorded yet)"
-    head = f"{'run':<12}  {'started (UTC)':<20}  {'kind':<8}  {'status':<8}  {'commit':<13}  {'checks':<6}  changed since previous"
+    head = (
+        f"{'run':<12}  {'started (UTC)':<20}  {'kind':<8}  {'status':<8}  {'commit':<13}  "
+        f"{'checks':<6}  changed since previous"
+    )
     lines = [head]
     for r in reversed(rows):
         commit = (r["git_commit"] or "")[:12] + ("*" if r["git_dirty"] == "true" else "")
@@ -249,10 +252,11 @@ def show(runs: Runs, run) -> dict[str, Any]:
 
 def format_show(rec: dict[str, Any]) -> str:
     """One run for a terminal."""
+    dirty = " (uncommitted changes)" if rec["git_dirty"] == "true" else ""
     lines = [
         f"run {rec['run_id']} ({rec['name']})",
         f"  kind {rec['kind']}, status {rec['status']}, {rec['start']} -> {rec['end'] or '…'}",
-        f"  commit {rec['git_commit']}{' (uncommitted changes)' if rec['git_dirty'] == 'true' else ''}",
+        f"  commit {rec['git_commit']}{dirty}",
     ]
     if rec["checks_total"]:
         lines.append(f"  checks {rec['checks_passed']} of {rec['checks_total']} pass")

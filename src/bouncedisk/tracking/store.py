@@ -10,7 +10,6 @@ import json
 import os
 import re
 import sqlite3
-import sys
 import tempfile
 import time
 import urllib.error
@@ -44,8 +43,8 @@ MLFLOW_TABLES = {
     "latest_metrics",
 }
 #: Seconds one request to a tracking server may take, retries, and backoff factor (MLflow's
-#: ``MLFLOW_HTTP_REQUEST_*`` variables; the environment wins). MLflow's own defaults are 120 s
-#: and 7 retries with doubling backoff: a stalled server held a command for tens of minutes.
+#: ``MLFLOW_HTTP_REQUEST_*`` variables; the environment wins). With MLflow's own defaults (120 s,
+#: 7 retries with doubling backoff) a stalled server holds a command for tens of minutes.
 HTTP_TIMEOUT_S = 10
 HTTP_RETRIES = 1
 HTTP_BACKOFF = 1
@@ -141,7 +140,7 @@ def preflight(store: Store, create: bool = True, timeout: float = 10.0) -> None:
         try:
             _client(store).search_experiments(max_results=1)
         except Exception as ex:  # noqa: BLE001 - every driver raises its own types
-            raise TrackingError(store.uri, f"cannot be used: {_one_line(ex)}") from None
+            raise TrackingError(store.uri, f"cannot be used: {one_line(ex)}") from None
 
 
 def _preflight_sqlite(uri: str, db: Path, create: bool) -> None:
@@ -187,10 +186,10 @@ def _preflight_sqlite(uri: str, db: Path, create: bool) -> None:
             finally:
                 con.close()
     except sqlite3.Error as ex:
-        raise TrackingError(uri, f"not a usable SQLite database: {_one_line(ex)}") from None
+        raise TrackingError(uri, f"not a usable SQLite database: {one_line(ex)}") from None
     except OSError as ex:
         what = "not writable" if create else "not readable"
-        raise TrackingError(uri, f"{what}: {ex.strerror or _one_line(ex)}") from None
+        raise TrackingError(uri, f"{what}: {ex.strerror or one_line(ex)}") from None
 
 
 def _http_request(uri: str, path: str, timeout: float, body: dict | None = None) -> Any:
@@ -223,13 +222,13 @@ def _preflight_http(uri: str, timeout: float) -> None:
         raise TrackingError(uri, f"{what} (HTTP {ex.code})") from None
     except (urllib.error.URLError, OSError, ValueError) as ex:
         reason = getattr(ex, "reason", ex)
-        raise TrackingError(uri, f"unreachable: {_one_line(reason)}") from None
+        raise TrackingError(uri, f"unreachable: {one_line(reason)}") from None
 
 
 _AUTOFLUSH = re.compile(r"^\(raised as a result of Query-invoked autoflush;[^)]*\)\s*")
 
 
-def _one_line(ex: object) -> str:
+def one_line(ex: object) -> str:
     """The first meaningful line of an error (SQLAlchemy's autoflush preamble dropped)."""
     text = _AUTOFLUSH.sub("", str(ex).strip())
     return (text.splitlines()[0] if text else type(ex).__name__)[:200]
@@ -337,7 +336,8 @@ def _log_batch(
         client.log_batch(run_id, metrics=m, params=p, tags=t)
 
 
-def print_error(ex: BaseException) -> None:
-    """The one-line report of a tracking error, for the Snakefile's handlers."""
-    line = ex.line() if isinstance(ex, InputError) else _one_line(ex)
-    print(f"bouncedisk: error: {line}", file=sys.stderr, flush=True)
+def error_report(ex: BaseException) -> str:
+    """The one-line report of a tracking error (``bouncedisk: error: ...``), which the
+    Snakefile's handlers print."""
+    line = ex.line() if isinstance(ex, InputError) else one_line(ex)
+    return f"bouncedisk: error: {line}"

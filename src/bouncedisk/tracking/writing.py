@@ -1,4 +1,5 @@
-"""Writing runs: the provenance tags every run carries, and a tracked command's one top-level run."""
+"""Writing runs: the provenance tags every run carries, and a tracked command's one top-level
+run."""
 
 from __future__ import annotations
 
@@ -7,14 +8,14 @@ import json
 import os
 import platform
 import socket
-import subprocess
 import tempfile
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
 from .. import __version__
-from ..io.provenance import TAG_GIT_COMMIT, TAG_GIT_DIRTY, TAG_VERSION, sha256_file
+from ..io.atomic import pid_alive
+from ..io.provenance import TAG_GIT_COMMIT, TAG_GIT_DIRTY, TAG_VERSION, git_state, sha256_file
 from .extraction import _keys, _netcdf_run_id, _number, describe_output, flatten
 from .store import Store, _client, _log_batch, experiment_id, store_lock
 
@@ -35,25 +36,6 @@ COPIED = {".png", ".pdf", ".svg", ".md", ".csv", ".json", ".txt", ".html", ".yam
 # ------------------------------------------------------------------------------------------
 
 
-def _git(*args: str, cwd: Path | None = None) -> str | None:
-    try:
-        r = subprocess.run(["git", *args], cwd=cwd, capture_output=True, text=True, timeout=10)
-    except (OSError, subprocess.SubprocessError):
-        return None
-    return r.stdout.strip() if r.returncode == 0 else None
-
-
-def git_state(cwd: Path | None = None) -> dict[str, str]:
-    """Commit of the working tree at ``cwd`` (default: the package's source tree) and whether
-    tracked files differ from it."""
-    cwd = cwd or Path(__file__).resolve().parents[1]
-    commit = _git("rev-parse", "HEAD", cwd=cwd)
-    if commit is None:
-        return {"git_commit": "unknown", "git_dirty": "unknown"}
-    dirty = _git("status", "--porcelain", "--untracked-files=no", cwd=cwd)
-    return {"git_commit": commit, "git_dirty": "true" if dirty else "false"}
-
-
 def _process_start(pid: int) -> str:
     """Start time of a process in clock ticks since boot (Linux), to tell a reused pid apart."""
     try:
@@ -65,12 +47,8 @@ def _process_start(pid: int) -> str:
 
 def process_alive(pid: int, start: str = "") -> bool:
     """Whether process ``pid`` (started at ``start``, if known) still runs on this host."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
+    if not pid_alive(pid):
         return False
-    except PermissionError:
-        return True
     return not start or not _process_start(pid) or _process_start(pid) == start
 
 
