@@ -66,6 +66,11 @@ BEST_BY = ("max_power", "no_load_speed")
 #: the study's own sample keeps its configured loads (its points are many).
 MAP_LOAD_STEP = 0.05
 MAP_LOAD_TOP = 1.1
+#: Transient the design maps add to their first run, from rest (units of ``1/R_φ``,
+#: :attr:`StudySettings.runup`): at ``R_φ = 0.001`` the run-up is not over after the study's
+#: 5, so that the maps' no-load speed would be a run-up's, not the steady one the torque–speed
+#: curves read.
+MAP_RUNUP = 15.0
 #: Fewest members of a design map's points: their intervals pick the best point and those not
 #: resolved from it (with 2 members Student's factor is 12.7, with 4 it is 3.2).
 MAP_MIN_MEMBERS = 4
@@ -160,9 +165,9 @@ class MotorModel:
             "name": "sensitivity",
             "parameters": params,
             "effects": effects,
-            "stop": {"time": (s.discard + s.duration) / r},
+            "stop": {"time": (s.discard + s.runup + s.duration) / r},
             "ensemble": {"members": s.members, "seed": s.seed},
-            "stats": {"discard": s.discard / r},
+            "stats": {"discard": (s.discard + s.runup) / r},
             "outputs": {"events": False, "trajectory": {"dt": 1.0 / (RUNUP_SAMPLES_PER_UNIT * r)}},
             "solver": {"method": "exact", "tol": 1e-12},
         }
@@ -243,7 +248,8 @@ def _load_curve(scene: Scene, s: StudySettings) -> tuple:
 
     t_from, t_end = ensemble_window(scene)
     cfg = engine_config(scene)
-    discard, duration = scene.stats.discard, t_end - scene.initial.t
+    # the continued loads: discard + duration (units 1/R_phi), without the first run's run-up
+    discard, duration = s.discard / cfg.r_phi, (s.discard + s.duration) / cfg.r_phi
     try:
         first = [_first_run(cfg, scene.initial, m, t_from) for m in range(s.members)]
         per_load, drift = _continue_up(cfg, first, s, duration, discard)
@@ -251,12 +257,14 @@ def _load_curve(scene: Scene, s: StudySettings) -> tuple:
         raise capped_error(
             scene, ex, f" (load tau_L = {getattr(ex, 'load', math.nan):.6g})"
         ) from None
-    free = EnsembleStats([f[0] for f in first], discard, t_end - t_from, True, scene.scales)
+    free = EnsembleStats(
+        [f[0] for f in first], scene.stats.discard, t_end - t_from, True, scene.scales
+    )
     n = min(len(f[2]) for f in first)  # the samples every member reached
     t, om = first[0][2][:n, 0], np.stack([f[2][:n, 1] for f in first])
     if s.running and float(np.mean(free.column("mean_omega"))) < 0.0:
         om = -om  # the mirror's run-up
-    ens = [EnsembleStats(x, discard, t_end - t_from, True, scene.scales) for x in per_load]
+    ens = [EnsembleStats(x, discard, duration - discard, True, scene.scales) for x in per_load]
     curve = LoadCurve(np.asarray(s.loads, float), {"up": ens}, {"up": drift})
     return free, curve, (t, om)
 
@@ -366,12 +374,14 @@ def map_settings(settings: StudySettings) -> StudySettings:
     largest load stays, bracketing every stall)."""
     members = max(settings.members, MAP_MIN_MEMBERS)
     if not settings.loads:
-        return dataclasses.replace(settings, members=members, running=False)
+        return dataclasses.replace(settings, members=members, running=False, runup=MAP_RUNUP)
     top = min(MAP_LOAD_TOP, max(settings.loads))
     steps = MAP_LOAD_STEP * np.arange(round(top / MAP_LOAD_STEP) + 1)
     loads = np.unique(np.round(np.r_[steps, settings.loads], 12))
     loads = tuple(float(x) for x in loads)
-    return dataclasses.replace(settings, members=members, loads=loads, running=False)
+    return dataclasses.replace(
+        settings, members=members, loads=loads, running=False, runup=MAP_RUNUP
+    )
 
 
 def map_sample(settings: StudySettings, e: float) -> tuple[np.ndarray, tuple[int, int]]:
