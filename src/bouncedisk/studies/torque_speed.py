@@ -471,6 +471,9 @@ def to_dataset(scene: Scene, curve: LoadCurve, wall_time_s: float, summary: dict
             np.array([[np.nanmax(s.column(q)) for s in curve.branches[b]] for b in names]),
             {"long_name": long_name},
         )
+    data["settled"] = (dims, _settled(curve, names).astype(np.int8), {
+        "long_name": "1 where the load's runs settled (second half's mean speed within 2% of "
+        "the first half's; none past the momentum bound): a stationary speed"})  # fmt: skip
     for var in data.values():
         var[2].setdefault("units", "1")
     members = np.arange(curve.branches[names[0]][0].column("mean_omega").size)
@@ -497,6 +500,7 @@ def to_dataset(scene: Scene, curve: LoadCurve, wall_time_s: float, summary: dict
             ds.attrs[key] = summary[key]
     for key in ("stall_torque_bracket", "max_power_bracket"):
         ds.attrs[key] = [_nan(x) for x in summary[key]]
+    ds.attrs["unsettled_loads"] = list(summary.get("unsettled_loads") or []) or "none"
     ds.attrs["stats_discard"], ds.attrs["stats_duration"] = summary["discard"], summary["duration"]
     ds.attrs["branches_differ_at"] = summary.get("branches_differ_at") or "none"
     if scene.physical is not None:
@@ -514,6 +518,18 @@ def to_dataset(scene: Scene, curve: LoadCurve, wall_time_s: float, summary: dict
         }
     )
     return ds
+
+
+def _settled(curve: LoadCurve, names: list[str]) -> np.ndarray:
+    """Per branch and load: have its runs settled (:func:`~.load_summary.settled_loads`)?"""
+    from .load_summary import MOMENTUM_BOUND, settled_loads
+
+    rows = []
+    for b in names:
+        drift = None if curve.drift is None else curve.drift[b]
+        rows.append(settled_loads(curve.loads, curve.matrix(b, "mean_omega"), drift,
+                                  MOMENTUM_BOUND))  # fmt: skip
+    return np.array(rows)
 
 
 def motor_scene(
