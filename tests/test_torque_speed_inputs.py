@@ -234,8 +234,14 @@ def test_physical_default_loads_are_nondimensional(tmp_path, capsys):
     torque = scene.physical.scales().torque
     assert np.array_equal(scene_loads(scene, None), parse_loads(DEFAULT_LOADS))
     assert np.allclose(scene_loads(scene, f"0,{0.5 * torque!r}"), [0.0, 0.5])
-    args = ["torque-speed", _file(tmp_path, PHYSICAL, "p.yaml"), "--set", "ensemble.members=2",
-            "--resolution", "0"]  # the default loads as given, unrefined
+    args = [
+        "torque-speed",
+        _file(tmp_path, PHYSICAL, "p.yaml"),
+        "--set",
+        "ensemble.members=2",
+        "--resolution",
+        "0",
+    ]  # the default loads as given, unrefined
     assert main(args) == 0
     table = capsys.readouterr().out
     assert table.splitlines()[0].split()[:3] == ["load", "(N", "m)"]
