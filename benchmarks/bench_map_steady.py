@@ -12,7 +12,10 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import datetime
 import json
+import os
+import platform
 import time
 
 import numpy as np
@@ -43,15 +46,26 @@ def main() -> None:
             cpu = time.process_time() - start
             r = 10.0**lr
             ref = r * float(np.mean(run_stats(long.scene(point), cores=1).column("mean_omega")))
-            rows.append({"e": e, "log10_r_phi": round(float(lr), 4),
-                         "map_no_load_speed": v["no_load_speed"][0], "long_run_no_load_speed": ref,
-                         "relative_difference": v["no_load_speed"][0] / ref - 1.0,
-                         "map_stall_torque": v["stall_torque"][:3], "cpu_s": cpu})  # fmt: skip
-            print(json.dumps(rows[-1]), flush=True)
-    record = {"title": "design maps at psi = 0 against long runs",
-              "command": "PYTHONPATH=src python benchmarks/bench_map_steady.py", "rows": rows}  # fmt: skip
+            stall = v["stall_torque"]
+            rows.append({
+                "measurement": f"e = {e:g}, psi = 0, log10 R_phi = {lr:.3g}: no-load speed "
+                "R_phi mean(Omega) (map; long run), stall torque [95% interval] (map)",
+                "result": f"{v['no_load_speed'][0]:.4f}; {ref:.4f} "
+                f"({100 * (v['no_load_speed'][0] / ref - 1):+.2f} %), {stall[0]:.3f} "
+                f"[{stall[1]:.3f}, {stall[2]:.3f}] ({cpu:.2f} s CPU)",
+            })  # fmt: skip
+            print(rows[-1]["measurement"], rows[-1]["result"], flush=True)
+    record = {
+        "title": "The design maps' steady speeds against long runs",
+        "command": "PYTHONPATH=src python benchmarks/bench_map_steady.py",
+        "date": datetime.date.today().isoformat(),
+        "machine": f"{platform.machine()}, {os.cpu_count()} cores (shared), Python "
+        f"{platform.python_version()}",
+        "rows": rows,
+    }
     with open(args.out, "w") as f:
         json.dump(record, f, indent=1)
+        f.write("\n")
 
 
 if __name__ == "__main__":
