@@ -64,11 +64,11 @@ def test_an_index_above_one_is_drawn_clipped_with_a_note_and_the_default_study_s
     ax = fig.axes[0]
     assert max(p.get_height() for p in ax.patches) <= 1.0
     text = _texts(fig)
-    assert "clipped" in text and "1.20" in text
+    assert "drawn clipped to [0, 1]: ST" in text and "1.20" in text
     assert "resolved only by the full study" in text
     assert "log10 tau" not in text and r"$\log_{10}\tau$" in text
     full = _texts(fig_sensitivity_indices(_indices(0.5, 1024 * 6)))
-    assert "clipped" not in full and "full study" not in full
+    assert "drawn clipped to" not in full and "full study" not in full
 
 
 def _maps(stall: np.ndarray) -> xr.Dataset:

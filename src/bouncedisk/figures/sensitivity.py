@@ -28,6 +28,10 @@ LABELS = {
 }
 
 
+#: An index beyond [0, 1] by more than this is named in its panel (every one is drawn clipped).
+CLIP_NOTE = 0.02
+
+
 def _short(output: str) -> str:
     """An output's name as an axis label."""
     return LABELS.get(output, output.replace("_", " "))
@@ -64,7 +68,7 @@ def fig_sensitivity_indices(ds: xr.Dataset) -> Figure:
             ax.errorbar(x, shown, yerr=[shown - np.clip(value - conf, -0.1, 1.1),
                                         np.clip(value + conf, -0.1, 1.1) - shown],
                         fmt="none", ecolor="k", capsize=3, lw=0.8)  # fmt: skip
-            out = np.flatnonzero((value > 1.0) | (value < 0.0))
+            out = np.flatnonzero((value > 1.0 + CLIP_NOTE) | (value < -CLIP_NOTE))
             clipped += [
                 f"{key}({_parameter(names[i])}) = {value[i]:.2f} ±{conf[i]:.2f}" for i in out
             ]
@@ -77,8 +81,8 @@ def fig_sensitivity_indices(ds: xr.Dataset) -> Figure:
         ax.axhline(0, color="k", lw=0.5)
         ax.set_ylim(-0.12, 1.12)
         if clipped:
-            ax.text(0.02, 0.97, "drawn clipped to [0, 1]: " + "; ".join(clipped),
-                    transform=ax.transAxes, fontsize=6, va="top", wrap=True)  # fmt: skip
+            ax.text(0.5, 0.02, "drawn clipped to [0, 1]: " + "; ".join(clipped),
+                    transform=ax.transAxes, fontsize=6, ha="center", va="bottom")  # fmt: skip
     for ax in axes[len(outputs) :]:
         ax.set_visible(False)
     handles = [Rectangle((0, 0), 1, 1, color=c, label=lab) for c, lab in
@@ -93,7 +97,7 @@ def fig_sensitivity_indices(ds: xr.Dataset) -> Figure:
 
     small = not isinstance(base, int) or base < FULL_MIN_BASE_SAMPLES
     fig.suptitle(f"Sobol' indices from {n} points (SALib, N = {base} base samples); "
-                 f"grey: interval wider than ±{limit:g}"
+                 f"grey: interval wider than ±{limit:g}; indices outside [0, 1] drawn clipped"
                  + ("\nthe total indices are resolved only by the full study "
                     "(config sensitivity: full)" if small else "")
                  + ("\nstall torque, power, efficiency: each motor loaded against its own "
@@ -183,8 +187,8 @@ def fig_design_maps(ds: xr.Dataset) -> Figure:
                             transform=axes[0, j].transAxes, fontsize=7, color="w")  # fmt: skip
     fig.suptitle(
         f"red star: largest {_short(best_by)}"
-        + (" (a star at the edge: the maximum may lie outside the swept range)" if edge else "")
-        + "; white rings: points whose 95 % interval reaches it; x: runs backwards at no load"
+        + (" (at the edge: the maximum may lie outside the swept range)" if edge else "")
+        + "; white rings: points whose 95 % interval reaches it\nx: runs backwards at no load"
         + ("; black ring: no stall up to the largest load" if rings else "")
         + "\nspeeds and powers times $R_\\phi$ (units $\\Phi_0/t_c$); the torque–speed "
         "curves draw $\\bar\\Omega$ and $\\tau_L\\bar\\Omega$, these divided by $R_\\phi$",

@@ -69,10 +69,14 @@ def settled_loads(
     speed up to the momentum ``bound``), or within three standard errors of 0 (a chaotic motor's
     halves differ by chance). Without ``drift`` (``None``, or not finite at a load) a load counts
     as settled; past the ``bound`` none does (no speed is stationary there, docs/model.md "The
-    motor under load").
+    motor under load"), nor a backward speed at it (the mean friction torque, at most 1, only
+    balances the load).
     """
     speed = np.atleast_2d(np.asarray(speed, float))
-    past = np.zeros(speed.shape[1], bool) if bound is None else np.asarray(loads) > bound
+    past = np.zeros(speed.shape[1], bool)
+    if bound is not None:  # at the bound a backward rotor is driven on backwards (<= 1 vs 1)
+        with np.errstate(invalid="ignore"):
+            past = (np.asarray(loads) > bound) | ((np.asarray(loads) >= bound) & (_mean(speed) < 0))
     if drift is None:
         return ~past
     drift = np.atleast_2d(np.asarray(drift, float))
