@@ -59,14 +59,19 @@ SAME_LOAD = 1e-9
 
 
 def settled_loads(
-    loads: np.ndarray, speed: np.ndarray, drift: np.ndarray | None, bound: float | None = None
+    loads: np.ndarray,
+    speed: np.ndarray,
+    drift: np.ndarray | None,
+    bound: float | None = None,
+    scale: float | None = None,
 ) -> np.ndarray:
     """Which loads' runs have settled (:data:`SETTLE`), a boolean per load.
 
     ``speed`` and ``drift`` are ``(members, loads)``: each member's mean speed over the window
     and its second half's mean speed less its first half's. A load has settled when the members'
     mean drift is at most ``SETTLE`` times the curve's speed scale (its largest absolute mean
-    speed up to the momentum ``bound``), or within three standard errors of 0 (a chaotic motor's
+    speed up to the momentum ``bound``, or ``scale``: the up branch's for the down branch, whose
+    runaway speeds would loosen it), or within three standard errors of 0 (a chaotic motor's
     halves differ by chance). Without ``drift`` (``None``, or not finite at a load) a load counts
     as settled; past the ``bound`` none does (no speed is stationary there, docs/model.md "The
     motor under load"), nor a backward speed at it (the mean friction torque, at most 1, only
@@ -85,11 +90,20 @@ def settled_loads(
     k = finite.sum(axis=0)
     dev = np.where(finite, drift - np.nan_to_num(d), 0.0)
     se = np.sqrt((dev**2).sum(axis=0) / np.maximum(k - 1, 1) / np.maximum(k, 1))
-    mean = np.where(past, np.nan, np.abs(_mean(speed)))
-    scale = float(np.nanmax(mean)) if np.isfinite(mean).any() else 0.0
+    if scale is None:
+        scale = speed_scale(loads, speed, bound)
     with np.errstate(invalid="ignore"):
         moving = (np.abs(d) > SETTLE * scale) & (np.abs(d) > 3.0 * se)
     return ~moving & ~past
+
+
+def speed_scale(loads: np.ndarray, speed: np.ndarray, bound: float | None = None) -> float:
+    """A curve's speed scale: its largest absolute mean speed up to the momentum ``bound``."""
+    speed = np.atleast_2d(np.asarray(speed, float))
+    mean = np.abs(_mean(speed))
+    if bound is not None:
+        mean = np.where(np.asarray(loads) > bound, np.nan, mean)
+    return float(np.nanmax(mean)) if np.isfinite(mean).any() else 0.0
 
 
 def _last_before(valid: np.ndarray) -> np.ndarray:

@@ -522,13 +522,14 @@ def to_dataset(scene: Scene, curve: LoadCurve, wall_time_s: float, summary: dict
 
 def _settled(curve: LoadCurve, names: list[str]) -> np.ndarray:
     """Per branch and load: have its runs settled (:func:`~.load_summary.settled_loads`)?"""
-    from .load_summary import MOMENTUM_BOUND, settled_loads
+    from .load_summary import MOMENTUM_BOUND, settled_loads, speed_scale
 
+    scale = speed_scale(curve.loads, curve.matrix(names[0], "mean_omega"), MOMENTUM_BOUND)
     rows = []
     for b in names:
         drift = None if curve.drift is None else curve.drift[b]
         rows.append(settled_loads(curve.loads, curve.matrix(b, "mean_omega"), drift,
-                                  MOMENTUM_BOUND))  # fmt: skip
+                                  MOMENTUM_BOUND, scale))  # fmt: skip
     return np.array(rows)
 
 
