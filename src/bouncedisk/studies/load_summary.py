@@ -1,16 +1,22 @@
 """A load curve's derived quantities: no-load speed, stall torque and maximum power, found.
 
-docs/model.md "The motor under load". The stall torque is the root of the ensemble's mean speed
-``Ω̄(τ_L)`` in the load: bracketed by the first sign change of the sampled curve, and the
-maximum power ``max τ_L Ω̄`` is bracketed by the largest sample and its two neighbours. Either
-bracket is narrowed by :func:`refine`, which asks a sweep for more loads inside it until it is no
-wider than the ensemble's own resolution (the bootstrap interval across members) or a set
-floor. Each estimate carries a 95 % interval: the central 95 % of :data:`BOOTSTRAP` resamples of
-the members, widened to hold its bracket (the mean curve's root or peak lies in it whatever the
-members do), and no interval at all from fewer than two members.
+docs/model.md "The motor under load". :func:`derived` is the one place the motor's figures are
+computed, for the torque–speed curves, the command, the design maps and the sensitivity study.
+The stall torque is the root of the ensemble's mean speed ``Ω̄(τ_L)`` in the load: bracketed by
+the first load where the speed is ``<= 0`` or that lies past the momentum bound (no speed is
+stationary there) and the load before, the bracket clipped to the bound. The maximum power
+``max τ_L Ω̄`` over the loads up to the bound is bracketed by the largest sample and its two
+neighbours. Either bracket is narrowed by :func:`refine`, which asks a sweep for more loads
+inside it (distinct from those it has: :func:`distinct_new`) until it is no wider than the
+ensemble's own resolution (the bootstrap interval across members) or a set floor. Each estimate
+carries a 95 % interval: the central 95 % of :data:`BOOTSTRAP` resamples of the members,
+widened to hold its bracket (the mean curve's root or peak lies in it whatever the members do),
+and no interval at all from fewer than two members.
 
-A curve that does not cross zero is not given a stall torque: its state says why (:data:`STALL_STATES`),
-and a power still rising at the largest load is not a maximum (:data:`PEAK_STATES`).
+A curve that does not cross zero is not given a stall torque: its state says why
+(:data:`STALL_STATES`); a power still rising at the largest load is not a maximum
+(:data:`PEAK_STATES`); where there is no estimate there is no interval. A load whose runs have
+not settled (:func:`settled_loads`) is reported, its reading a finite window's mean.
 """
 
 from __future__ import annotations

@@ -50,11 +50,16 @@ OUTPUTS: dict[str, tuple[str, str, bool]] = {
     "log10_tau": ("log10 of the run-up time constant of the ensemble-mean run-up", "1", False),
     "chatter_rate": ("complete chattering sequences per unit time", "1", False),
     "stall_torque": (
-        "stall torque, smallest load with mean Omega <= 0 (friction units)",
+        "stall torque, root of mean Omega in the load, at most the momentum bound 1 "
+        "(friction units)",
         "1",
         True,
     ),
-    "max_power": ("largest mean output power R_phi * tau_L * mean Omega over the loads", "1", True),
+    "max_power": (
+        "largest mean output power R_phi * tau_L * mean Omega over the loads up to 1",
+        "1",
+        True,
+    ),
     "efficiency_at_max_power": ("torsional efficiency at the load of the largest power", "1", True),
 }
 #: The design maps' outputs, and the one that picks the best operating point (first present).
