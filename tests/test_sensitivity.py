@@ -97,9 +97,9 @@ class _Curve:
         return self.matrix(branch, "power_out")
 
 
-def test_load_figures_are_the_mean_curves_with_jackknife_errors():
+def test_load_figures_are_the_mean_curves_with_bootstrap_errors():
     # speed_m(tau) = c_m - tau: the mean curve's root is mean(c) (linear: exact between loads),
-    # and the jackknife error of a mean is the standard error s / sqrt(K)
+    # and the bootstrap's error of a mean, corrected by sqrt(K/(K-1)), is s / sqrt(K)
     loads = np.array([0.0, 0.25, 0.5, 0.75, 1.0, 2.0])
     c = np.array([0.55, 0.61, 0.58, 0.66])
     speed = c[:, None] - loads[None, :]
@@ -107,7 +107,7 @@ def test_load_figures_are_the_mean_curves_with_jackknife_errors():
     got = sens.load_figures(_Curve(loads, speed, eff), r=0.1)
     value, low, high, se = got["stall_torque"]
     assert value == pytest.approx(c.mean(), abs=1e-12)
-    assert se == pytest.approx(np.std(c, ddof=1) / 2.0, rel=1e-9)
+    assert se == pytest.approx(np.std(c, ddof=1) / 2.0, rel=0.05)
     assert low < value < high
     # the power tau (cbar - tau) is largest on the grid at tau = 0.25: R_phi times it
     assert got["max_power"][0] == pytest.approx(0.1 * 0.25 * (c.mean() - 0.25), rel=1e-12)

@@ -86,3 +86,11 @@ rule sensitivity_analyse:
         settings=SENS_PARAMS,
     script:
         "../scripts/sensitivity_analyse.py"
+
+
+rule sensitivity:
+    """The study alone, as a target: its shards, design maps and indices. The resolved study:
+    `snakemake --cores 2 --config sensitivity=full results=results-full -- sensitivity`
+    (about 1.8 core-hours, docs/user_guide/sensitivity.md)."""
+    input:
+        rules.sensitivity_analyse.output,

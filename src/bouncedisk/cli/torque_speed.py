@@ -14,6 +14,9 @@ from .stats import _progress
 from .tracking_options import _add_track_options, _track, _tracking_store
 from .window_warnings import print_window_warnings
 
+#: How finely the command locates the stall torque and the maximum power by default (as the
+#: pipeline's load curves, workflow/config/config.yaml ``resolution``), in units of tau_L.
+DEFAULT_RESOLUTION = 0.005
 #: The table's columns and derived lines: nondimensional, and for a physical scene in SI units.
 _COLUMNS = {
     False: ("loads", "mean_omega", "power_out", "efficiency_torsion"),
@@ -51,6 +54,9 @@ def format_curve(summary: dict, physical: bool = False) -> str:
         ci = "" if lo is None and hi is None else f"  95% CI [{_g(lo)}, {_g(hi)}]"
         value = _why_none(name, summary) if v is None else _g(v)
         lines.append(f"{name:>19}: {value}{ci}")
+    if summary.get("unsettled_loads"):
+        at = ", ".join(f"{x:.4g}" for x in summary["unsettled_loads"])
+        lines.append(f"{'not settled':>19}: tau_L = {at} (a finite window's mean, not a speed)")
     if summary.get("branches_differ_at"):
         at = ", ".join(f"{x:.4g}" for x in summary["branches_differ_at"])
         lines.append(f"{'two speeds':>19}: the up and down branches differ at tau_L = {at}")
@@ -66,17 +72,17 @@ def _g(x) -> str:
 
 
 def _why_none(name: str, summary: dict) -> str:
-    """Why a derived quantity has no value, in the table's words."""
-    speeds = summary["mean_omega"]
-    if name.startswith("no_load_speed") and summary["loads"][0] != 0.0:
-        return "n/a (the loads do not include 0)"
-    if not name.startswith("stall_torque"):
-        return "n/a"
-    if speeds and speeds[0] is not None and speeds[0] <= 0.0:
-        return "n/a (the speed is already <= 0 at the smallest load: the stall lies below it)"
-    if all(x is not None and x > 0.0 for x in speeds):
-        return "n/a (speed stays positive)"
-    return "n/a"
+    """Why a derived quantity has no value, in the table's words (the summary's states,
+    :data:`~bouncedisk.studies.load_summary.STALL_STATES` and ``PEAK_STATES``)."""
+    from ..studies.load_summary import PEAK_STATES, STALL_STATES
+
+    if name.startswith("no_load_speed"):
+        return "n/a (the loads do not include 0)" if summary["loads"][0] != 0.0 else "n/a"
+    if name.startswith("stall_torque"):
+        state = summary.get("stall_torque_state", "none")
+        return f"n/a ({state}: {STALL_STATES.get(state, state)})"
+    state = summary.get("max_power_state", "none")
+    return f"n/a ({state}: {PEAK_STATES.get(state, state)})"
 
 
 def finite_json(x):
@@ -98,24 +104,27 @@ def torque_speed_command(args: argparse.Namespace) -> dict:
     """
     from ..analysis.statistics import ensemble_window
     from ..io.output_checks import check_output_path
-    from ..model.scene import load_scene
     from ..run.runner import deferred_interrupts
-    from ..studies.torque_speed import scene_loads, to_dataset, torque_speed, with_load
+    from ..studies.load_summary import REFINE_ROUNDS
+    from ..studies.torque_speed import refined_torque_speed, scene_loads, to_dataset, with_load
 
     if args.cores is not None and args.cores < 1:
         raise InputError("<arguments>", "--cores", f"must be >= 1, got {args.cores}")
+    resolution = _resolution(args.resolution)
     if args.output is not None:
         check_output_path(args.output, "-o", inputs=[args.scene])
-    scene = with_load(load_scene(args.scene, list(args.set or [])))
+    scene = with_load(_scene(args.scene, list(args.set or [])))
     ensemble_window(scene)
     loads = scene_loads(scene, args.loads)
     cores = args.cores or available_cores()
     start = time.perf_counter()
     with deferred_interrupts() as req:
         try:
-            curve = torque_speed(
+            curve = refined_torque_speed(
                 scene,
                 loads,
+                resolution,
+                REFINE_ROUNDS if resolution > 0.0 else 0,
                 cores=cores,
                 on_member=_progress(args.quiet, f"{scene.name} (torque-speed)"),
                 should_stop=lambda: req.signum is not None,
@@ -135,6 +144,26 @@ def torque_speed_command(args: argparse.Namespace) -> dict:
     return summary
 
 
+def _resolution(text) -> float:
+    """``--resolution`` as a number >= 0 (0: the loads as given)."""
+    from ..model.params import number
+
+    return number("<arguments>", "--resolution", text, nonneg=True)
+
+
+def _scene(path: str, sets: list[str]):
+    """The scene; one that lists the ``load`` effect without its ``load_torque`` is read with
+    ``load_torque: 0`` (a curve sets the torque at each load itself)."""
+    from ..model.scene import load_scene
+
+    try:
+        return load_scene(path, sets)
+    except InputError as ex:
+        if not (ex.field.endswith(".load_torque") and "'load' effect" in ex.message):
+            raise
+        return load_scene(path, [*sets, f"{ex.field}=0"])
+
+
 def _add_torque_speed(sub) -> None:
     """``bouncedisk torque-speed SCENE [--loads ...] [-o CURVE.nc] [--json]`` (docs/formats.md)."""
     p = sub.add_parser(
@@ -150,6 +179,14 @@ def _add_torque_speed(sub) -> None:
         help="load torques (nondimensional tau_L; N*m for a physical scene; default: 11 loads "
         "of tau_L from 0 to the momentum bound 1, for any scene)",
     )
+    p.add_argument(
+        "--resolution",
+        default=str(DEFAULT_RESOLUTION),
+        metavar="R",
+        help="add loads where the stall torque and the maximum power lie until each is located "
+        f"to R (nondimensional tau_L) or to the ensemble's spread (default {DEFAULT_RESOLUTION:g},"
+        " as the pipeline; 0: the loads as given)",
+    )
     p.add_argument("-o", "--output", help="write the curve (per branch, load and member) here")
     _add_set_option(p, "ensemble.members=32")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
@@ -164,7 +201,8 @@ def _add_torque_speed(sub) -> None:
 def _cmd_torque_speed(args: argparse.Namespace) -> int:
     store = _tracking_store(args)
     summary = torque_speed_command(args)
-    params = {"scene_file": args.scene, "set": args.set or [], "loads": args.loads or ""}
+    params = {"scene_file": args.scene, "set": args.set or [], "loads": args.loads or "",
+              "resolution": args.resolution}  # fmt: skip
     scalars = ("no_load_speed", "stall_torque", "max_power", "max_power_load")
     metrics = {k: summary[k] for k in scalars if summary[k] is not None}
     _track(args, store, "torque-speed", [args.output] if args.output else [], params, metrics)

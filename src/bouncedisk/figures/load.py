@@ -37,8 +37,8 @@ def _units(ds: xr.Dataset) -> tuple[float, float, float, str, str, str]:
         1.0,
         1.0,
         r"load torque $\tau_L$ (units of $\mu m_r g_{eff} r_{eff}$)",
-        r"mean speed $\bar\Omega$",
-        r"output power $\tau_L\bar\Omega$",
+        r"mean speed $\bar\Omega$ (design maps: $R_\phi\bar\Omega$)",
+        r"output power $\tau_L\bar\Omega$ (maps: $\times R_\phi$)",
     )
 
 
@@ -63,6 +63,7 @@ def fig_torque_speed(ds: xr.Dataset) -> Figure:
     kt, kw, kp, xlab, ylab, plab = _units(ds)
     tu, wu, pu = (" mN·m", " rad/s", " mW") if "torque_scale_Nm" in ds.attrs else ("", "", "")
     load = ds["load_torque"].values * kt
+    steady = stationary(ds)
     fig = Figure(figsize=(7.5, 8.0), layout="constrained")
     axes = fig.subplots(3, 1, sharex=True)
     panels = (
@@ -71,10 +72,12 @@ def fig_torque_speed(ds: xr.Dataset) -> Figure:
         ("efficiency_torsion", 1.0, "efficiency $W_L/W_t$ (loads below stall)"),
     )
     for ax, (name, k, label) in zip(axes, panels, strict=True):
-        for branch in ds["branch"].values:
+        for b, branch in enumerate(ds["branch"].values):
             color, text = BRANCH_STYLE.get(str(branch), ("k", str(branch)))
             sel = ds.sel(branch=branch)
-            keep = sel["mean_omega"].values > 0.0 if name == "efficiency_torsion" else True
+            keep = steady[b] & (
+                sel["mean_omega"].values > 0.0 if name == "efficiency_torsion" else True
+            )
             low = np.where(keep, sel[f"{name}_ci95_low"].values, np.nan) * k
             high = np.where(keep, sel[f"{name}_ci95_high"].values, np.nan) * k
             ax.fill_between(load, low, high, color=color, alpha=0.25, lw=0)
@@ -82,6 +85,14 @@ def fig_torque_speed(ds: xr.Dataset) -> Figure:
                     color=color, label=text)  # fmt: skip
         ax.axhline(0.0, color="0.5", lw=0.6)
         ax.set_ylabel(label)
+    if not steady.all():  # the readings that are no stationary speed: named, not drawn
+        gone = ~steady.all(axis=0)
+        for ax in axes:
+            for x in load[gone]:
+                ax.axvline(x, color="0.85", lw=2.0, zorder=0)
+        n = int((~steady).sum())
+        axes[0].plot([], [], "|", color="0.85", ms=10, mew=2,
+                     label=f"{n} readings not stationary (grey lines): not drawn")  # fmt: skip
     _stall(axes[0], ds, kt, tu)
     _max_power(axes[1], ds, kt, kp, tu, pu)
     axes[0].legend(fontsize=8, loc="best")
@@ -91,7 +102,9 @@ def fig_torque_speed(ds: xr.Dataset) -> Figure:
     if _zero_width(ds):
         bands = "95% bands of zero width: a periodic attractor"
     else:
-        half = np.nanmax(ds["mean_omega_ci95_high"] - ds["mean_omega_ci95_low"]) / 2 * kw
+        width = (ds["mean_omega_ci95_high"] - ds["mean_omega_ci95_low"]).values
+        width = np.where(steady, width, np.nan)
+        half = np.nanmax(width) / 2 * kw
         bands = f"95% bands, the mean speed's half-width at most {half:.2g}{wu}"
     fig.suptitle(
         f"Load characteristic: e = {ds.attrs.get('e', np.nan):.3g}, "
@@ -101,6 +114,18 @@ def fig_torque_speed(ds: xr.Dataset) -> Figure:
         fontsize=10,
     )
     return fig
+
+
+def stationary(ds: xr.Dataset) -> np.ndarray:
+    """Per branch and load ``(branch, load)``: is its reading a stationary speed? The file's
+    ``settled``; in a file without it, not past the momentum bound ``τ_L = 1`` (docs/model.md
+    "The motor under load")."""
+    from ..studies.load_summary import MOMENTUM_BOUND
+
+    if "settled" in ds:
+        return ds["settled"].values.astype(bool)  # (branch, load), as written
+    steady = ds["load_torque"].values <= MOMENTUM_BOUND
+    return np.tile(steady, (len(ds["branch"]), 1))
 
 
 def _interval(ds: xr.Dataset, name: str) -> tuple[float, float]:
@@ -131,8 +156,11 @@ def _max_power(ax, ds: xr.Dataset, kt: float, kp: float, tu: str, pu: str) -> No
         ax.plot([], [], " ", label=f"max. power: {STATE_TEXT.get(state, state)}")
         return
     p = float(ds.attrs.get("max_power", np.nan)) * kp
-    ax.plot([x * kt], [p], "k*", ms=9, label=f"max. power {p:.3g}{pu} at load {x * kt:.3g}{tu}")
     lo, hi = _interval(ds, "max_power_load")
+    where = (f" (located in [{lo * kt:.3g}, {hi * kt:.3g}])"
+             if np.isfinite(lo) and np.isfinite(hi) else "")  # fmt: skip
+    ax.plot([x * kt], [p], "k*", ms=9,
+            label=f"max. power {p:.3g}{pu} at load {x * kt:.3g}{tu}{where}")  # fmt: skip
     if np.isfinite(lo) and np.isfinite(hi):
         ax.axvspan(lo * kt, hi * kt, color="k", alpha=0.12, lw=0,
                    label="95% interval of its load")  # fmt: skip

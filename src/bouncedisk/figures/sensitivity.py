@@ -17,10 +17,24 @@ from .joint_fit import (  # the fit's figures: drawn through FIGURES
 )
 from .load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
 
+#: The outputs as the figures write them (one convention: speeds and powers times R_phi).
+LABELS = {
+    "no_load_speed": r"no-load speed $R_\phi\bar\Omega$",
+    "log10_tau": r"$\log_{10}\tau$ (run-up)",
+    "chatter_rate": "chatter rate",
+    "stall_torque": r"stall torque $\tau_L$",
+    "max_power": r"max. power $R_\phi\tau_L\bar\Omega$",
+    "efficiency_at_max_power": "efficiency at max. power",
+}
+
+
+#: An index beyond [0, 1] by more than this is named in its panel (every one is drawn clipped).
+CLIP_NOTE = 0.02
+
 
 def _short(output: str) -> str:
     """An output's name as an axis label."""
-    return output.replace("_", " ")
+    return LABELS.get(output, output.replace("_", " "))
 
 
 def _parameter(name: str) -> str:
@@ -44,11 +58,20 @@ def fig_sensitivity_indices(ds: xr.Dataset) -> Figure:
     limit = float(ds.attrs.get("resolved_half_width", math.inf))
     for ax, o in zip(axes, outputs, strict=False):
         row = ds.sel(output=o)
+        clipped = []
         for k, (key, color) in enumerate((("S1", "#1f77b4"), ("ST", "#ff7f0e"))):
-            conf = row[f"{key}_conf"].values
+            conf, value = row[f"{key}_conf"].values, row[key].values
             colors = [color if c <= limit else "#bbbbbb" for c in conf]
-            ax.bar(pos + (k - 0.5) * 0.38, row[key].values, 0.38, color=colors,
-                   yerr=conf, capsize=3, label=key)  # fmt: skip
+            shown = np.clip(value, 0.0, 1.0)  # an index is a share of the variance: in [0, 1]
+            x = pos + (k - 0.5) * 0.38
+            ax.bar(x, shown, 0.38, color=colors, label=key)
+            ax.errorbar(x, shown, yerr=[shown - np.clip(value - conf, -0.1, 1.1),
+                                        np.clip(value + conf, -0.1, 1.1) - shown],
+                        fmt="none", ecolor="k", capsize=3, lw=0.8)  # fmt: skip
+            out = np.flatnonzero((value > 1.0 + CLIP_NOTE) | (value < -CLIP_NOTE))
+            clipped += [
+                f"{key}({_parameter(names[i])}) = {value[i]:.2f} ±{conf[i]:.2f}" for i in out
+            ]
         share = float(row["noise_share"])
         undefined = int(row["n_undefined"])
         note = (f"undefined at {undefined} points: no indices" if undefined
@@ -56,9 +79,10 @@ def fig_sensitivity_indices(ds: xr.Dataset) -> Figure:
         ax.set_title(f"{_short(o)}\n{note}", fontsize=9)
         ax.set_xticks(pos, [_parameter(n) for n in names], fontsize=8)
         ax.axhline(0, color="k", lw=0.5)
-        low = np.nanmin(np.r_[row["S1"].values - row["S1_conf"].values, -0.1])
-        high = np.nanmax(np.r_[row["ST"].values + row["ST_conf"].values, 1.1])
-        ax.set_ylim(low - 0.02, high + 0.02)
+        ax.set_ylim(-0.12, 1.12)
+        if clipped:
+            ax.text(0.5, 0.02, "drawn clipped to [0, 1]: " + "; ".join(clipped),
+                    transform=ax.transAxes, fontsize=6, ha="center", va="bottom")  # fmt: skip
     for ax in axes[len(outputs) :]:
         ax.set_visible(False)
     handles = [Rectangle((0, 0), 1, 1, color=c, label=lab) for c, lab in
@@ -69,8 +93,13 @@ def fig_sensitivity_indices(ds: xr.Dataset) -> Figure:
     n = ds.attrs.get("n_points", "?")
     base = int(n) // (len(names) + 2) if str(n).isdigit() else "?"
     running = str(ds.attrs.get("load_direction", "")).startswith("running")
+    from ..studies.sensitivity_settings import FULL_MIN_BASE_SAMPLES
+
+    small = not isinstance(base, int) or base < FULL_MIN_BASE_SAMPLES
     fig.suptitle(f"Sobol' indices from {n} points (SALib, N = {base} base samples); "
-                 f"grey: interval wider than ±{limit:g}"
+                 f"grey: interval wider than ±{limit:g}; indices outside [0, 1] drawn clipped"
+                 + ("\nthe total indices are resolved only by the full study "
+                    "(config sensitivity: full)" if small else "")
                  + ("\nstall torque, power, efficiency: each motor loaded against its own "
                     "running direction ($\\psi \\to \\psi + \\pi$ mirrors it)" if running else ""),
                  fontsize=10)  # fmt: skip
@@ -120,6 +149,7 @@ def fig_design_maps(ds: xr.Dataset) -> Figure:
     w_label = rf"$\omega_s$ = {float(w):g}" if w is not None else ""
     fig = Figure(figsize=(4.8 * len(maps), 3.4 * len(outputs) + 0.4), layout="constrained")
     axes = fig.subplots(len(outputs), len(maps), squeeze=False)
+    rings, edge = False, False
     for j, m in enumerate(maps):
         xp, xr_ = (m["x"].sel(parameter=p).values for p in ("psi", "log10_r_phi"))
         psi, lr = xp.reshape(n_psi, n_r)[:, 0], xr_.reshape(n_psi, n_r)[0]
@@ -131,7 +161,8 @@ def fig_design_maps(ds: xr.Dataset) -> Figure:
             if o != "no_load_speed":
                 z = np.where(backwards, np.nan, z)
                 ax.scatter(xp[backwards], xr_[backwards], marker="x", c="k", s=18, lw=0.8)
-            beyond = ~np.isfinite(m[o].values)
+            beyond = ~np.isfinite(m[o].values) & ~backwards
+            rings |= bool(beyond.any())
             ax.scatter(xp[beyond], xr_[beyond], marker="o", s=30, facecolors="none",
                        edgecolors="k", lw=0.8)  # fmt: skip
             mesh = ax.pcolormesh(
@@ -147,11 +178,20 @@ def fig_design_maps(ds: xr.Dataset) -> Figure:
             ax.set_title(f"e = {float(m['map_e']):g}, {w_label}", fontsize=9)
         if best["index"] is not None:
             lo, hi = best["ci95"]
-            axes[0, j].text(0.02, 0.02, f"best {_short(best_by)}: {best['value']:.3g} [{lo:.3g}, {hi:.3g}]",
+            i = best["index"]
+            at_edge = xr_[i] in (xr_.min(), xr_.max()) or xp[i] in (xp.min(), xp.max())
+            edge |= bool(at_edge)
+            where = " (at the edge of the swept range)" if at_edge else ""
+            axes[0, j].text(0.02, 0.02, f"best {_short(best_by)}: {best['value']:.3g} "
+                            f"[{lo:.3g}, {hi:.3g}]{where}",
                             transform=axes[0, j].transAxes, fontsize=7, color="w")  # fmt: skip
     fig.suptitle(
-        f"red star: largest {_short(best_by)}; white rings: points whose 95 % interval reaches "
-        "it; x: runs backwards at no load; black ring: no stall up to the largest load",
+        f"red star: largest {_short(best_by)}"
+        + (" (at the edge: the maximum may lie outside the swept range)" if edge else "")
+        + "; white rings: points whose 95 % interval reaches it\nx: runs backwards at no load"
+        + ("; black ring: no stall up to the largest load" if rings else "")
+        + "\nspeeds and powers times $R_\\phi$ (units $\\Phi_0/t_c$); the torque–speed "
+        "curves draw $\\bar\\Omega$ and $\\tau_L\\bar\\Omega$, these divided by $R_\\phi$",
         fontsize=8,
     )
     return fig

@@ -50,11 +50,16 @@ OUTPUTS: dict[str, tuple[str, str, bool]] = {
     "log10_tau": ("log10 of the run-up time constant of the ensemble-mean run-up", "1", False),
     "chatter_rate": ("complete chattering sequences per unit time", "1", False),
     "stall_torque": (
-        "stall torque, smallest load with mean Omega <= 0 (friction units)",
+        "stall torque, root of mean Omega in the load, at most the momentum bound 1 "
+        "(friction units)",
         "1",
         True,
     ),
-    "max_power": ("largest mean output power R_phi * tau_L * mean Omega over the loads", "1", True),
+    "max_power": (
+        "largest mean output power R_phi * tau_L * mean Omega over the loads up to 1",
+        "1",
+        True,
+    ),
     "efficiency_at_max_power": ("torsional efficiency at the load of the largest power", "1", True),
 }
 #: The design maps' outputs, and the one that picks the best operating point (first present).
@@ -66,6 +71,11 @@ BEST_BY = ("max_power", "no_load_speed")
 #: the study's own sample keeps its configured loads (its points are many).
 MAP_LOAD_STEP = 0.05
 MAP_LOAD_TOP = 1.1
+#: Transient the design maps add to their first run, from rest (units of ``1/R_φ``,
+#: :attr:`StudySettings.runup`): at ``R_φ = 0.001`` the run-up is not over after the study's
+#: 5, so that the maps' no-load speed would be a run-up's, not the steady one the torque–speed
+#: curves read.
+MAP_RUNUP = 15.0
 #: Fewest members of a design map's points: their intervals pick the best point and those not
 #: resolved from it (with 2 members Student's factor is 12.7, with 4 it is 3.2).
 MAP_MIN_MEMBERS = 4
@@ -160,9 +170,9 @@ class MotorModel:
             "name": "sensitivity",
             "parameters": params,
             "effects": effects,
-            "stop": {"time": (s.discard + s.duration) / r},
+            "stop": {"time": (s.discard + s.runup + s.duration) / r},
             "ensemble": {"members": s.members, "seed": s.seed},
-            "stats": {"discard": s.discard / r},
+            "stats": {"discard": (s.discard + s.runup) / r},
             "outputs": {"events": False, "trajectory": {"dt": 1.0 / (RUNUP_SAMPLES_PER_UNIT * r)}},
             "solver": {"method": "exact", "tol": 1e-12},
         }
@@ -188,31 +198,26 @@ class MotorModel:
 
 def _first_run(cfg, init, member: int, t_from: float) -> tuple:
     """One member's run from rest at the curve's first load
-    (:func:`bouncedisk.analysis.ensembles.run_member`: its statistics and final state), with its
-    ``(t, Ω)`` samples on the scene's trajectory grid, the run-up (docs/model.md "The motor
-    under load": at ``τ_L = 0`` the load effect changes nothing).
+    (:func:`bouncedisk.studies.torque_speed.run_settled`: its statistics, final state and
+    drift), with its ``(t, Ω)`` samples on the scene's trajectory grid, the run-up
+    (docs/model.md "The motor under load": at ``τ_L = 0`` the load effect changes nothing).
 
     Returns
     -------
-    stats, final, samples
-        The member's :class:`~bouncedisk.analysis.ensembles.MemberStats`, its final state and
-        its ``(t, Ω)`` samples, shape (samples, 2).
+    stats, final, samples, drift
+        The member's :class:`~bouncedisk.analysis.ensembles.MemberStats`, its final state, its
+        ``(t, Ω)`` samples, shape (samples, 2), and its second half's mean speed less its first.
 
     Raises
     ------
     CappedRun
         The run stopped at its cap on events before the end of its window.
     """
-    from ..analysis.ensembles import run_member
-    from ..io.records import TrajColumn
+    from .torque_speed import run_settled
 
     samples: list[np.ndarray] = []
-
-    def keep(c) -> None:
-        samples.append(np.array(c.traj[:, [TrajColumn.T, TrajColumn.OMEGA]]))
-
-    stats, final, _tail = run_member(cfg, init, member, t_from, on_chunk=keep)
-    return stats, final, np.concatenate(samples)
+    stats, final, drift = run_settled(cfg, init, member, t_from, keep=samples.append)
+    return stats, final, np.concatenate(samples), drift
 
 
 def _load_curve(scene: Scene, s: StudySettings) -> tuple:
@@ -231,7 +236,8 @@ def _load_curve(scene: Scene, s: StudySettings) -> tuple:
     free : EnsembleStats
         The members at ``τ_L = 0``, signed.
     curve : LoadCurve
-        Branch ``up`` at ``s.loads``, in the running direction with ``s.running``.
+        Branch ``up`` at ``s.loads``, in the running direction with ``s.running``, with each
+        run's drift (whether it settled).
     (t, om) : tuple of ndarray
         The run-up: the times every member reached and the speeds, shape (member, time).
 
@@ -247,43 +253,51 @@ def _load_curve(scene: Scene, s: StudySettings) -> tuple:
 
     t_from, t_end = ensemble_window(scene)
     cfg = engine_config(scene)
-    discard, duration = scene.stats.discard, t_end - scene.initial.t
+    # the continued loads: discard + duration (units 1/R_phi), without the first run's run-up
+    discard, duration = s.discard / cfg.r_phi, (s.discard + s.duration) / cfg.r_phi
     try:
         first = [_first_run(cfg, scene.initial, m, t_from) for m in range(s.members)]
-        per_load = _continue_up(cfg, first, s, duration, discard)
+        per_load, drift = _continue_up(cfg, first, s, duration, discard)
     except CappedRun as ex:
         raise capped_error(
             scene, ex, f" (load tau_L = {getattr(ex, 'load', math.nan):.6g})"
         ) from None
-    free = EnsembleStats([f[0] for f in first], discard, t_end - t_from, True, scene.scales)
+    free = EnsembleStats(
+        [f[0] for f in first], scene.stats.discard, t_end - t_from, True, scene.scales
+    )
     n = min(len(f[2]) for f in first)  # the samples every member reached
     t, om = first[0][2][:n, 0], np.stack([f[2][:n, 1] for f in first])
     if s.running and float(np.mean(free.column("mean_omega"))) < 0.0:
         om = -om  # the mirror's run-up
-    ens = [EnsembleStats(x, discard, t_end - t_from, True, scene.scales) for x in per_load]
-    return free, LoadCurve(np.asarray(s.loads, float), {"up": ens}), (t, om)
+    ens = [EnsembleStats(x, discard, duration - discard, True, scene.scales) for x in per_load]
+    curve = LoadCurve(np.asarray(s.loads, float), {"up": ens}, {"up": drift})
+    return free, curve, (t, om)
 
 
-def _continue_up(cfg, first: list, s: StudySettings, duration: float, discard: float) -> list:
-    """Every member's statistics at each of ``s.loads`` (a list per load): its first run
-    (:func:`_first_run`), then :func:`~.torque_speed.member_sweep` up the other loads from its
-    final state; with ``s.running`` and a negative mean no-load speed as the mirror motor
-    (:func:`_load_curve`)."""
+def _continue_up(cfg, first: list, s: StudySettings, duration: float, discard: float) -> tuple:
+    """Every member's statistics at each of ``s.loads`` (a list per load) and their drifts
+    ``(members, loads)``: its first run (:func:`_first_run`), then
+    :func:`~.torque_speed.member_sweep` up the other loads from its final state; with
+    ``s.running`` and a negative mean no-load speed as the mirror motor (:func:`_load_curve`)."""
     from .torque_speed import continued_state, member_sweep
 
     stats0, finals = [f[0] for f in first], [f[1] for f in first]
+    drift0 = [f[3] for f in first]
     if s.running and float(np.mean([x.mean_omega for x in stats0])) < 0.0:
         cfg = dataclasses.replace(cfg, psi=cfg.psi + math.pi)
         stats0 = [
             dataclasses.replace(x, mean_omega=-x.mean_omega, mean_slip=-x.mean_slip) for x in stats0
         ]
         finals = [{**f, "omega": -f["omega"]} for f in finals]
+        drift0 = [-d for d in drift0]
     rest = [
         member_sweep(cfg, continued_state(f, cfg.omega_s), m, s.loads[1:], discard, duration,
-                     ("up",))["up"]
+                     ("up",))
         for m, f in enumerate(finals)
     ]  # fmt: skip
-    return [stats0, *(list(at_load) for at_load in zip(*rest, strict=True))]
+    per_load = [stats0, *(list(at) for at in zip(*(r["up"] for r in rest), strict=True))]
+    drift = np.column_stack([drift0, np.array([r["drift"]["up"] for r in rest], float)])
+    return per_load, drift
 
 
 def _runup_tau(t: np.ndarray, om: np.ndarray) -> tuple[float, float, float, float]:
@@ -311,52 +325,38 @@ def load_figures(curve, r: float) -> dict[str, tuple[float, float, float, float]
     """Stall torque, maximum power and the torsional efficiency at it, from a load curve's up
     branch (docs/model.md "The motor under load"), each ``(value, low, high, se)``.
 
-    The values are those of the members' mean curve, found by the torque–speed summary's own
-    rules (the efficiency: the mean over the members whose torsional input over the window
-    is positive, the others' ``η_t = W_L/W_t`` being undefined, docs/model.md "Power and
-    energy audit"; :func:`bouncedisk.studies.torque_speed.first_zero`: the root of the mean speed in
-    the load; here 0 when the motor runs backwards at no load, where the curve's summary gives
-    no value but the state ``backwards_at_no_load``);
-    :func:`bouncedisk.studies.torque_speed.peak`: the largest power over the curve's loads; the
-    efficiency is 0 where that power is not positive);
-    their standard errors are the jackknife's over members (``K`` re-evaluations, where the
-    summary's bootstrap takes thousands), their intervals Student's; a stall torque found past
-    the momentum bound 1 has its interval reach down to it, as the curve's summary does (past
-    the bound no speed is stationary: a finite run's mean speed stays positive a little longer). The power is scaled by
-    ``R_φ`` (``R_φ τ_L Ω̄``, units of ``Φ0/t_c``).
+    Computed where the torque–speed curves compute them
+    (:func:`bouncedisk.studies.load_summary.derived`: the members' mean curve over the loads
+    whose runs settled, the stall's bracket ending at the momentum bound, bootstrap intervals
+    and standard errors). Where the summary has no value the study still needs a number: a
+    motor that runs backwards at no load holds no load forwards (stall torque 0, its state
+    ``backwards_at_no_load``), and one whose power is largest at no load delivers none
+    (maximum power and efficiency 0); any other state is undefined (``nan``). The power is
+    scaled by ``R_φ`` (``R_φ τ_L Ω̄``, units of ``Φ0/t_c``).
     """
-    from .load_summary import MOMENTUM_BOUND
-    from .torque_speed import first_zero, peak
+    from .load_summary import MOMENTUM_BOUND, derived
 
     order = np.argsort(np.asarray(curve.loads, float), kind="stable")
     loads = np.asarray(curve.loads, float)[order]
-    speed = curve.matrix("up", "mean_omega")[:, order]
-    power = curve.power("up")[:, order]
-    eff = curve.matrix("up", "efficiency_torsion")[:, order]
-    k = speed.shape[0]
-
-    def figures(idx: np.ndarray) -> np.ndarray:
-        p, at = peak(loads, power[idx].mean(axis=0))
-        j = int(np.argmin(np.abs(loads - at)))
-        col = eff[idx, j][np.isfinite(eff[idx, j])]  # members with a torsional input W_t > 0
-        eta = 0.0 if p <= 0.0 else (col.mean() if col.size else math.nan)  # no power: 0
-        mean = speed[idx].mean(axis=0)
-        # a motor that turns backwards at no load holds no load forwards: stall torque 0 in the
-        # study (the load curve's own summary calls this state backwards_at_no_load, no value)
-        stall = 0.0 if loads[0] == 0.0 and mean[0] <= 0.0 else first_zero(loads, mean)
-        return np.array([stall, r * p, eta])
-
-    every = np.arange(k)
-    full = figures(every)
-    jack = np.array([figures(np.delete(every, i)) for i in range(k)])
-    q = t_quantile(k - 1, LEVEL)
+    drift = getattr(curve, "drift", None)
+    drift = None if drift is None else drift["up"][:, order]
+    d = derived(
+        loads, curve.matrix("up", "mean_omega")[:, order], curve.power("up")[:, order],
+        MOMENTUM_BOUND, curve.matrix("up", "efficiency_torsion")[:, order], drift,
+    )  # fmt: skip
+    zero = (0.0, 0.0, 0.0, 0.0)
+    none = (math.nan, math.nan, math.nan, math.nan)
     out = {}
-    for n, name in enumerate(("stall_torque", "max_power", "efficiency_at_max_power")):
-        se = _jackknife_se(jack[:, n])
-        out[name] = (float(full[n]), full[n] - q * se, full[n] + q * se, se)
-    value, low, high, se = out["stall_torque"]
-    if low > MOMENTUM_BOUND:  # a root past the bound: the motor stalls at it (as the curve says)
-        out["stall_torque"] = (value, MOMENTUM_BOUND, high, se)
+    for name, scale in (("stall_torque", 1.0), ("max_power", r), ("efficiency_at_max_power", 1.0)):
+        if d[name] is not None:
+            lo, hi = (math.nan if x is None else x * scale for x in d[f"{name}_ci95"])
+            se = d["standard_errors"][name]
+            out[name] = (d[name] * scale, lo, hi, math.nan if se is None else se * scale)
+        elif name == "stall_torque":
+            out[name] = zero if d["stall_torque_state"] == "backwards_at_no_load" else none
+        else:
+            at_zero = d["max_power_state"] == "at_smallest_load" and loads[0] == 0.0
+            out[name] = zero if at_zero else none
     return out
 
 
@@ -379,12 +379,14 @@ def map_settings(settings: StudySettings) -> StudySettings:
     largest load stays, bracketing every stall)."""
     members = max(settings.members, MAP_MIN_MEMBERS)
     if not settings.loads:
-        return dataclasses.replace(settings, members=members, running=False)
+        return dataclasses.replace(settings, members=members, running=False, runup=MAP_RUNUP)
     top = min(MAP_LOAD_TOP, max(settings.loads))
     steps = MAP_LOAD_STEP * np.arange(round(top / MAP_LOAD_STEP) + 1)
     loads = np.unique(np.round(np.r_[steps, settings.loads], 12))
     loads = tuple(float(x) for x in loads)
-    return dataclasses.replace(settings, members=members, loads=loads, running=False)
+    return dataclasses.replace(
+        settings, members=members, loads=loads, running=False, runup=MAP_RUNUP
+    )
 
 
 def map_sample(settings: StudySettings, e: float) -> tuple[np.ndarray, tuple[int, int]]:

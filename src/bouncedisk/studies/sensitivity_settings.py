@@ -71,6 +71,10 @@ class StudySettings:
     map_e, map_omega_s, map_points
         Design maps over ``(psi, log10_r_phi)``: one per ``e`` in ``map_e`` at ``map_omega_s``,
         ``map_points = (n_psi, n_r_phi)``.
+    runup : float
+        Transient added to ``discard`` for each point's first run, from rest, in units of
+        ``1/R_φ`` (the design maps': the run-up is slower at small ``R_φ``); the continued loads
+        start near their own speed and leave out ``discard``.
     running : bool
         Load figures in the motor's own running direction (the load opposes the no-load
         motion, :class:`bouncedisk.studies.sensitivity.MotorModel`); the design maps keep the
@@ -92,6 +96,7 @@ class StudySettings:
     map_omega_s: float
     map_points: tuple[int, int]
     running: bool = True
+    runup: float = 0.0
 
     @classmethod
     def from_params(cls, params: Mapping) -> StudySettings:

@@ -158,6 +158,9 @@ class LoadCurve:
 
     loads: np.ndarray
     branches: dict[str, list[EnsembleStats]]
+    #: Per branch, each member's second-half less first-half mean speed at each load
+    #: ``(members, loads)`` (:func:`member_sweep`; ``None``: not measured, every load settled).
+    drift: dict[str, np.ndarray] | None = None
 
     def matrix(self, branch: str, name: str) -> np.ndarray:
         """A per-member quantity as a ``(members, loads)`` array."""
@@ -257,25 +260,67 @@ def member_sweep(
 ) -> dict[str, list[MemberStats]]:
     """One member's statistics at each load, swept up then down by continuation.
 
-    Each run lasts ``duration`` with ``discard`` left out of its averages.
+    Each run lasts ``duration`` with ``discard`` left out of its averages. Under the key
+    ``"drift"`` (per branch, a list over the loads) the second half's mean speed less the first
+    half's (:func:`run_settled`).
     """
     order = {"up": list(range(len(loads))), "down": list(range(len(loads)))[::-1]}
-    out: dict[str, list[MemberStats]] = {}
+    out: dict = {"drift": {}}
     state = init
     for branch in branches:
-        got: dict[int, MemberStats] = {}
+        got: dict[int, tuple] = {}
         for k in order[branch]:
             t0 = state.t
             run = dataclasses.replace(cfg, load_torque=float(loads[k]), t_end=t0 + duration)
             try:
-                stats, final, _tail = run_member(run, state, member, t0 + discard, should_stop)
+                stats, final, drift = run_settled(run, state, member, t0 + discard, should_stop)
             except CappedRun as ex:
                 ex.load = float(loads[k])
                 raise
-            got[k] = stats
+            got[k] = (stats, drift)
             state = continued_state(final, cfg.omega_s)
-        out[branch] = [got[k] for k in range(len(loads))]
+        out[branch] = [got[k][0] for k in range(len(loads))]
+        out["drift"][branch] = [got[k][1] for k in range(len(loads))]
     return out
+
+
+def run_settled(
+    cfg: EngineConfig,
+    init: InitialState,
+    member: int,
+    t_from: float,
+    should_stop: Callable[[], bool] | None = None,
+    keep: Callable[[np.ndarray], None] | None = None,
+) -> tuple[MemberStats, dict, float]:
+    """:func:`~bouncedisk.analysis.ensembles.run_member` with the rotor speed sampled
+    :data:`~bouncedisk.studies.load_summary.SETTLE_SAMPLES` times over ``[t_from, t_end]``
+    (``cfg.traj_dt`` where that is finer), returning its statistics, final state and drift:
+    the second half's mean sampled speed less the first half's. ``keep`` receives every chunk's
+    ``(t, Ω)`` samples."""
+    from ..io.records import TrajColumn
+    from .load_summary import SETTLE_SAMPLES
+
+    step = (cfg.t_end - t_from) / SETTLE_SAMPLES
+    if keep is None:
+        cfg = dataclasses.replace(cfg, traj_t0=t_from, traj_t1=math.inf)
+    elif cfg.traj_dt > 0.0:
+        step = cfg.traj_dt  # the caller's grid
+    samples: list[np.ndarray] = []
+
+    def take(c) -> None:
+        tw = np.array(c.traj[:, [TrajColumn.T, TrajColumn.OMEGA]])
+        samples.append(tw)
+        if keep is not None:
+            keep(tw)
+
+    run = dataclasses.replace(cfg, traj_dt=step)
+    stats, final, _tail = run_member(run, init, member, t_from, should_stop, on_chunk=take)
+    tw = np.concatenate(samples) if samples else np.empty((0, 2))
+    mid = 0.5 * (t_from + cfg.t_end)
+    first = tw[(tw[:, 0] >= t_from) & (tw[:, 0] < mid), 1]
+    second = tw[tw[:, 0] >= mid, 1]
+    drift = float(second.mean() - first.mean()) if first.size and second.size else math.nan
+    return stats, final, drift
 
 
 def torque_speed(
@@ -326,7 +371,7 @@ def torque_speed(
     duration = t_end - scene.initial.t
     members = scene.ensemble.members
 
-    def one(m: int) -> dict[str, list[MemberStats]]:
+    def one(m: int) -> dict:
         return member_sweep(cfg, scene.initial, m, loads, discard, duration, branches, should_stop)
 
     try:
@@ -342,7 +387,8 @@ def torque_speed(
         ]
         for b in branches
     }
-    return LoadCurve(loads, curve)
+    drift = {b: np.array([r["drift"][b] for r in results], float) for b in branches}
+    return LoadCurve(loads, curve, drift)
 
 
 def refined_torque_speed(
@@ -425,6 +471,9 @@ def to_dataset(scene: Scene, curve: LoadCurve, wall_time_s: float, summary: dict
             np.array([[np.nanmax(s.column(q)) for s in curve.branches[b]] for b in names]),
             {"long_name": long_name},
         )
+    data["settled"] = (dims, _settled(curve, names).astype(np.int8), {
+        "long_name": "1 where the load's runs settled (second half's mean speed within 2% of "
+        "the first half's; none past the momentum bound): a stationary speed"})  # fmt: skip
     for var in data.values():
         var[2].setdefault("units", "1")
     members = np.arange(curve.branches[names[0]][0].column("mean_omega").size)
@@ -451,6 +500,7 @@ def to_dataset(scene: Scene, curve: LoadCurve, wall_time_s: float, summary: dict
             ds.attrs[key] = summary[key]
     for key in ("stall_torque_bracket", "max_power_bracket"):
         ds.attrs[key] = [_nan(x) for x in summary[key]]
+    ds.attrs["unsettled_loads"] = list(summary.get("unsettled_loads") or []) or "none"
     ds.attrs["stats_discard"], ds.attrs["stats_duration"] = summary["discard"], summary["duration"]
     ds.attrs["branches_differ_at"] = summary.get("branches_differ_at") or "none"
     if scene.physical is not None:
@@ -468,6 +518,19 @@ def to_dataset(scene: Scene, curve: LoadCurve, wall_time_s: float, summary: dict
         }
     )
     return ds
+
+
+def _settled(curve: LoadCurve, names: list[str]) -> np.ndarray:
+    """Per branch and load: have its runs settled (:func:`~.load_summary.settled_loads`)?"""
+    from .load_summary import MOMENTUM_BOUND, settled_loads, speed_scale
+
+    scale = speed_scale(curve.loads, curve.matrix(names[0], "mean_omega"), MOMENTUM_BOUND)
+    rows = []
+    for b in names:
+        drift = None if curve.drift is None else curve.drift[b]
+        rows.append(settled_loads(curve.loads, curve.matrix(b, "mean_omega"), drift,
+                                  MOMENTUM_BOUND, scale))  # fmt: skip
+    return np.array(rows)
 
 
 def motor_scene(

@@ -1,0 +1,97 @@
+"""What the load and sensitivity figures draw: only stationary readings on the torque–speed
+axes, no legend entry for a marker not drawn, indices outside [0, 1] clipped with a note, one
+unit convention said on the axes, and no raw "log10 tau"."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+from load_scenes import small_load_scene
+
+from bouncedisk.figures.load import fig_torque_speed
+from bouncedisk.figures.sensitivity import fig_design_maps, fig_sensitivity_indices
+from bouncedisk.studies.torque_speed import to_dataset, torque_speed
+
+
+def _texts(fig) -> str:
+    out = [t.get_text() for t in fig.texts]
+    for ax in fig.axes:
+        out += [ax.get_xlabel(), ax.get_ylabel(), ax.get_title()]
+        out += [t.get_text() for t in ax.texts]
+        leg = ax.get_legend()
+        out += [t.get_text() for t in leg.get_texts()] if leg else []
+    return "\n".join(out)
+
+
+@pytest.fixture(scope="module")
+def past_the_bound() -> xr.Dataset:
+    """Fig. 3's motor swept to 1.3: past the momentum bound the runs never become stationary
+    (the down branch starts from a rotor running away backwards)."""
+    scene = small_load_scene(0.3, members=2, time=800.0, discard=150.0)
+    return to_dataset(scene, torque_speed(scene, [0.0, 0.5, 0.9, 1.3]), 0.0)
+
+
+def test_the_speed_axis_is_not_dominated_by_runs_that_never_became_stationary(past_the_bound):
+    """torque_speed_fig3's speed axis ran from -1000 to 150: the runs past stall were drawn."""
+    ds = past_the_bound
+    assert ds["settled"].sel(load_torque=1.3).values.tolist() == [0, 0]
+    fig = fig_torque_speed(ds)
+    low, high = fig.axes[0].get_ylim()
+    steady = ds["mean_omega"].values[ds["settled"].values.astype(bool)]
+    span = steady.max() - min(steady.min(), 0.0)
+    assert low >= min(steady.min(), 0.0) - 0.2 * span and high <= steady.max() + 0.2 * span
+    assert float(ds["mean_omega"].values.min()) < low  # the unsettled readings: not drawn
+    assert "not stationary" in _texts(fig)
+
+
+def _indices(st_psi: float, n_points: int) -> xr.Dataset:
+    outputs, params = ["no_load_speed", "log10_tau"], ["e", "omega_s", "log10_r_phi", "psi"]
+    s = np.full((2, 4), 0.2)
+    st = s.copy()
+    st[0, 3] = st_psi
+    dims = ("output", "parameter")
+    data = {"S1": (dims, s), "S1_conf": (dims, s / 4), "ST": (dims, st), "ST_conf": (dims, s)}
+    data.update({k: ("output", np.zeros(2)) for k in ("noise_share", "n_undefined")})
+    ds = xr.Dataset(data, coords={"output": outputs, "parameter": params})
+    ds.attrs.update({"n_points": n_points, "resolved_half_width": 0.1})
+    return ds
+
+
+def test_an_index_above_one_is_drawn_clipped_with_a_note_and_the_default_study_says_so():
+    """S_T(psi) of the no-load speed was drawn as a bar to 1.20; "log10 tau" raw."""
+    fig = fig_sensitivity_indices(_indices(1.2, 128 * 6))
+    ax = fig.axes[0]
+    assert max(p.get_height() for p in ax.patches) <= 1.0
+    text = _texts(fig)
+    assert "drawn clipped to [0, 1]: ST" in text and "1.20" in text
+    assert "resolved only by the full study" in text
+    assert "log10 tau" not in text and r"$\log_{10}\tau$" in text
+    full = _texts(fig_sensitivity_indices(_indices(0.5, 1024 * 6)))
+    assert "drawn clipped to" not in full and "full study" not in full
+
+
+def _maps(stall: np.ndarray) -> xr.Dataset:
+    n_psi, n_r = 2, 2
+    psi, lr = np.meshgrid([-1.0, 1.0], [-3.0, -1.0], indexing="ij")
+    x = np.column_stack([np.full(4, 0.3), np.full(4, 1.5), lr.ravel(), psi.ravel()])
+    data = {"x": (("point", "parameter"), x)}
+    values = {"no_load_speed": np.array([1.0, 1.2, 1.1, 0.9]), "stall_torque": stall,
+              "max_power": np.array([0.1, 0.3, 0.2, 0.1])}  # fmt: skip
+    for name, v in values.items():
+        data[name] = ("point", v)
+        data[f"{name}_ci_low"], data[f"{name}_ci_high"] = ("point", v - 0.01), ("point", v + 0.01)
+    ds = xr.Dataset(data, coords={"parameter": ["e", "omega_s", "log10_r_phi", "psi"]})
+    ds = xr.concat([ds], dim="map").assign_coords(map_e=("map", [0.3]))
+    ds.attrs.update({"map_n_psi": n_psi, "map_n_r_phi": n_r, "map_omega_s": 1.5})
+    return ds
+
+
+def test_the_design_maps_legend_names_only_what_is_drawn_and_their_units():
+    """The legend explained a black ring that no cell had; the maps' R_phi * mean(Omega)
+    against the curves' mean(Omega) with no word."""
+    text = _texts(fig_design_maps(_maps(np.array([1.0, 0.9, 0.8, 0.7]))))
+    assert "black ring" not in text
+    assert "edge of the swept range" in text  # the best point (R_phi = 0.1) is on its edge
+    assert r"R_\phi" in text and "divided by" in text
+    assert "black ring" in _texts(fig_design_maps(_maps(np.array([1.0, np.nan, 0.8, 0.7]))))
