@@ -80,6 +80,9 @@ def main() -> None:
     ap.add_argument("--events", type=int, default=1_000_000)
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--only", default="", help="run only the cases whose name contains this")
+    ap.add_argument(
+        "--record", action="store_true", help="write benchmarks/out/engine_compare.json"
+    )
     args = ap.parse_args()
     measure(args.old, 10)  # compile or load the numba caches of both trees
     measure(args.new, 10)
@@ -95,14 +98,26 @@ def main() -> None:
         f"{'case':<34}{'old best /s':>13}{'new best /s':>13}{'old median':>12}{'new median':>12}"
         f"{'new/old':>9}"
     )
+    rows = []
     for k, old in rates["old"].items():
         new = rates["new"][k]
         ratio = statistics.median(n / o for o, n in zip(old, new, strict=True))
         same = "" if digests["old"][k] == digests["new"][k] else "  BITS DIFFER"
+        rows.append(
+            (
+                f"{k}: impacts/s old → new (medians), median ratio",
+                f"{statistics.median(old) / 1e6:.2f} → {statistics.median(new) / 1e6:.2f} million,"
+                f" {ratio:.3f}×{', outputs bit-identical' if not same else same}",
+            )
+        )
         print(
             f"{k:<34}{max(old):>13,.0f}{max(new):>13,.0f}{statistics.median(old):>12,.0f}"
             f"{statistics.median(new):>12,.0f}{ratio:>9.3f}{same}"
         )
+    if args.record:
+        from record import write_record
+
+        write_record("engine_compare", "The engine beside the previous version, one run", rows)
 
 
 if __name__ == "__main__":
