@@ -66,7 +66,7 @@ from .laws import (
 )
 from .layout import *  # the array layouts and codes (plain integers), re-exported
 from .noise import member_key, noisy_restitution
-from .roots import TWO_PI, first_root, first_root_sc, floor_turns, inflections, no_root
+from .roots import TWO_PI, first_root, first_root_walk, floor_turns, inflections, no_root
 
 
 def _nrt_off() -> dict:
@@ -184,12 +184,13 @@ def _flight_root(u0, v0, th0, s0, c0, ta, ga, w, xtol, infl):
 @njit(cache=True, inline="always")
 def _gap_root(g0, v, th, s, c, w, t_max, xtol, fd, dl, bt):
     """First root of a flight's gap ``g0 + vτ − τ²/2 − (sin φ − sin θ)`` (``s, c = sin θ,
-    cos θ``): :func:`~bouncedisk.engine.roots.first_root_from` without recomputing them."""
+    cos θ``): :func:`~bouncedisk.engine.roots.first_root_from` without recomputing them, its
+    first shortcut (:func:`~bouncedisk.engine.roots.no_root`) tested once, here."""
     if g0 < 0.0:
         return 0.0
     if no_root(g0, v, -0.5, 0.0, -1.0, th, s, c, w, t_max):  # a flight's ascent: no call
         return -1.0
-    return first_root_sc(g0, v, -0.5, 0.0, -1.0, th, s, c, w, t_max, xtol, fd, dl, bt)
+    return first_root_walk(g0, v, -0.5, 0.0, -1.0, th, s, c, w, t_max, xtol, fd, dl, bt)
 
 
 @njit(cache=True, inline="always")

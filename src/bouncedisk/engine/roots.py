@@ -297,6 +297,13 @@ def first_root_sc(f0, c1, c2, a, b, th0, s0, k0, w, t_max, xtol, found, delta, b
     """
     if no_root(f0, c1, c2, a, b, th0, s0, k0, w, t_max):
         return -1.0
+    return first_root_walk(f0, c1, c2, a, b, th0, s0, k0, w, t_max, xtol, found, delta, beta)
+
+
+@njit(cache=True)
+def first_root_walk(f0, c1, c2, a, b, th0, s0, k0, w, t_max, xtol, found, delta, beta):
+    """:func:`first_root_sc` after its first shortcut, for a caller that has found
+    :func:`no_root` false with these arguments (the same result; the test is not repeated)."""
     per = TWO_PI / w
     amp = abs(a) + abs(b)
     ww = w * w
