@@ -55,6 +55,7 @@ from ..analysis.statistics import capped_error, confidence_interval, ensemble_wi
 from ..analysis.sweeps import _ordered_runs, shard_slice, with_params
 from ..engine import InitialState
 from ..io.provenance import base_attrs, new_run_id
+from ..model import limits
 from ..model.engine_config import engine_config
 from ..model.errors import InputError
 from ..model.scene import Scene
@@ -463,8 +464,7 @@ def group(ds: xr.Dataset, settle: float = SETTLE) -> xr.Dataset:
     """The starts of a complete computation with their labels and the attractors: per attractor
     its mean speed (mean over its starts, Student interval across them), regime and period,
     basin fraction with its Wilson interval (docs/formats.md "Basins file")."""
-    if not settle > 0.0 or not math.isfinite(settle):
-        raise InputError("<arguments>", "--settle", f"must be a number > 0, got {settle!r}")
+    limits.SETTLE.check("", "settle", settle)
     lab, scale = labels(ds, settle)
     n = len(lab)
     mean = ds["mean_omega"].values
