@@ -397,3 +397,19 @@ def test_the_settle_tolerance_has_one_bound(capsys, settle):
     assert main(argv) == 2
     line = one_line(capsys)
     assert "--settle" in line and SETTLE.text() in line
+
+
+def test_a_summarys_json_number_has_one_definition():
+    """`_num` was defined three times (basins, load summary, sensitivity)."""
+    import math
+    import re
+
+    import numpy as np
+
+    from bouncedisk.io.records import json_number
+
+    src = Path(__file__).parents[1] / "src" / "bouncedisk"
+    defined = [p.name for p in src.rglob("*.py") if re.search(r"^def _num\(", p.read_text(), re.M)]
+    assert defined == []
+    assert json_number(np.float64(2.5)) == 2.5 and type(json_number(np.float64(2.5))) is float
+    assert [json_number(x) for x in (math.nan, math.inf, -np.inf)] == [None, None, None]

@@ -55,6 +55,7 @@ from ..analysis.statistics import capped_error, confidence_interval, ensemble_wi
 from ..analysis.sweeps import _ordered_runs, shard_slice, with_params
 from ..engine import InitialState
 from ..io.provenance import base_attrs, new_run_id
+from ..io.records import json_number as _num
 from ..model import limits
 from ..model.engine_config import engine_config
 from ..model.errors import InputError
@@ -523,10 +524,6 @@ def basins(
 ) -> xr.Dataset:
     """Every start of ``grid`` run and grouped (:func:`run_starts`, :func:`group`)."""
     return group(run_starts(scene, grid, cores=cores, progress=progress), settle)
-
-
-def _num(x: float) -> float | None:
-    return float(x) if math.isfinite(x) else None
 
 
 def summary(ds: xr.Dataset) -> dict:
