@@ -222,3 +222,13 @@ def test_sidecar_values_beyond_the_motor_are_refused(tmp_path, old, new, field):
     with pytest.raises(InputError) as ex:
         read_load_curve(_curve(tmp_path, yaml_text=YAML.replace(old, new)))
     assert ex.value.field == field and "must be in [" in ex.value.message
+
+
+@pytest.mark.parametrize("new", ["8.0000000000000007e-05", "-0.0001"])
+def test_a_number_in_a_message_is_a_plain_float(tmp_path, new):
+    """Messages printed `np.float64(8e-05)` (a repeated or a negative torque)."""
+    assert "\n0.0001," in CSV
+    with pytest.raises(InputError) as ex:
+        read_load_curve(_curve(tmp_path, csv=CSV.replace("\n0.0001,", f"\n{new},")))
+    message = ex.value.message
+    assert ex.value.field == "torque_Nm" and repr(float(new)) in message and "np." not in message

@@ -25,6 +25,15 @@ def _text(x: float) -> str:
     return f"{x:g}"
 
 
+def shown(value: object) -> str:
+    """A value as an error message quotes it: ``0.7``, ``1e+30`` for a huge whole number, never
+    ``np.float64(0.7)``."""
+    value = value.item() if hasattr(value, "item") else value
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 1e7:
+        return f"{value:.6g}"
+    return repr(value)
+
+
 @dataclass(frozen=True)
 class Bound:
     """The interval ``[low, high]`` (an end ``open`` excludes it) a stated value must lie in."""
@@ -53,8 +62,7 @@ class Bound:
             Naming ``source`` and ``name`` (the option or the file's field).
         """
         if value not in self:
-            got = f"{value:.6g}" if isinstance(value, int) and abs(value) >= 1e7 else repr(value)
-            raise InputError(source, name, f"must be {self.text()}, got {got}")
+            raise InputError(source, name, f"must be {self.text()}, got {shown(value)}")
         return value
 
 
