@@ -49,7 +49,7 @@ class Bound:
         return bool(above and below)
 
     def text(self) -> str:
-        """``in [0, 0.5]``, ``in (0, 1)``, ``between 40 and 10,000``."""
+        """``in [0, 0.5]``, ``in (0, 1)``, ``in [40, 10,000]``."""
         left, right = "(" if self.low_open else "[", ")" if self.high_open else "]"
         return f"in {left}{_text(self.low)}, {_text(self.high)}{right}"
 
@@ -124,8 +124,9 @@ def max_speed(
     fastest the motor can turn its rotor.
 
     Friction drives the rotor towards the stator's angular velocity, whose peak is
-    ``2π f Φ0`` (docs/model.md), so a rotor started from rest never turns faster; a constant load
-    torque ``T`` can turn it backwards at most ``T t / J_r`` faster within ``t``. An unknown
+    ``2π f Φ0`` (docs/model.md), so a rotor started from rest turns at most about that fast (an
+    impact's friction impulse may overshoot the slip it removes: hence the margin); a constant
+    load torque ``T`` can turn it backwards at most ``T t / J_r`` faster within ``t``. An unknown
     ``Φ0`` (``None``) is taken at its bound :data:`PHI0_RAD`.
     """
     phi0 = PHI0_RAD.high if phi0_rad is None else phi0_rad
