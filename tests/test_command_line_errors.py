@@ -380,3 +380,36 @@ def test_fuzz_console_script_one_line(tmp_path):
     assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "x.nc").exists()
     assert json.dumps(proc.stderr)  # printable
+
+
+# --------------------------------------------------------------- one bound, one definition
+@pytest.mark.parametrize("settle", [1.5, 0.0, float("nan")])
+def test_the_settle_tolerance_has_one_bound(capsys, settle):
+    """`--settle` in (0, 1) on the command line, > 0 in the library (whose error named the
+    option): one bound, the option named on the command line and the parameter in the library."""
+    from bouncedisk.model.limits import SETTLE
+    from bouncedisk.studies.basins import group
+
+    with pytest.raises(InputError) as ex:
+        group(None, settle=settle)
+    assert ex.value.field == "settle" and SETTLE.text() in ex.value.message
+    argv = ["basins", FIG3, "--phases", "4", "--settle", str(settle)]
+    assert main(argv) == 2
+    line = one_line(capsys)
+    assert "--settle" in line and SETTLE.text() in line
+
+
+def test_a_summarys_json_number_has_one_definition():
+    """`_num` was defined three times (basins, load summary, sensitivity)."""
+    import math
+    import re
+
+    import numpy as np
+
+    from bouncedisk.io.records import json_number
+
+    src = Path(__file__).parents[1] / "src" / "bouncedisk"
+    defined = [p.name for p in src.rglob("*.py") if re.search(r"^def _num\(", p.read_text(), re.M)]
+    assert defined == []
+    assert json_number(np.float64(2.5)) == 2.5 and type(json_number(np.float64(2.5))) is float
+    assert [json_number(x) for x in (math.nan, math.inf, -np.inf)] == [None, None, None]

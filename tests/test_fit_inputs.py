@@ -163,3 +163,109 @@ def test_time_origin_keeps_uniform_curves_on_their_grid(frame):
                    PHI0, "", True, "x.csv")  # fmt: skip
     (r,), _, note = prepare_runs(dataclasses.replace(c))
     assert note == "" and np.max(np.abs(r.time - c.time)) <= 1e-9 * DT
+
+
+# ---------------------------------------------------------------- run-up values beyond the motor
+
+
+@pytest.mark.parametrize(
+    "column,scale,field",
+    [
+        ("omega_rad_s", 1e200, "omega_rad_s: row"),
+        ("sigma_rad_s", 1e300, "sigma_rad_s: row"),
+        ("time_s", 1e20, "time_s: row"),
+    ],
+)
+def test_runup_values_beyond_the_motor_are_refused_when_read(
+    tmp_path, capsys, frame, column, scale, field
+):
+    """Run-up speeds x1e200 stopped the fit on a LinAlgError."""
+    p = _curve(tmp_path, frame.assign(**{column: frame[column] * scale}))
+    with pytest.raises(InputError, match="check the units"):
+        read_curve(p)
+    _fails(capsys, [str(p), "-o", str(tmp_path / "f.nc")], field, p)
+
+
+def test_a_runup_has_the_rows_the_fit_needs(tmp_path, frame):
+    """One number for the reader, the fit and the formats page."""
+    from pathlib import Path
+
+    from bouncedisk.io.runup_curves import MIN_ROWS
+    from bouncedisk.model.limits import MIN_RUNUP_SAMPLES
+
+    assert MIN_ROWS == core.MIN_FIT_SAMPLES == MIN_RUNUP_SAMPLES
+    with pytest.raises(InputError, match=f"the fit needs at least {MIN_RUNUP_SAMPLES}"):
+        read_curve(_curve(tmp_path, frame.iloc[: MIN_RUNUP_SAMPLES - 1]))
+    assert len(read_curve(_curve(tmp_path, frame.iloc[:MIN_RUNUP_SAMPLES])).time) == 200
+    page = (Path(__file__).parents[1] / "docs" / "formats.md").read_text()
+    section = page.split("## Run-up curves")[1].split("## ")[0]
+    assert f"least {MIN_RUNUP_SAMPLES} rows" in " ".join(section.split())
+
+
+# ---------------------------------------------------------------- several --load
+
+
+def test_every_load_option_is_fitted(tmp_path, monkeypatch, frame):
+    """`--load A --load B` kept only B, silently."""
+    from bouncedisk.fitting import command
+
+    given = []
+
+    def run_fit(curves, output, settings, loads, *rest):
+        given.extend(loads)
+        raise InputError("<test>", "", "stopped before the fit")
+
+    monkeypatch.setattr(command, "run_fit", run_fit)
+    p = _curve(tmp_path, frame)
+    argv = ["fit", str(p), "--load", "a.csv", "--load", "b.csv", "c.csv", "-o", "f.nc", "-q"]
+    assert main(argv) == 2
+    assert given == ["a.csv", "b.csv", "c.csv"]
+
+
+def test_a_missing_load_among_several_is_named(tmp_path, capsys, frame):
+    p = _curve(tmp_path, frame)
+    first, second = tmp_path / "first.csv", tmp_path / "second.csv"
+    args = [str(p), "--load", str(first), "--load", str(second), "-o", str(tmp_path / "f.nc")]
+    err = _fails(capsys, args, "file not found", first)
+    assert str(second) not in err
+
+
+# ---------------------------------------------------------------- the fit's settings, one rule each
+
+
+def test_fit_settings_check_e_sigma_and_bootstrap_as_the_command_line(tmp_path, capsys, frame):
+    from bouncedisk.model.limits import BOOTSTRAP, E_SIGMA
+
+    for kwargs in (
+        {"e_sigma": 0.7},
+        {"e_sigma": -0.1},
+        {"e_sigma": float("nan")},
+        {"bootstrap": BOOTSTRAP.high + 1},
+        {"bootstrap": BOOTSTRAP.low - 1},
+    ):
+        with pytest.raises(InputError) as ex:
+            core.FitSettings(**kwargs)
+        (name,) = kwargs
+        assert ex.value.field == name
+    core.FitSettings(e_sigma=E_SIGMA.high, bootstrap=BOOTSTRAP.high)
+    p = _curve(tmp_path, frame)
+    err = _fails(capsys, [str(p), "-o", str(tmp_path / "f.nc"), "--e-sigma", "0.7"], "--e-sigma")
+    assert E_SIGMA.text() in err
+    err = _fails(
+        capsys, [str(p), "-o", str(tmp_path / "f.nc"), "--bootstrap", "10001"], "--bootstrap"
+    )
+    assert "10000" in err
+
+
+def test_the_config_schema_states_the_bounds_of_the_command_line():
+    from pathlib import Path
+
+    from bouncedisk.model.limits import BOOTSTRAP, E_SIGMA
+
+    schema_file = Path(__file__).parents[1] / "workflow" / "schemas" / "config.schema.yaml"
+    proto = yaml.safe_load(schema_file.read_text())["properties"]["prototype"]["properties"]
+    assert (proto["bootstrap"]["minimum"], proto["bootstrap"]["maximum"]) == (
+        BOOTSTRAP.low,
+        BOOTSTRAP.high,
+    )
+    assert (proto["e_sigma"]["minimum"], proto["e_sigma"]["maximum"]) == (E_SIGMA.low, E_SIGMA.high)

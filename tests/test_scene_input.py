@@ -72,3 +72,23 @@ def test_ordinary_aliases_still_load():
     data = yamlio.load(text, "x")
     assert data["q"] == {"e": 0.3, "omega_s": 1.5} and data["r"] == {"e": 0.5, "omega_s": 1.5}
     assert yamlio._expanded_size(yamlio.Loader(text).get_single_node(), "x") == 23
+
+
+# ------------------------------------------------------------------ restitution noise, one bound
+PHYSICAL = dict(m_r=0.01, r_g=0.004, r_c=0.002, mu=0.3, e=0.5, g=9.81, f=2e4, U0=1e-6, Phi0=2e-4)
+
+
+def test_scene_noise_has_the_command_lines_bound():
+    """`e_sigma` in [0, 0.5] on the command line, >= 0 in a scene: one bound for both."""
+    from bouncedisk.model.errors import InputError
+    from bouncedisk.model.limits import E_SIGMA
+    from bouncedisk.model.params import PhysicalParameters
+    from bouncedisk.model.scene import load_scene
+
+    with pytest.raises(InputError) as ex:
+        load_scene(S6, ["parameters.e_sigma=0.7"])
+    assert ex.value.field.startswith("parameters.e_sigma") and E_SIGMA.text() in ex.value.message
+    assert load_scene(S6, [f"parameters.e_sigma={E_SIGMA.high}"]).params.e_sigma == 0.5
+    with pytest.raises(InputError) as ex:
+        PhysicalParameters.from_mapping({**PHYSICAL, "e_sigma": 0.7}, "m.yaml")
+    assert ex.value.field == "physical.e_sigma" and E_SIGMA.text() in ex.value.message

@@ -7,6 +7,7 @@ import time
 
 from ..io.history import write_with_history
 from ..model.errors import InputError
+from ..model.limits import SETTLE as SETTLE_RULE
 from ..run.cores import available_cores
 from .common import _add_set_option, command_line, named_override, print_result
 from .tracking_options import _add_track_options, _track, _tracking_store
@@ -64,8 +65,7 @@ def basins_command(args: argparse.Namespace) -> dict:
     extend = EXTEND if args.extend is None else args.extend
     if args.cores is not None and args.cores < 1:
         raise InputError("<arguments>", "--cores", f"must be >= 1, got {args.cores}")
-    if not 0.0 < settle < 1.0:
-        raise InputError("<arguments>", "--settle", f"must be in (0, 1), got {settle:g}")
+    SETTLE_RULE.check("<arguments>", "--settle", settle)
     if args.output is not None:
         check_output_path(args.output, "-o", inputs=[args.scene])
     scene = load_scene(args.scene, args.set or [])

@@ -9,6 +9,7 @@ import sys
 import time
 
 from ..model.errors import InputError
+from ..model.limits import BOOTSTRAP, E_SIGMA
 from .tracking_options import _add_track_options, _track, _tracking_store
 
 ARG = "<arguments>"
@@ -34,7 +35,7 @@ def fit_settings(args: argparse.Namespace):
 
     opts = {
         "seed": _int_option(args.seed, "--seed", 0, 2**63 - 1),
-        "bootstrap": _int_option(args.bootstrap, "--bootstrap", core.MIN_BOOTSTRAP, 10_000),
+        "bootstrap": _int_option(args.bootstrap, "--bootstrap", BOOTSTRAP.low, BOOTSTRAP.high),
         "members": _int_option(args.members, "--members", 4, 1024) if args.members is not None else None,
     }  # fmt: skip
     for name in ("scan", "zoom"):
@@ -47,16 +48,14 @@ def fit_settings(args: argparse.Namespace):
 
 
 def _e_sigma_option(text) -> float | None:
-    """``--e-sigma``: the members' restitution noise ``σ_e`` (docs/model.md), stated in
-    ``[0, 0.5]`` (0: the deterministic limit), or ``fit`` (``None``: a fifth search coordinate)."""
+    """``--e-sigma``: the members' restitution noise ``σ_e`` (docs/model.md), stated within
+    :data:`~bouncedisk.model.limits.E_SIGMA` (0: the deterministic limit), or ``fit`` (``None``:
+    a fifth search coordinate)."""
     from ..model.params import number
 
     if str(text).strip().lower() == "fit":
         return None
-    value = number(ARG, "--e-sigma", text, nonneg=True)
-    if value > 0.5:
-        raise InputError(ARG, "--e-sigma", f"must be at most 0.5, got {value}")
-    return value
+    return E_SIGMA.check(ARG, "--e-sigma", number(ARG, "--e-sigma", text))
 
 
 def _cmd_fit(args: argparse.Namespace) -> int:
@@ -98,18 +97,20 @@ def _add_fit(sub) -> None:
     p.add_argument(
         "--load",
         nargs="+",
+        action="extend",
         default=[],
         metavar="LOAD.csv",
         help="load curves of the same motor (torque_Nm, speed_rad_s[, speed_sd_rad_s] and a "
-        "sidecar with the rotor and window_s), fitted jointly with the run-ups",
+        "sidecar with the rotor and window_s), fitted jointly with the run-ups; repeatable: "
+        "every curve given is fitted",
     )
     p.add_argument("--sidecar", help="YAML sidecar of every curve (default: CURVE with .yaml)")
     p.add_argument("--seed", default="12345", help="random seed, >= 0 (default: %(default)s)")
     p.add_argument(
         "--bootstrap",
         default="40",
-        help="block-bootstrap resamples of the data (default: %(default)s, the fewest the fit "
-        "accepts)",
+        help=f"block-bootstrap resamples of the data, {BOOTSTRAP.text()} (default: %(default)s, "
+        "the fewest the fit accepts)",
     )
     p.add_argument(
         "--members",
@@ -131,8 +132,9 @@ def _add_fit(sub) -> None:
     p.add_argument(
         "--e-sigma",
         default=None,
-        help="restitution noise of the model's members: a number in [0, 0.5] states it (default: "
-        "0.03; 0: the deterministic limit), 'fit' fits it over [0, 0.1] (docs/user_guide/fitting.md)",
+        help=f"restitution noise of the model's members: a number {E_SIGMA.text()} states it "
+        "(default: 0.03; 0: the deterministic limit), 'fit' fits it over [0, 0.1] "
+        "(docs/user_guide/fitting.md)",
     )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress or summary")
     _add_track_options(p)

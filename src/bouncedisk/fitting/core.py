@@ -18,6 +18,7 @@ import numpy as np
 from ..analysis.observables import first_order_trend
 from ..io.load_curves import LoadCurveData
 from ..io.runup_curves import MotorCurve
+from ..model import limits
 from ..model.errors import InputError
 from .basins import Basin, choose, list_basins
 from .joint import LoadFit, joint_consistent, load_part, load_result
@@ -58,11 +59,11 @@ MEMBERS_ONE, MEMBERS_RUNS = 12, 32
 SCAN_MEMBERS_RUNS = 4
 #: Fewest samples (after the work bound) the statistics are taken on: the block bootstrap's
 #: blocks are at least 20 samples, and the data must hold at least 10 of them.
-MIN_FIT_SAMPLES = 200
+MIN_FIT_SAMPLES = limits.MIN_RUNUP_SAMPLES
 #: Fewest drive periods a record must span (the run-up is many impacts long).
 MIN_PERIODS = 50
 #: Fewest bootstrap resamples: a 95 % percentile interval needs a 2.5 % tail of at least one.
-MIN_BOOTSTRAP = 40
+MIN_BOOTSTRAP = limits.BOOTSTRAP.low
 
 
 @dataclass(frozen=True)
@@ -88,9 +89,9 @@ class FitSettings:
     profile: tuple[str, ...] | None = None  # coordinates to profile (None: all)
 
     def __post_init__(self) -> None:
-        if self.bootstrap < MIN_BOOTSTRAP:
-            raise ValueError(f"bootstrap must be at least {MIN_BOOTSTRAP} (a 95 % percentile "
-                             f"interval), got {self.bootstrap}")  # fmt: skip
+        limits.BOOTSTRAP.check("FitSettings", "bootstrap", self.bootstrap)
+        if self.e_sigma is not None:
+            limits.E_SIGMA.check("FitSettings", "e_sigma", self.e_sigma)
 
     def for_runs(self, runs: int) -> FitSettings:
         """The settings with the ensemble sizes left open (``None``) set for ``runs`` run-ups.

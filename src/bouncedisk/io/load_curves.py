@@ -26,11 +26,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
+from ..model import limits
 from ..model.errors import InputError
+from ..model.limits import shown
 from ..model.params import number, whole_number
 from ..model.scene import read_yaml
+from .curve_files import check_units, column, read_motor, read_table
 from .output_checks import sidecar_of
 
 COLUMNS = ("torque_Nm", "speed_rad_s")
@@ -39,8 +41,13 @@ SIDECAR_KEYS = (
     "source", "synthetic", "units", "motor", "rotor", "preload_N", "window_s", "protocol",
     "description", "generating_parameters", "generator", "repeats",
 )  # fmt: skip
-ROTOR_KEYS = ("m_r_kg", "r_g_m", "r_c_m")
-MOTOR_KEYS = ("drive_frequency_hz", "Phi0_rad")
+#: The rotor's fields, each with its bound.
+ROTOR_FIELDS = {
+    "m_r_kg": limits.ROTOR_MASS_KG,
+    "r_g_m": limits.ROTOR_RADIUS_M,
+    "r_c_m": limits.ROTOR_RADIUS_M,
+}
+ROTOR_KEYS = tuple(ROTOR_FIELDS)
 MIN_LOADS = 3
 #: Most loads (rows) a curve may hold: as many as the samples of a fitted run-up.
 MAX_LOADS = 12_000
@@ -67,75 +74,90 @@ class LoadCurveData:
 
 
 def _sidecar(path: Path) -> dict:
-    """Read and check a load curve's sidecar (one line naming the file and field)."""
+    """Read and check a load curve's sidecar (one line naming the file and field); ``motor``,
+    ``rotor``, ``preload_N`` and ``window_s`` come back as floats."""
     src = str(path)
     data = read_yaml(path, "load curve sidecar")
     for k in data:
         if k not in SIDECAR_KEYS:
             raise InputError(src, str(k), f"unknown key (known: {', '.join(SIDECAR_KEYS)})")
-    motor = data.get("motor")
-    if not isinstance(motor, dict):
-        raise InputError(src, "motor", "is required: {drive_frequency_hz, Phi0_rad}")
-    for k in motor:
-        if k not in MOTOR_KEYS:
-            raise InputError(src, f"motor.{k}", f"unknown key (known: {', '.join(MOTOR_KEYS)})")
-    for k in MOTOR_KEYS:
-        if k not in motor:
-            raise InputError(src, f"motor.{k}", "is required")
-        number(src, f"motor.{k}", motor[k], positive=True)
-    rotor = data.get("rotor")
+    check_units(src, data.get("units"), ("torque", "speed"))
+    data["motor"] = read_motor(src, data.get("motor"), ("drive_frequency_hz", "Phi0_rad"))
+    data["rotor"] = _rotor(src, data.get("rotor"))
+    preload = number(src, "preload_N", data.get("preload_N", 0.0), nonneg=True)
+    data["preload_N"] = limits.PRELOAD_N.check(src, "preload_N", preload)
+    data["window_s"] = _window(src, data.get("window_s"), data["motor"]["drive_frequency_hz"])
+    if isinstance(data.get("repeats"), str):  # a quoted '5' is text, as a scene's members
+        raise InputError(
+            src, "repeats", f"must be a whole number, got the text {data['repeats']!r}"
+        )
+    if "repeats" in data:  # 5.0 reads as 5, as a scene's members
+        repeats = whole_number(src, "repeats", data["repeats"], minimum=1)
+        data["repeats"] = limits.REPEATS.check(src, "repeats", repeats)
+    if not isinstance(data.get("synthetic", False), bool):
+        raise InputError(src, "synthetic", f"must be true or false, got {data['synthetic']!r}")
+    return data
+
+
+def _rotor(src: str, rotor: object) -> dict[str, float]:
+    """The sidecar's ``rotor``: every field of :data:`ROTOR_FIELDS`, each within its bound."""
     if not isinstance(rotor, dict):
         raise InputError(src, "rotor", f"is required: {{{', '.join(ROTOR_KEYS)}}}")
     for k in rotor:
-        if k not in ROTOR_KEYS:
+        if k not in ROTOR_FIELDS:
             raise InputError(src, f"rotor.{k}", f"unknown key (known: {', '.join(ROTOR_KEYS)})")
-    for k in ROTOR_KEYS:
+    out = {}
+    for k, bound in ROTOR_FIELDS.items():
         if k not in rotor:
             raise InputError(src, f"rotor.{k}", "is required")
-        number(src, f"rotor.{k}", rotor[k], positive=True)
-    number(src, "preload_N", data.get("preload_N", 0.0), nonneg=True)
-    win = data.get("window_s")
+        out[k] = bound.check(src, f"rotor.{k}", number(src, f"rotor.{k}", rotor[k]))
+    return out
+
+
+def _window(src: str, win: object, drive_frequency_hz: float) -> tuple[float, float]:
+    """The sidecar's ``window_s``: ``[t0, t1]``, ``t1 > t0 >= 0``, ending within
+    :data:`MAX_WINDOW_PERIODS` drive periods."""
     if not isinstance(win, list) or len(win) != 2:
         raise InputError(src, "window_s", "is required: [t0, t1] in seconds after the start")
     t0 = number(src, "window_s[0]", win[0], nonneg=True)
     t1 = number(src, "window_s[1]", win[1], positive=True)
     if not t1 > t0:
         raise InputError(src, "window_s", f"must have t1 > t0, got {win}")
-    periods = t1 * float(motor["drive_frequency_hz"])
+    periods = t1 * drive_frequency_hz
     if periods > MAX_WINDOW_PERIODS:
         raise InputError(
             src,
             "window_s[1]",
             f"{t1:g} s is {periods:.4g} drive periods; a reading may last at most "
-            f"{MAX_WINDOW_PERIODS:,} periods ({MAX_WINDOW_PERIODS / float(motor['drive_frequency_hz']):.4g} s "
+            f"{MAX_WINDOW_PERIODS:,} periods ({MAX_WINDOW_PERIODS / drive_frequency_hz:.4g} s "
             "at this drive), as a fitted run-up",
         )
-    if isinstance(data.get("repeats"), str):  # a quoted '5' is text, as a scene's members
-        raise InputError(
-            src, "repeats", f"must be a whole number, got the text {data['repeats']!r}"
+    return t0, t1
+
+
+def _bounds(meta: dict, torque: np.ndarray | None = None) -> tuple[float, str]:
+    """The largest load torque the rotor allows or, given the torques, the largest speed (each
+    with why: :mod:`bouncedisk.model.limits`)."""
+    rotor, motor, t1 = meta["rotor"], meta["motor"], meta["window_s"][1]
+    if torque is None:
+        largest = limits.max_load_torque(rotor["m_r_kg"], meta["preload_N"], rotor["r_c_m"])
+        why = (
+            f"{limits.MAX_LOAD:g} friction torques mu m_r g_eff r_eff of this rotor at "
+            f"mu = {limits.MAX_FRICTION_COEFFICIENT:g}"
         )
-    if "repeats" in data:  # 5.0 reads as 5, as a scene's members
-        data["repeats"] = whole_number(src, "repeats", data["repeats"], minimum=1)
-    if not isinstance(data.get("synthetic", False), bool):
-        raise InputError(src, "synthetic", f"must be true or false, got {data['synthetic']!r}")
-    return data
-
-
-def _column(df: pd.DataFrame, src: str, col: str) -> np.ndarray:
-    """A numeric column: every row a finite number (one line naming the row otherwise)."""
-    raw = df[col]
-    if raw.map(lambda x: isinstance(x, bool)).any():
-        raise InputError(src, col, "holds true/false values, not numbers")
-    values = pd.to_numeric(raw, errors="coerce")
-    bad = values.isna() & raw.notna()
-    if bad.any():
-        row = int(np.argmax(bad.values))
-        raise InputError(src, col, f"row {row + 2}: not a number: {raw.iloc[row]!r}")
-    finite = np.isfinite(values.to_numpy(dtype=float))
-    if not finite.all():
-        row = int(np.argmax(~finite))
-        raise InputError(src, col, f"row {row + 2}: missing or non-finite value")
-    return values.to_numpy(dtype=float)
+        return largest, why
+    inertia = rotor["m_r_kg"] * rotor["r_g_m"] ** 2
+    f, phi0, most = (
+        motor["drive_frequency_hz"],
+        motor["Phi0_rad"],
+        float(np.max(torque, initial=0.0)),
+    )
+    why = (
+        f"{limits.SPEED_MARGIN:g} times the stator's peak angular speed 2 pi f Phi0 at "
+        f"f = {f:g} Hz, Phi0 = {phi0:g} rad, plus what the largest load torque turns the rotor "
+        f"backwards within window_s, {most:g} N m x {t1:g} s / J_r"
+    )
+    return limits.max_speed(f, phi0, most, t1, inertia), why
 
 
 def read_load_curve(path: str | Path) -> LoadCurveData:
@@ -145,9 +167,10 @@ def read_load_curve(path: str | Path) -> LoadCurveData:
     ------
     InputError
         One line naming the file, row and column: a missing file, sidecar, column or rotor key;
-        text, NaN or a negative value where a torque or spread is due; a repeated torque; fewer
-        than :data:`MIN_LOADS` or more than :data:`MAX_LOADS` loads; a bad window (ending past
-        :data:`MAX_WINDOW_PERIODS` drive periods) or unit.
+        text, NaN or a negative value where a torque or spread is due; a torque or speed beyond
+        what the rotor and drive allow (:mod:`bouncedisk.model.limits`); a repeated torque;
+        fewer than :data:`MIN_LOADS` or more than :data:`MAX_LOADS` loads; a bad window (ending
+        past :data:`MAX_WINDOW_PERIODS` drive periods) or unit.
     """
     p = Path(path)
     src = str(path)
@@ -157,29 +180,24 @@ def read_load_curve(path: str | Path) -> LoadCurveData:
     if not side.is_file():
         raise InputError(str(side), "", "sidecar not found (motor, rotor and window_s)")
     meta = _sidecar(side)
-    try:
-        df = pd.read_csv(p, comment="#", skipinitialspace=True)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as ex:
-        raise InputError(src, "", f"not a readable CSV: {str(ex).splitlines()[0]}") from None
-    names = [str(c).strip() for c in df.columns]
-    for col in set(names):
-        if names.count(col) > 1 or col.endswith(tuple(f".{i}" for i in range(1, 9))):
-            raise InputError(src, col.split(".")[0], "column given more than once")
-    df.columns = names
+    df = read_table(p, (*COLUMNS, *OPTIONAL_COLUMNS))
     for col in COLUMNS:
         if col not in df.columns:
-            raise InputError(src, col, f"missing column (have: {', '.join(names)})")
-    torque = _column(df, src, "torque_Nm")
-    speed = _column(df, src, "speed_rad_s")
-    sd = _column(df, src, "speed_sd_rad_s") if "speed_sd_rad_s" in df.columns else None
+            raise InputError(src, col, f"missing column (have: {', '.join(df.columns)})")
+    torque = column(df, src, "torque_Nm", _bounds(meta))
+    speed_bound = _bounds(meta, torque)
+    speed = column(df, src, "speed_rad_s", speed_bound)
+    sd = column(df, src, "speed_sd_rad_s", speed_bound) if "speed_sd_rad_s" in df.columns else None
     for name, values in (("torque_Nm", torque), ("speed_sd_rad_s", sd)):
         if values is not None and np.any(values < 0):
             row = int(np.argmax(values < 0))
-            raise InputError(src, name, f"row {row + 2}: must be >= 0, got {values[row]!r}")
+            raise InputError(src, name, f"row {row + 2}: must be >= 0, got {shown(values[row])}")
     _, first = np.unique(torque, return_index=True)
     if len(first) < len(torque):
         row = int(np.setdiff1d(np.arange(len(torque)), first)[0])
-        raise InputError(src, "torque_Nm", f"row {row + 2}: repeats the load {torque[row]!r}")
+        raise InputError(
+            src, "torque_Nm", f"row {row + 2}: repeats the load torque {shown(torque[row])}"
+        )
     if len(torque) < MIN_LOADS:
         raise InputError(src, "", f"has {len(torque)} loads; at least {MIN_LOADS} are needed")
     if len(torque) > MAX_LOADS:
@@ -189,16 +207,15 @@ def read_load_curve(path: str | Path) -> LoadCurveData:
             f"has {len(torque):,} loads; at most {MAX_LOADS:,} (as the samples of a run-up)",
         )
     order = np.argsort(torque)
-    motor, rotor = meta["motor"], meta["rotor"]
     return LoadCurveData(
         torque=torque[order],
         speed=speed[order],
         speed_sd=None if sd is None else sd[order],
-        drive_frequency_hz=float(motor["drive_frequency_hz"]),
-        phi0_rad=float(motor["Phi0_rad"]),
-        rotor={k: float(rotor[k]) for k in ROTOR_KEYS},
-        preload_n=float(meta.get("preload_N", 0.0)),
-        window_s=(float(meta["window_s"][0]), float(meta["window_s"][1])),
+        drive_frequency_hz=meta["motor"]["drive_frequency_hz"],
+        phi0_rad=meta["motor"]["Phi0_rad"],
+        rotor=dict(meta["rotor"]),
+        preload_n=meta["preload_N"],
+        window_s=meta["window_s"],
         synthetic=bool(meta.get("synthetic", False)),
         path=src,
         sidecar=meta,

@@ -1,4 +1,5 @@
-"""The engine's records, named: run status, event kinds, trajectory and stroboscopic columns.
+"""The engine's records, named: run status, event kinds, trajectory and stroboscopic columns;
+and the one rule for a number in a JSON summary (:func:`json_number`).
 
 The compiled kernel (:mod:`bouncedisk.engine.kernel`) returns integer codes and plain array
 columns; this module is the one public place that names them, with values taken from the
@@ -11,6 +12,7 @@ and ``res.status_code == RunStatus.REST`` says the rotor rides the stator for ev
 
 from __future__ import annotations
 
+import math
 from enum import IntEnum
 
 from ..engine import layout as _K
@@ -18,6 +20,7 @@ from ..engine.layout import OK_STATUSES, STATUS_TEXT
 
 __all__ = [
     "KIND_NAMES",
+    "json_number",
     "EventKind",
     "RunStatus",
     "StrobeColumn",
@@ -78,3 +81,10 @@ class StrobeColumn(IntEnum):
 
 if len(TrajColumn) != _K.TRAJ_COLS or len(StrobeColumn) != _K.STROBE_COLS:  # pragma: no cover
     raise ImportError("bouncedisk.io.records is out of step with the kernel's column counts")
+
+
+def json_number(value: object) -> float | None:
+    """A number as a JSON summary holds it: a finite float, or ``None`` (JSON has no NaN or
+    infinity) for NaN and infinities."""
+    x = float(value)
+    return x if math.isfinite(x) else None

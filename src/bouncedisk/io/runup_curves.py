@@ -10,7 +10,11 @@ rad/s), optional ``sigma_rad_s`` (measurement standard deviation). The sidecar (
     motor:
       drive_frequency_hz: 20000.0   # required: sets omega_s = 2π f t_c
       Phi0_rad: 2.0e-4              # optional: torsional amplitude; fixes the speed scale
+      U0_m: 1.0e-6                  # optional: axial amplitude
     noise_sigma_rad_s: 0.1          # optional, if the CSV has no sigma_rad_s column
+
+The units, the motor fields and each column are checked as a load curve's
+(:mod:`bouncedisk.io.curve_files`), within the bounds of :mod:`bouncedisk.model.limits`.
 """
 
 from __future__ import annotations
@@ -21,22 +25,30 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..model import limits
 from ..model.errors import InputError
 from ..model.params import number
 from ..model.scene import read_yaml
+from .curve_files import check_units, column, read_motor, read_table
 from .output_checks import sidecar_of
 
-MIN_ROWS = 20
-#: Largest torsional amplitude Φ0 (rad) a sidecar may state: half a turn (docs/model.md's Φ0 is a
-#: small torsion angle of the stator; anything larger is a unit mistake).
-MAX_PHI0_RAD = 3.141592653589793
+#: Fewest rows of a run-up: as many as the fit's statistics need.
+MIN_ROWS = limits.MIN_RUNUP_SAMPLES
 #: The measurement noise may not exceed this multiple of the data's own standard deviation (the
 #: data are signal plus noise: their variance is at least the noise's).
 MAX_NOISE_OVER_SPREAD = 2.0
-UNIT_ALIASES = {
-    "time": {"s", "second", "seconds", "sec"},
-    "omega": {"rad/s", "rad s-1", "rad.s-1", "rad s^-1"},
-}
+#: The keys a run-up sidecar may hold.
+SIDECAR_KEYS = (
+    "source",
+    "synthetic",
+    "units",
+    "motor",
+    "noise_sigma_rad_s",
+    "description",
+    "generating_parameters",
+    "generator",
+)
+COLUMNS = ("time_s", "omega_rad_s", "sigma_rad_s")
 
 
 @dataclass(frozen=True)
@@ -71,57 +83,37 @@ class MotorCurve:
 
 
 def read_sidecar(path: str | Path) -> dict:
-    """Read and validate a curve's YAML sidecar."""
+    """Read and validate a curve's YAML sidecar (units, motor and noise within their bounds)."""
     src = str(path)
     data = read_yaml(path, "curve sidecar")
-    known = {
-        "source",
-        "synthetic",
-        "units",
-        "motor",
-        "noise_sigma_rad_s",
-        "description",
-        "generating_parameters",
-        "generator",
-    }
     for k in data:
-        if k not in known:
-            raise InputError(src, str(k), f"unknown key (known: {', '.join(sorted(known))})")
-    units = data.get("units")
-    if not isinstance(units, dict):
-        raise InputError(src, "units", "is required: {time: s, omega: rad/s}")
-    for key, allowed in UNIT_ALIASES.items():
-        u = units.get(key)
-        if not isinstance(u, str) or u.strip().lower() not in allowed:
-            hint = "convert to seconds" if key == "time" else "convert to rad/s (rpm × 2π/60)"
-            raise InputError(
-                src, f"units.{key}", f"must be {sorted(allowed)[0]!r}, got {u!r}; {hint}"
-            )
-    motor = data.get("motor")
-    if not isinstance(motor, dict):
-        raise InputError(src, "motor", "is required, with at least drive_frequency_hz")
-    for k in motor:
-        if k not in ("drive_frequency_hz", "Phi0_rad", "U0_m"):
-            raise InputError(
-                src, f"motor.{k}", "unknown key (known: drive_frequency_hz, Phi0_rad, U0_m)"
-            )
-    if "drive_frequency_hz" not in motor:
-        raise InputError(src, "motor.drive_frequency_hz", "is required")
-    number(src, "motor.drive_frequency_hz", motor["drive_frequency_hz"], positive=True)
-    if motor.get("Phi0_rad") is not None:
-        phi0 = number(src, "motor.Phi0_rad", motor["Phi0_rad"], positive=True)
-        if phi0 > MAX_PHI0_RAD:
-            raise InputError(src, "motor.Phi0_rad", f"must be at most pi rad (a torsional "
-                             f"amplitude), got {phi0:g}; is it in radians?")  # fmt: skip
-    if motor.get("U0_m") is not None:
-        number(src, "motor.U0_m", motor["U0_m"], positive=True)
+        if k not in SIDECAR_KEYS:
+            known = ", ".join(sorted(SIDECAR_KEYS))
+            raise InputError(src, str(k), f"unknown key (known: {known})")
+    check_units(src, data.get("units"), ("time", "omega"))
+    motor = read_motor(src, data.get("motor"), required=("drive_frequency_hz",))
     if data.get("noise_sigma_rad_s") is not None:
-        number(src, "noise_sigma_rad_s", data["noise_sigma_rad_s"], nonneg=True)
+        sigma = number(src, "noise_sigma_rad_s", data["noise_sigma_rad_s"], nonneg=True)
+        largest, why = _speed_bound(motor)
+        if sigma > largest:
+            message = f"{sigma:g} rad/s exceeds {largest:.4g} ({why}); check the units"
+            raise InputError(src, "noise_sigma_rad_s", message)
     if "synthetic" in data and not isinstance(data["synthetic"], bool):
         raise InputError(src, "synthetic", f"must be true or false, got {data['synthetic']!r}")
     if not isinstance(data.get("source", ""), str):
         raise InputError(src, "source", "must be text")
     return data
+
+
+def _speed_bound(motor: dict[str, float]) -> tuple[float, str]:
+    """The largest speed a run-up may hold (:func:`bouncedisk.model.limits.max_speed`) and why."""
+    f, phi0 = motor["drive_frequency_hz"], motor.get("Phi0_rad")
+    stated = f"Phi0 = {phi0:g} rad" if phi0 is not None else "Phi0 unknown, taken at pi rad"
+    why = (
+        f"{limits.SPEED_MARGIN:g} times the stator's peak angular speed 2 pi f Phi0 at "
+        f"f = {f:g} Hz, {stated}: the fastest friction can turn the rotor"
+    )
+    return limits.max_speed(f, phi0), why
 
 
 def read_curve(path: str | Path, sidecar: str | Path | None = None) -> MotorCurve:
@@ -130,8 +122,9 @@ def read_curve(path: str | Path, sidecar: str | Path | None = None) -> MotorCurv
     Raises
     ------
     InputError
-        Missing file or column, text in a number column, NaN, non-increasing time, fewer than 20
-        rows, negative sigma, wrong units in the sidecar.
+        Missing file or column, text in a number column, NaN, a time or speed beyond its bound
+        (:mod:`bouncedisk.model.limits`), non-increasing time, fewer than :data:`MIN_ROWS` rows,
+        negative sigma, wrong units in the sidecar.
     """
     p = Path(path)
     src = str(path)
@@ -141,81 +134,45 @@ def read_curve(path: str | Path, sidecar: str | Path | None = None) -> MotorCurv
     if not side.is_file():
         raise InputError(str(side), "", "sidecar not found (units, source and motor constants)")
     meta = read_sidecar(side)
-    try:
-        df = pd.read_csv(p, comment="#", skipinitialspace=True)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as ex:
-        raise InputError(src, "", f"not a readable CSV: {str(ex).splitlines()[0]}") from None
-    df.columns = [str(c).strip() for c in df.columns]
-    _check_header(src, list(df.columns))
+    df = read_table(p, COLUMNS)
     for col in ("time_s", "omega_rad_s"):
         if col not in df.columns:
             raise InputError(src, col, f"missing column (have: {', '.join(df.columns)})")
-    cols = ["time_s", "omega_rad_s"] + (["sigma_rad_s"] if "sigma_rad_s" in df.columns else [])
-    for col in cols:
-        if df[col].dtype == bool or df[col].map(lambda v: isinstance(v, bool)).any():
-            row = int(np.argmax(df[col].map(lambda v: isinstance(v, bool)).to_numpy()))
-            raise InputError(src, col, f"row {row + 2}: not a number: {df[col].iloc[row]!r}")
-        values = pd.to_numeric(df[col], errors="coerce")
-        bad = values.isna() & df[col].notna()
-        if bad.any():
-            row = int(np.argmax(bad.values))
-            raise InputError(src, col, f"row {row + 2}: not a number: {df[col].iloc[row]!r}")
-        if values.isna().any() or not np.isfinite(values.values).all():
-            row = int(np.argmax(~np.isfinite(values.values)))
-            raise InputError(src, col, f"row {row + 2}: missing or non-finite value")
-        df[col] = values.astype(float)
-    if len(df) < MIN_ROWS:
-        raise InputError(src, "", f"has {len(df)} rows; at least {MIN_ROWS} are needed")
-    t = df["time_s"].to_numpy()
+    motor = meta["motor"]
+    speed = _speed_bound(motor)
+    t = column(df, src, "time_s", (limits.TIME_S.high, "time stamps within about 300 years"))
+    omega = column(df, src, "omega_rad_s", speed)
+    s = column(df, src, "sigma_rad_s", speed) if "sigma_rad_s" in df.columns else None
     dt = np.diff(t)
     if np.any(dt <= 0):
         row = int(np.argmax(dt <= 0))
         raise InputError(src, "time_s", f"row {row + 3}: time must increase strictly")
+    if len(t) < MIN_ROWS:
+        raise InputError(src, "time_s", f"has {len(t)} rows; the fit needs at least {MIN_ROWS}")
     sigma = 0.0
-    if "sigma_rad_s" in df.columns:
-        s = df["sigma_rad_s"].to_numpy()
+    if s is not None:
         if np.any(s < 0):
             raise InputError(src, "sigma_rad_s", "must be >= 0")
         sigma = float(np.mean(s))
     elif meta.get("noise_sigma_rad_s") is not None:
         sigma = float(meta["noise_sigma_rad_s"])
-    omega = df["omega_rad_s"].to_numpy()
     spread = float(np.std(omega))
     if sigma > MAX_NOISE_OVER_SPREAD * spread:
-        where = (
-            (src, "sigma_rad_s")
-            if "sigma_rad_s" in df.columns
-            else (str(side), "noise_sigma_rad_s")
-        )
+        where = (src, "sigma_rad_s") if s is not None else (str(side), "noise_sigma_rad_s")
         raise InputError(*where, f"measurement noise {sigma:g} rad/s exceeds {MAX_NOISE_OVER_SPREAD:g} "
                          f"times the spread of the data themselves ({spread:g} rad/s)")  # fmt: skip
-    motor = meta["motor"]
     return MotorCurve(
         time=t,
         omega=omega,
         sigma=sigma,
-        drive_frequency_hz=float(motor["drive_frequency_hz"]),
-        phi0_rad=float(motor["Phi0_rad"]) if motor.get("Phi0_rad") is not None else None,
+        drive_frequency_hz=motor["drive_frequency_hz"],
+        phi0_rad=motor.get("Phi0_rad"),
         source=str(meta.get("source", "")),
         synthetic=bool(meta.get("synthetic", False)),
         path=src,
         sidecar=meta,
         sidecar_path=str(side),
     )
-
-
-def _check_header(src: str, columns: list[str]) -> None:
-    """Refuse a column the reader would otherwise pick one of several of (pandas renames a
-    repeated ``omega_rad_s`` to ``omega_rad_s.1`` and the first would be used silently)."""
-    for c in columns:
-        base, dot, tail = c.rpartition(".")
-        if (
-            dot
-            and tail.isdigit()
-            and base in columns
-            and base in ("time_s", "omega_rad_s", "sigma_rad_s")
-        ):
-            raise InputError(src, base, "the column appears more than once; keep one")
 
 
 def write_curve(df: pd.DataFrame, path: str | Path, sidecar: dict) -> None:

@@ -14,6 +14,7 @@ from dataclasses import asdict, dataclass, fields
 
 from ..engine.bounds import check_omega_s
 from .errors import InputError, plain
+from .limits import E_SIGMA
 
 #: Restitution noise that samples the natural measure (docs/model.md "Long-run statistics of
 #: chaotic motion"), for ensembles whose scene states none: physically meaningless, a periodic
@@ -165,8 +166,7 @@ class Parameters:
             raise InputError(
                 source, f"{prefix}.inertia_ratio", f"must be > 0, got {self.inertia_ratio}"
             )
-        if not self.e_sigma >= 0.0:
-            raise InputError(source, f"{prefix}.e_sigma", f"must be >= 0, got {self.e_sigma}")
+        E_SIGMA.check(source, f"{prefix}.e_sigma", self.e_sigma)
         if not self.load_torque >= 0.0:
             raise InputError(
                 source, f"{prefix}.load_torque", f"must be >= 0, got {self.load_torque}"
@@ -274,7 +274,8 @@ class PhysicalParameters:
                 raise InputError(source, f"{prefix}.{key}", f"must be > 0, got {getattr(p, key)}")
         if not 0.0 <= p.e <= 1.0:
             raise InputError(source, f"{prefix}.e", f"must be in [0, 1], got {p.e}")
-        for key in ("F_preload", "load_torque", "e_sigma"):
+        E_SIGMA.check(source, f"{prefix}.e_sigma", p.e_sigma)
+        for key in ("F_preload", "load_torque"):
             if getattr(p, key) < 0.0:
                 raise InputError(source, f"{prefix}.{key}", f"must be >= 0, got {getattr(p, key)}")
         return p

@@ -64,6 +64,8 @@ from ..analysis.sweeps import _ordered_runs, shard_slice, with_params
 from ..engine import InitialState
 from ..engine.bounds import MAX_SPEED
 from ..io.provenance import base_attrs, new_run_id
+from ..io.records import json_number as _num
+from ..model import limits
 from ..model.engine_config import engine_config
 from ..model.errors import InputError
 from ..model.scene import Scene
@@ -656,8 +658,7 @@ def group(ds: xr.Dataset, settle: float = SETTLE) -> xr.Dataset:
     """The starts of a complete computation with their labels and the attractors: per attractor
     its mean speed (mean over its starts, Student interval across them), regime and period,
     basin fraction with its Wilson interval (docs/formats.md "Basins file")."""
-    if not settle > 0.0 or not math.isfinite(settle):
-        raise InputError("<arguments>", "--settle", f"must be a number > 0, got {settle!r}")
+    limits.SETTLE.check("", "settle", settle)
     lab, scale = labels(ds, settle)
     n = len(lab)
     mean = ds["mean_omega"].values
@@ -726,10 +727,6 @@ def _window_factors(ds: xr.Dataset) -> np.ndarray:
     if "window_factor" in ds:
         return ds["window_factor"].values
     return np.ones(ds.sizes["start"])
-
-
-def _num(x: float) -> float | None:
-    return float(x) if math.isfinite(x) else None
 
 
 def summary(ds: xr.Dataset) -> dict:

@@ -27,6 +27,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..analysis.statistics import confidence_interval
+from ..io.records import json_number as _num
 
 #: Bootstrap resamples of the members for the derived quantities' intervals (fixed seed).
 BOOTSTRAP = 2000
@@ -250,10 +251,6 @@ def _interval(samples: np.ndarray, bracket: tuple[float, float] | None = None) -
     if bracket is not None:
         lo, hi = min(lo, bracket[0]), max(hi, bracket[1])
     return [_num(lo), _num(hi)]
-
-
-def _num(x: float) -> float | None:
-    return float(x) if math.isfinite(x) else None
 
 
 def _figures(loads, speed, power, eff, settled, bound) -> dict[str, np.ndarray]:

@@ -33,6 +33,7 @@ from ..analysis.bands import member_speeds
 from ..analysis.statistics import confidence_interval, run_stats, t_quantile
 from ..analysis.sweeps import regime_attrs, shard_slice
 from ..io.provenance import base_attrs
+from ..io.records import json_number as _num
 from ..model.scene import Scene, scene_from_mapping
 from .sensitivity_settings import PARAMETERS, StudySettings
 
@@ -694,8 +695,3 @@ def summary(indices: xr.Dataset, maps: Sequence[xr.Dataset] = ()) -> dict:
         if best is not None:
             out["best"][f"e={m.attrs['map_e']:g}"] = best_point(m, best)
     return out
-
-
-def _num(v) -> float | None:
-    x = float(v)
-    return x if math.isfinite(x) else None
