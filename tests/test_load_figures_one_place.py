@@ -14,7 +14,7 @@ from bouncedisk.studies.load_summary import derived, distinct_new, refine, settl
 
 class _Collapse:
     """A stand-in load curve: the speed holds near 74 up to the momentum bound 1 and collapses
-    past it (a finite window's mean past the bound falls with the load, as in issue 53's case)."""
+    past it (a finite window's mean past the bound falls with the load, as on the Fig. 3 motor)."""
 
     def __init__(self, loads, branches=None):
         self.loads = np.asarray(loads, float)
@@ -40,9 +40,9 @@ def test_near_duplicate_loads_are_one_load():
 
 
 def test_refined_maximum_is_located_on_distinct_loads_up_to_the_bound():
-    """Issue 53 item 2: loads 0:1.05:8 refined at 0.01 reported 72.47 [72.47364327, 72.47364333]
-    at [0.9656, 0.975] (the bracket collapsed on 0.975 beside 0.9750000000000001) where the power
-    reaches 74.2 at the bound."""
+    """Loads 0:1.05:8 refined at 0.01 must not keep near-duplicates (0.975 beside
+    0.9750000000000001), on which a bracket would collapse to a zero-width interval short of the
+    maximum at the bound."""
     sweeps = lambda loads, omega0, branch: _Collapse(loads)  # noqa: E731
     out = refine(_Collapse(np.linspace(0.0, 1.05, 8)), sweeps, resolution=0.01)
     assert np.all(np.diff(out.loads) > 1e-9)
@@ -69,9 +69,9 @@ def test_refined_maximum_is_located_on_distinct_loads_up_to_the_bound():
     ],
 )
 def test_no_interval_where_there_is_no_estimate(loads, speed, stall, peak):
-    """Issue 53 item 3: beyond_largest_load gave max_power_load_ci95 [0.2, 0.2], psi = pi
-    max_power 0.0 [0.0, 0.0], loads 1.5,2,3 a load interval [1.5, 1.5] (past the momentum
-    bound no reading is a stationary power: no maximum at all)."""
+    """No zero-width interval where there is no estimate: a maximum beyond the largest load, a
+    motor running backwards at no load, loads all past the momentum bound (where no reading is a
+    stationary power: no maximum at all)."""
     members = np.stack([speed(loads) * f for f in (0.99, 1.0, 1.01)])
     d = derived(loads, members, members * loads, 1.0)
     assert (d["stall_torque_state"], d["max_power_state"]) == (stall, peak)
@@ -98,7 +98,7 @@ stats: {discard: 20.0}
 
 
 def test_command_takes_a_scene_with_the_load_effect_and_no_load_torque(tmp_path, capsys):
-    """Issue 53: `torque-speed` refused a scene listing `load` without `load_torque`."""
+    """`torque-speed` takes a scene listing the `load` effect without `load_torque`."""
     path = scene_file(tmp_path, SCENE, "loaded.yaml")
     assert main(["torque-speed", path, "--loads", "0,0.5", "--resolution", "0", "-q"]) == 0
     assert "load_torque" not in capsys.readouterr().err
