@@ -296,6 +296,12 @@ def _set(name, value):
             "stats_mean_omega",
         ),
         ("stats/stats_e06.nc", "stats_e06", _set("lyapunov", lambda v: -v), "stats_lyapunov"),
+        (
+            "stats/stats_e03.nc",
+            "stats_e03",
+            _set("period_p", lambda v: np.where(np.arange(v.size) < 3, 1, v)),
+            "stats_regime_fraction 1 vs",
+        ),
         ("stats/stats_e06.nc", "stats_e06", _set("stats_regime", "periodic"), "stats_regime"),
         (
             "stats/stats_locked.nc",
@@ -314,6 +320,14 @@ def _set(name, value):
         ("load/load_fig4.nc", "load_fig4", _set("mean_omega", lambda v: v + 1000.0), "mean_omega["),
         ("load/load_fig4.nc", "load_fig4", _set("mean_omega", lambda v: -v), "mean_omega["),
         ("load/load_fig4.nc", "load_fig4", _set("mean_omega_member", lambda v: -v), "not found"),
+        (
+            "load/load_fig4.nc",
+            "load_fig4",
+            _set(
+                "audit_residual_axial", lambda v: np.where(np.arange(v.shape[-1]) == 3, np.nan, v)
+            ),
+            "residual inf",
+        ),
         # fig. 5: the run against its ensemble's band; the band's R^2 against its mean
         ("simulations/fig5.nc", "fig5", _set("omega_rotor", lambda v: 10 * v), "inside"),
         ("simulations/fig5.nc", "fig5", _set("omega_rotor", lambda v: -v), "inside"),

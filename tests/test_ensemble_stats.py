@@ -6,6 +6,7 @@ Restitution noise, members, confidence intervals, regimes and the ``bouncedisk s
 from __future__ import annotations
 
 import json
+import dataclasses
 import math
 
 import numpy as np
@@ -307,3 +308,13 @@ def test_a_regime_tie_is_reported_as_a_tie():
     s = clear.summary()
     assert s["regime"] == "chaotic" and s["regime_tie"] == []
     assert "chaotic, 67% of members" in format_summary(s) and "tie" not in format_summary(s)
+
+
+def test_the_regime_fraction_counts_only_members_on_its_period():
+    """Three of eight periodic members on period 1/1, five on 2/2: the ensemble is periodic
+    [2, 2] in 5/8 of its members, not in all of them."""
+    members = [_member(k, "periodic") for k in range(8)]
+    members[3:] = [dataclasses.replace(m, period_p=2, period_q=2) for m in members[3:]]
+    s = EnsembleStats(members, 0.0, 1.0).summary()
+    assert s["regime"] == "periodic" and s["period"] == [2, 2]
+    assert s["regime_fraction"] == 5 / 8

@@ -116,12 +116,18 @@ class EnsembleStats:
 
     @property
     def regime(self) -> tuple[str, float, list[int] | None]:
-        """Most common member regime, the fraction of members in it, and its ``[p, q]``."""
+        """Most common member regime, the fraction of members in it, and its ``[p, q]``.
+
+        For a regime with a period the fraction counts the members of that regime *and* period:
+        members of the same regime on another period are not "in" it.
+        """
         counts = Counter((m.regime, m.period_p, m.period_q) for m in self.members)
         by_regime = Counter(m.regime for m in self.members)
         code, n = by_regime.most_common(1)[0]
-        (_, p, q), _ = next((k, c) for k, c in counts.most_common() if k[0] == code)
+        (_, p, q), n_period = next((k, c) for k, c in counts.most_common() if k[0] == code)
         period = [p, q] if p > 0 else None
+        if period is not None:
+            n = n_period
         return ob.REGIMES[code], n / len(self.members), period
 
     @property

@@ -250,6 +250,15 @@ def stats_from_file(ds, where: str) -> tuple[dict, list[str]]:
 
 
 # ----------------------------------------------------------------------------- load curves
+
+
+def _largest(values: np.ndarray) -> float:
+    """The largest of ``values``, infinite where one is not finite (a residual that is NaN did not
+    close: it must fail the audit's claim, not be skipped)."""
+    v = np.asarray(values, float)
+    return float(np.max(np.where(np.isfinite(v), v, np.inf))) if v.size else math.inf
+
+
 def load_from_file(ds, where: str) -> tuple[dict, list[str]]:
     """A load curve's up branch recomputed from its members: per load the mean speed and its
     95 % interval, the stall torque with its interval and state (:func:`derived`), with the
@@ -271,7 +280,7 @@ def load_from_file(ds, where: str) -> tuple[dict, list[str]]:
         "low": per_load[:, 1],
         "high": per_load[:, 2],
         "residual": max(
-            float(np.nanmax(array(ds, where, f"audit_residual_{k}"))) for k in ("axial", "torsion")
+            _largest(array(ds, where, f"audit_residual_{k}")) for k in ("axial", "torsion")
         ),
         "stall": nan if got["stall_torque"] is None else got["stall_torque"],
         "stall_ci95": stall_ci,
