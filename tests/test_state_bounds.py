@@ -90,6 +90,9 @@ def test_states_that_hung_the_kernel_are_refused():
         # before: ZeroDivisionError
         (lambda: small(omega_s=1e-300), "EngineConfig: omega_s: must be a number in [2**-500"),
         (lambda: small(t_end=1e300), "EngineConfig: t_end: 1e+300 is beyond the times"),
+        # the scene's bounds hold in the API too: a phase without precision, a noise beyond e's range
+        (lambda: small(psi=1e300), "EngineConfig: psi: must be an angle in radians, |psi| <= 1000"),
+        (lambda: small(e_sigma=10.0), "EngineConfig: e_sigma: must be in [0, 0.5], got 10"),
     ],
 )
 def test_values_out_of_bounds_are_input_errors(make, line):

@@ -276,3 +276,20 @@ def test_property_one_member_scene_has_no_intervals(e, omega_s, top):
         k = next(i for i, v in enumerate(speed) if v <= 0 or loads[i] > 1.0)
         top = min(loads[k], max(loads[k - 1], 1.0))
         assert loads[k - 1] <= s["stall_torque"] <= top and speed[k - 1] > 0
+
+
+@pytest.mark.parametrize(
+    "text,said",
+    [
+        ("0,0.9,0.9000000000000001,1", "repeats a load"),  # one load twice, by round-off
+        ("1,,2", "has an empty item"),
+        ("1,2,", "has an empty item"),
+    ],
+)
+def test_a_load_list_with_a_near_duplicate_or_an_empty_item_is_refused(text, said):
+    from bouncedisk.model.errors import InputError
+    from bouncedisk.studies.torque_speed import parse_loads
+
+    with pytest.raises(InputError) as ex:
+        parse_loads(text)
+    assert said in ex.value.line()

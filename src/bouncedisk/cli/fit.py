@@ -96,8 +96,7 @@ def _add_fit(sub) -> None:
     p.add_argument("-o", "--output", required=True, help="fit netCDF file to write")
     p.add_argument(
         "--load",
-        nargs="+",
-        action="extend",
+        action="append",
         default=[],
         metavar="LOAD.csv",
         help="load curves of the same motor (torque_Nm, speed_rad_s[, speed_sd_rad_s] and a "

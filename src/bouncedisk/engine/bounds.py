@@ -54,6 +54,12 @@ OMEGA_S_MIN = 2.0**-500
 MAX_SPEED = 1e100
 #: Largest ``max_events``: the kernel's int64 event counter.
 MAX_EVENTS = 2**63 - 1
+#: Largest ``|psi|``: the torsional phase enters ``sin(omega_s t + psi)``, so it must keep the
+#: phase's precision like a time does; 1e3 rad is far beyond any angle a user means.
+MAX_PSI = 1e3
+#: Largest restitution noise ``σ_e`` of ``e + σ_e ξ`` (docs/model.md): half the whole range of
+#: ``e`` is the most a noise can mean (0 is the deterministic limit).
+MAX_E_SIGMA = 0.5
 #: Largest trajectory sample index (int64, with room for the kernel's sums).
 MAX_SAMPLE_INDEX = 2.0**62
 
@@ -169,7 +175,10 @@ def check_state(
 _RANGES: dict[str, tuple[Any, str]] = {
     "e": (lambda x: is_real(x) and 0.0 <= x <= 1.0, "must be a number in [0, 1]"),
     "r_phi": (lambda x: is_real(x) and 0.0 < x < math.inf, "must be a finite number > 0"),
-    "psi": (lambda x: is_real(x) and math.isfinite(x), "must be a finite number (radians)"),
+    "psi": (
+        lambda x: is_real(x) and abs(x) <= MAX_PSI,
+        f"must be an angle in radians, |psi| <= {MAX_PSI:g}",
+    ),
     "inertia_ratio": (
         lambda x: is_real(x) and x > 0.0,
         "must be > 0 (inf for a stator not moved by impacts)",
@@ -181,7 +190,10 @@ _RANGES: dict[str, tuple[Any, str]] = {
         "must be a whole number in [1, 2**63 - 1] (not a boolean)",
     ),
     "traj_dt": (lambda x: is_real(x) and 0.0 <= x < math.inf, "must be a finite number >= 0"),
-    "e_sigma": (lambda x: is_real(x) and 0.0 <= x < math.inf, "must be a finite number >= 0"),
+    "e_sigma": (
+        lambda x: is_real(x) and 0.0 <= x <= MAX_E_SIGMA,
+        f"must be in [0, {MAX_E_SIGMA:g}]",
+    ),
     "seed": (lambda x: is_count(x, 0, 2**63 - 1), "must be a whole number in [0, 2**63)"),
     "member": (lambda x: is_count(x, 0, 2**63 - 1), "must be a whole number in [0, 2**63)"),
     # the engine also runs a driving torque (< 0)

@@ -32,7 +32,7 @@ class EngineConfig:
         Nondimensional parameters (docs/model.md), ``omega_s`` within the bounds of
         :mod:`.bounds`. A fast stator launches the rotor at about its own speed ``omega_s``,
         for a flight of about ``2 omega_s``: at ``omega_s = 1e4`` the first impact of the
-        default start comes at ``t ≈ 2e4``, and a run stopped before has no event.
+        default start comes at ``t ≈ 2e4``, and a run stopped before that has no event.
     contact, torsion, impulse_cap : bool
         Effects (docs/model.md "Optional effects").
     inertia_ratio : float

@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ..engine.bounds import MAX_E_SIGMA
 from .errors import InputError
 
 
@@ -68,9 +69,8 @@ class Bound:
 
 # ---------------------------------------------------------------- model and fit settings
 
-#: Restitution noise ``σ_e`` of the per-impact restitution ``e + σ_e ξ`` (docs/model.md): 0 is the
-#: deterministic limit; half the whole range of ``e`` is the most a noise can mean.
-E_SIGMA = Bound(0.0, 0.5)
+#: Restitution noise ``σ_e`` of the per-impact restitution ``e + σ_e ξ``: the engine's bound.
+E_SIGMA = Bound(0.0, MAX_E_SIGMA)
 #: Block-bootstrap resamples of a fit: a 95 % percentile interval needs a 2.5 % tail of at least
 #: one resample (40); 10,000 resolve its ends to well under a percent.
 BOOTSTRAP = Bound(40, 10_000)

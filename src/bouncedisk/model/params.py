@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, fields
 
-from ..engine.bounds import check_omega_s
+from ..engine.bounds import MAX_PSI, check_omega_s
 from .errors import InputError, plain
 from .limits import E_SIGMA
 
@@ -173,7 +173,7 @@ class Parameters:
             )
         if not self.mu_ratio >= 1.0:
             raise InputError(source, f"{prefix}.mu_ratio", f"must be >= 1, got {self.mu_ratio}")
-        if abs(self.psi) > 1e3:
+        if abs(self.psi) > MAX_PSI:
             raise InputError(
                 source, f"{prefix}.psi", f"must be an angle in radians, got {self.psi}"
             )

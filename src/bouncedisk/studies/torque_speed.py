@@ -38,8 +38,10 @@ from .load_summary import (  # first_zero and peak: the summary's API, also from
     BOOTSTRAP,
     DERIVED,
     REFINE_ROUNDS,
+    SAME_LOAD,
     _num,
     derived,  # noqa: F401
+    distinct_new,
     first_zero,  # noqa: F401
     peak,  # noqa: F401
     refine,
@@ -138,14 +140,14 @@ def parse_loads(text: str, source: str = "<arguments>", field: str = "--loads") 
         if not stop > start:
             raise InputError(source, field, f"STOP must be > START, got {text!r}")
         return np.linspace(start, stop, n)
-    items = [x for x in text.split(",") if x.strip()]
-    if not items:
-        raise InputError(source, field, f"must be START:STOP:N or A,B,C, got {text!r}")
+    items = text.split(",")
+    if not all(x.strip() for x in items):
+        raise InputError(source, field, f"has an empty item: {text!r}; give START:STOP:N or A,B,C")
     if len(items) > MAX_LOADS:
         raise InputError(source, field, f"must ask for at most {MAX_LOADS} loads")
     loads = np.array([number(source, field, x, nonneg=True) for x in items])
-    if len(np.unique(loads)) != len(loads):
-        raise InputError(source, field, f"repeats a load: {text!r}")
+    if len(distinct_new(np.empty(0), loads)) != len(loads):
+        raise InputError(source, field, f"repeats a load (within {SAME_LOAD:g}): {text!r}")
     return np.sort(loads)
 
 
