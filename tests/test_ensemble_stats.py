@@ -5,8 +5,8 @@ Restitution noise, members, confidence intervals, regimes and the ``bouncedisk s
 
 from __future__ import annotations
 
-import json
 import dataclasses
+import json
 import math
 
 import numpy as np

@@ -217,9 +217,25 @@ def test_every_load_option_is_fitted(tmp_path, monkeypatch, frame):
 
     monkeypatch.setattr(command, "run_fit", run_fit)
     p = _curve(tmp_path, frame)
-    argv = ["fit", str(p), "--load", "a.csv", "--load", "b.csv", "c.csv", "-o", "f.nc", "-q"]
+    argv = ["fit", str(p), "--load", "a.csv", "--load", "b.csv", "-o", "f.nc", "-q"]
     assert main(argv) == 2
-    assert given == ["a.csv", "b.csv", "c.csv"]
+    assert given == ["a.csv", "b.csv"]
+
+
+def test_a_run_up_after_a_load_option_is_a_run_up(tmp_path, monkeypatch, frame):
+    """`fit --load L.csv RUN.csv`: one curve per `--load`, so RUN.csv is the run-up."""
+    from bouncedisk.fitting import command
+
+    seen = {}
+
+    def run_fit(curves, output, settings, loads, *rest):
+        seen.update(curves=[str(c) for c in curves], loads=list(loads))
+        raise InputError("<test>", "", "stopped before the fit")
+
+    monkeypatch.setattr(command, "run_fit", run_fit)
+    p = _curve(tmp_path, frame)
+    assert main(["fit", "--load", "a.csv", str(p), "-o", "f.nc", "-q"]) == 2
+    assert seen == {"curves": [str(p)], "loads": ["a.csv"]}
 
 
 def test_a_missing_load_among_several_is_named(tmp_path, capsys, frame):
