@@ -91,7 +91,7 @@ def _add_fit(sub) -> None:
         "curve",
         nargs="+",
         help="CSV with time_s, omega_rad_s[, sigma_rad_s]; several: run-ups of one motor, "
-        "fitted together (README, 'Fitting')",
+        "fitted together (docs/user_guide/fitting.md)",
     )
     p.add_argument("-o", "--output", required=True, help="fit netCDF file to write")
     p.add_argument(

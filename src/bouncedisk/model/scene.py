@@ -12,6 +12,7 @@ import json
 import math
 import re
 from dataclasses import dataclass, field
+from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -218,11 +219,29 @@ def apply_overrides(raw: dict, overrides: list[str] | str, source: str = "--set"
     return out
 
 
+#: Where a scene path that does not exist is looked up: ``fig3``, ``fig3.yaml`` or the checkout's
+#: ``workflow/config/scenes/fig3.yaml`` name the scene the package ships (docs/formats.md "Scenes").
+SHIPPED_SCENE_FOLDERS = ("", "workflow/config/scenes")
+
+
+def shipped_scene(path: str | Path) -> Path | None:
+    """The scene the package ships that ``path`` names, when ``path`` itself does not exist."""
+    p = Path(path)
+    if p.exists() or p.parent.as_posix().rstrip("/").removesuffix(".") not in SHIPPED_SCENE_FOLDERS:
+        return None
+    name = p.name if p.suffix == ".yaml" else f"{p.name}.yaml"
+    found = resources.files("bouncedisk") / "scenes" / name
+    return Path(str(found)) if found.is_file() else None
+
+
 def read_yaml(path: str | Path, what: str = "scene") -> dict:
     """Read a YAML mapping, turning every failure into one :class:`InputError` line that calls
-    the file ``what`` (a scene, a sidecar, ...)."""
+    the file ``what`` (a scene, a sidecar, ...). A scene that does not exist but names one the
+    package ships (:func:`shipped_scene`) is read from the package."""
     p = Path(path)
     src = str(path)
+    if what == "scene" and (shipped := shipped_scene(p)) is not None:
+        p = shipped
     if p.exists() and not p.is_dir() and not p.is_file():  # a FIFO would block in open()
         raise InputError(src, "", f"is not a regular file (a pipe or device?), not a {what} file")
     try:

@@ -243,6 +243,8 @@ def _client(store: Store):
     """An MlflowClient on ``store``: no telemetry, no INFO chatter from MLflow's migrations."""
     os.environ.setdefault("MLFLOW_DISABLE_TELEMETRY", "true")
     os.environ.setdefault("DO_NOT_TRACK", "true")
+    # no progress bars on stderr when `bouncedisk runs` reads a run's artifacts
+    os.environ.setdefault("MLFLOW_ENABLE_ARTIFACTS_PROGRESS_BAR", "false")
     # every request to a server has a bounded time (read by MLflow at each request)
     os.environ.setdefault("MLFLOW_HTTP_REQUEST_TIMEOUT", str(HTTP_TIMEOUT_S))
     os.environ.setdefault("MLFLOW_HTTP_REQUEST_MAX_RETRIES", str(HTTP_RETRIES))
