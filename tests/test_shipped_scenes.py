@@ -18,7 +18,9 @@ def test_a_shipped_scene_is_found_by_name_from_an_empty_folder(tmp_path, monkeyp
 
 def test_a_file_beside_the_name_wins_and_other_folders_are_not_searched(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    (tmp_path / "fig3.yaml").write_text("parameters: {e: 0.45, omega_s: 1.5}\nstop: {impacts: 10}\n")
+    (tmp_path / "fig3.yaml").write_text(
+        "parameters: {e: 0.45, omega_s: 1.5}\nstop: {impacts: 10}\n"
+    )
     assert load_scene("fig3.yaml").params.e == pytest.approx(0.45)
     with pytest.raises(InputError, match="file not found"):
         load_scene("elsewhere/fig3.yaml")
