@@ -8,8 +8,8 @@ with the points its Jacobian reads) take their samples from one axial run per me
 1. The engine: 8 and 3 runs differing in ``(R_φ, ψ)`` (a ψ grid; a step and its two
    differences) one by one against one axial run, in four regimes of the fit's range; each
    row's samples checked equal, bit for bit. Best of 3 wall times.
-2. Whole fits with the points evaluated together and one by one (the version before: every
-   point its own runs): wall and CPU time of each, and the same ``χ²``, estimate and intervals.
+2. Whole fits with the points evaluated together and one by one (every point its own runs):
+   wall and CPU time of each, and the same ``χ²``, estimate and intervals.
    The shipped motor's joint fit at the pipeline's settings (``--scan 64 --zoom 0 --e-sigma 0.03
    --cores 2``: its scan is a small share of it), and the fit of its run-up alone at the default
    search (scan 192, zoom 16: the scan is most of it).

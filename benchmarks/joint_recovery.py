@@ -8,21 +8,13 @@ Run:  python benchmarks/joint_recovery.py [--scan N] [--zoom N] [--cores N] [CAS
 Prints, per case, the fit's summary lines (the identifiability table and the chi2 at the
 generating point under the fit's final metric) and whether every joint interval holds the
 generating value, then one JSON line with the interval widths by data set. Not a test: a fit per
-case takes 1.5-5.5 minutes on one core. At the defaults (scan 256, zoom 8; 2026-11-25, ``--cores 1``
-beside other work): every joint interval holds the generating value in all three cases and is
-two-sided near the period doubling. Near the period doubling: chi2 14.46 on 21, the generating
-point's 7.39; the joint valley (a thin tube in (e, psi, omega_s)) lies between the scan's and the
-joint zoom's points and is reached by the joint refinement (``search.joint_refine``; before it the
-search ended at chi2 1002, inadequate, nothing identified); 136 s wall. Periodic: chi2 0.97, the
-generating point's 3.10; 323 s. Chaotic: chi2 8.04, the generating point's 39.1 under the
-estimate's metric (run-ups 36.7): its intervals hold the truth through the widening to every
-consistent candidate, not the profiles; 90 s. The periodic and chaotic cases' chi2, chi2 at the
-generating point and interval widths are those measured before the refinement (which the periodic
-case runs, the chaotic one does not). At scan 64 the periodic case lands in a valley of chi2 76
-(measured once, not re-run). All of these predate the re-reading of the scan's candidates on
-the fit's members and the level from fresh members (docs/fitting_method.md, "The intervals");
-since then ``tests/test_joint_fit.py`` checks the chaotic case at these settings (every joint
-interval holds the generating value), the widths here are not re-measured.
+case takes minutes on one core (the defaults are scan 256, zoom 8). Near the period doubling the
+joint valley (a thin tube in (e, psi, omega_s)) lies between the scan's and the joint zoom's
+points and is reached by the joint refinement (``search.joint_refine``); in the chaotic case the
+intervals hold the truth through the widening to every consistent candidate, not the profiles.
+A smaller scan can leave the periodic case in a wrong valley. ``tests/test_joint_fit.py`` checks
+the chaotic case at these settings (every joint interval holds the generating value); the
+measured rows are in ``benchmarks/out/fit.json``.
 """
 
 from __future__ import annotations

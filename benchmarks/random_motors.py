@@ -24,26 +24,9 @@ Run:  nice -n 5 python benchmarks/random_motors.py [--motors 16] [--first 0] [--
 ``--first``/``--count`` run a slice of the sample (the same motors whatever the slice), so a
 table can be made in parts. One JSON line per motor, then the rates of the motors run.
 
-Measured 2026-11-25 with ``--scan 64 --zoom 0`` (the pipeline's search sizes; the command and
-the rates in docs/user_guide/fitting.md, "Random motors", the records in benchmarks/out/fit.json):
-of 16 motors 13 adequate, each of ``e``, ``R_phi``, ``omega_s`` held by 12, ``psi`` by 11,
-``e_sigma`` by 6, ``R_phi`` to a factor below 2 on none; 34-338 s wall a motor. At the default
-sizes (``--scan 192 --zoom 16``): 15 adequate, ``e`` held by 15, ``R_phi``, ``psi``, ``omega_s``
-by 14, ``e_sigma`` by 11, ``R_phi`` below a factor 2 on 1; 54-431 s a motor. Targets met:
-adequacy and ``e`` only. Measured 2026-11-26 at the default sizes, after the scan's candidates
-are re-read on the fit's members and the intervals measured from the level on fresh members
-(docs/fitting_method.md, "The intervals"): 15 adequate, ``e`` and ``e_sigma`` held by 14,
-``R_phi`` and ``psi`` by 13, ``omega_s`` by 12, ``R_phi`` below a factor 2 on 3 (median factor
-4.4); 69-323 s a motor (the first three beside the test suite). Targets met: adequacy only.
-With the deterministic limit's valley walk (``bouncedisk.fitting.limit_walk``), 2026-11-26: 15
-adequate, ``e`` held by 15, ``R_phi`` and ``psi`` by 14, ``omega_s`` and ``e_sigma`` by 13, all
-five by 11, ``R_phi`` below a factor 2 on 3 (median factor 4.1); 63-324 s a motor (median 80 s).
-Targets met: adequacy and ``e``. With the joint candidates read at the noise levels
-(``search.CANDIDATE_NOISE``) and the covariance measured at ``e_sigma >= 1e-8``
-(``search.metric_point``), 2026-11-26: 15 adequate, ``e`` held by 14, ``R_phi``, ``psi`` and
-``omega_s`` by 13, ``e_sigma`` by 15, all five by 12; 68 of 80 intervals hold the truth (85 %,
-95 % interval 69-98 % resampling motors); ``R_phi`` below a factor 2 on 4 (median factor 3.7);
-68-318 s a motor (median 89 s). Targets met: adequacy and ``e_sigma``.
+The measured rows and rates are in ``benchmarks/out/fit.json``; docs/user_guide/fitting.md,
+"Random motors", states the rates and the command that produces them (``--motors 16 --cores 2``
+at the default sizes). A fit takes minutes a motor.
 
 The last line printed holds the rates and the pooled coverage (:func:`coverage`); ``--rates
 ROWS.json`` prints them for rows already made (the slices' ``--json`` files put together).

@@ -1,12 +1,11 @@
 """The deterministic limit's valley walk: a joint fit's search at ``σ_e = 0``.
 
 Without restitution noise a periodic motor's load curve is a smooth, exact function of the
-parameters, and the readings of a lab's few repeated runs pin it very tightly: on the random
-motor 7 of ``benchmarks/random_motors.py`` (``σ_e = 0``) the joint ``χ²`` rises from 5.5 to about
-50 when ``e`` moves by 0.002 or ``omega_s`` by 0.001 with ``(ψ, R_φ)`` refitted, narrower than any
+parameters, and the readings of a lab's few repeated runs pin it very tightly: the joint
+``χ²``'s valley, with ``(ψ, R_φ)`` refitted, can be narrower in ``e`` and ``omega_s`` than any
 scan's spacing. The scan runs at the stated noise, where such a valley is not seen, and the
 local search stops in a neighbouring one. But along ``e`` the valley floor descends smoothly to
-the truth when ``(R_φ, ψ, omega_s)`` follow it (there from ``χ²`` 45 to 2 over 0.1 in ``e``).
+the truth when ``(R_φ, ψ, omega_s)`` follow it.
 
 :func:`deterministic_walk` follows it: from the search's best point with ``σ_e`` set to 0, the
 other coordinates (all but ``e``) are refitted by least squares at each step in ``e``, predicted
@@ -14,15 +13,13 @@ linearly from the last two steps, past a bump of the floor and with shorter step
 valley bends (:func:`_one_way`); a last refit with ``e`` free starts from the walk's best point.
 It runs only where the deterministic limit reads a ``χ²`` within :data:`WORTH` times the best
 one's (a motor with noise reads far worse there). At ``σ_e = 0`` the members coincide, so one
-run serves an ensemble (:func:`.model.rows_records`) and a step costs a few seconds (motor 7's
-walk: 99 s, from ``χ²`` 48.7 to 2.0). Every point is logged: the search's result is the best
-logged point, never worse than before.
+run serves an ensemble (:func:`.model.rows_records`) and a step costs a few seconds. Every point
+is logged: the search's result is the best logged point, never worse than without the walk.
 
 The refit frees every coordinate but ``e`` and ``σ_e``: ``(R_φ, ψ, omega_s)``, and the speed scale
 where ``Φ0`` is unknown. A chaotic motor at ``σ_e = 0`` has no such valley: a change of ``2·10⁻⁴``
-in ``e`` moves its readings by hundreds of their standard deviations (motor 15), so the walk
-finds nothing there (skipped by the :data:`WORTH` rule, as on motor 15, or ended after a few
-halvings).
+in ``e`` can move its readings by hundreds of their standard deviations, so the walk finds
+nothing there (skipped by the :data:`WORTH` rule, or ended after a few halvings).
 """
 
 from __future__ import annotations
@@ -36,10 +33,9 @@ from .objective import Evaluation, Objective
 
 #: The least lowering of ``χ²`` for which the search moves to the walk's best point and measures
 #: the model's covariance there (the plain threshold ``χ²₁(0.95)``): a gain within the noise of
-#: ``χ²`` is no reason to move the metric. (Before the covariance was measured at
-#: ``σ_e ≥ 10⁻⁸``, :func:`.search.metric_point`, a chaotic motor's coinciding members at
-#: ``σ_e = 0`` made it hold the reading noise only: on motor 9 a walk that lowered ``χ²`` by
-#: 0.07 made the fit read 321 on 23.)
+#: ``χ²`` is no reason to move the metric. The covariance itself is measured at
+#: ``σ_e ≥ 10⁻⁸`` (:func:`.search.metric_point`): at ``σ_e = 0`` a chaotic motor's members
+#: coincide and would hold the reading noise only.
 WALK_GAIN = 3.84
 #: The walk runs where the deterministic limit's ``χ²`` is at most this many times the best's.
 WORTH = 2.0
@@ -96,10 +92,10 @@ def _one_way(
 
     A step whose refit does not lower the best ``χ²`` is refitted once more from where it ended
     (:data:`NFEV` evaluations rarely converge where the valley bends). The walk goes on past
-    :data:`PAST` such steps in a row (the floor has bumps: on motor 7 one of 10 units 0.01 before
-    the truth), then returns to its best point with the step halved; it ends when the step is
-    below :data:`SHORTEST` of :data:`STEP`, when the next step leaves the range of ``e``, or
-    after :data:`MAX_STEPS` passes.
+    :data:`PAST` such steps in a row (the valley floor has bumps short of the truth), then
+    returns to its best point with the step halved; it ends when the step is below
+    :data:`SHORTEST` of :data:`STEP`, when the next step leaves the range of ``e``, or after
+    :data:`MAX_STEPS` passes.
     """
     ie = obj.names.index("e")
     h = STEP * obj.span[ie]

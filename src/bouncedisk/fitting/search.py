@@ -371,8 +371,8 @@ def metric_point(obj: Objective, x: np.ndarray) -> np.ndarray:
     :data:`METRIC_E_SIGMA` (docs/model.md "Long-run statistics of chaotic motion").
 
     At ``e_sigma = 0`` every member runs the same orbit, so a chaotic motor's members coincide
-    and their covariance holds the reading noise only: measured there, the metric made random
-    motor 12's generating point read ``χ²`` 6.8 million on 23 and the fit inadequate. At
+    and their covariance holds the reading noise only: measured there, the metric can make a
+    chaotic motor's generating point read a ``χ²`` of millions and the fit inadequate. At
     :data:`METRIC_E_SIGMA` a chaotic point's members part (``tests/test_joint_fit.py``), as at
     the model's natural-measure ``1e-9``, while a periodic motor's converge to one orbit.
     """
@@ -426,9 +426,8 @@ def joint_candidates(
 
 #: Restitution noise levels at which a fitted ``e_sigma``'s joint candidates are read besides the
 #: scan's stated one (:func:`at_noise_levels`), about every 0.03 of the range [0, 0.1]. Not 0,
-#: the deterministic limit being the walk's (:mod:`.limit_walk`): before the covariance was
-#: measured at :func:`metric_point`, a candidate at 0 set the metric where a chaotic motor's
-#: members coincide (random motor 6 read chi2 1081); with it, 0 has not been tried.
+#: the deterministic limit being the walk's (:mod:`.limit_walk`): without :func:`metric_point`,
+#: a candidate at 0 would set the metric where a chaotic motor's members coincide.
 CANDIDATE_NOISE = (0.01, 0.06, 0.09)
 
 
@@ -437,10 +436,10 @@ def at_noise_levels(obj: Objective, xs: list[np.ndarray]) -> list[np.ndarray]:
     level (none without).
 
     The scan reads the run-ups at the stated noise, and at fixed other coordinates the joint
-    ``χ²`` is sharp in ``e_sigma`` (random motor 5, ``e_sigma`` 0.049: 5.0 at 0.05, 15.9 at 0.04,
-    78.7 at 0.03), so a basin whose noise is far from the stated one is never a candidate; read
-    at the levels, its load curve can make it one. More candidates then reproduce both data
-    sets, so the joint refinement (:func:`joint_missed`) runs less often.
+    ``χ²`` is sharp in ``e_sigma`` (a change of 0.01 can multiply it several times), so a basin
+    whose noise is far from the stated one is never a candidate; read at the levels, its load
+    curve can make it one. More candidates then reproduce both data sets, so the joint
+    refinement (:func:`joint_missed`) runs less often.
     """
     if "e_sigma" not in obj.names:
         return []
@@ -464,8 +463,8 @@ def joint_missed(obj: Objective, scores: list[float]) -> bool:
 
     A cheap candidate is one model realization against the data's, so it is consistent with the
     data when its ``χ²`` is below twice the 95 % point of ``χ²(n)``
-    (:func:`.uncertainty.realization_limit`, as for the scan's points). Above that for every candidate, the search has not
-    reached the joint valley.
+    (:func:`.uncertainty.realization_limit`, as for the scan's points). Above that for every
+    candidate, the search has not reached the joint valley.
 
     Parameters
     ----------
