@@ -220,7 +220,7 @@ def apply_overrides(raw: dict, overrides: list[str] | str, source: str = "--set"
 
 
 #: Where a scene path that does not exist is looked up: ``fig3``, ``fig3.yaml`` or the checkout's
-#: ``workflow/config/scenes/fig3.yaml`` name the scene the package ships (docs/formats.md "Scenes").
+#: ``workflow/config/scenes/fig3.yaml`` name the scene the package ships (docs/formats.md "Scene file").
 SHIPPED_SCENE_FOLDERS = ("", "workflow/config/scenes")
 
 
