@@ -1,4 +1,4 @@
-"""The design maps' steady speeds against long runs and the torque–speed curves (issue targets).
+"""The design maps' steady speeds against long runs and the torque–speed curves.
 
 Run:  PYTHONPATH=src python benchmarks/bench_map_steady.py [--out benchmarks/out/map_steady.json]
 
@@ -56,7 +56,7 @@ def main() -> None:
             })  # fmt: skip
             print(rows[-1]["measurement"], rows[-1]["result"], flush=True)
     record = {
-        "title": "The design maps' steady speeds against long runs",
+        "title": "Steady speeds of the design maps against long runs",
         "command": "PYTHONPATH=src python benchmarks/bench_map_steady.py",
         "date": datetime.date.today().isoformat(),
         "machine": f"{platform.machine()}, {os.cpu_count()} cores (shared), Python "

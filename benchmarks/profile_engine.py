@@ -230,7 +230,7 @@ def main() -> None:
     if args.record:
         from record import write_record
 
-        write_record("engine_profile", "Where the engine's time goes per impact", table)
+        write_record("engine_profile", "Where the time of an impact goes in the engine", table)
 
 
 if __name__ == "__main__":

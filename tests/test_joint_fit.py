@@ -179,7 +179,7 @@ def test_load_curve_errors_before_work(data_dir, tmp_path, capsys):
     out = tmp_path / "fit.nc"
     cases = [
         (["--load", str(tmp_path / "none.csv")], "file not found"),
-        (["--load", str(data_dir / "load.csv"), str(data_dir / "load.csv")], "same file"),
+        (["--load", str(data_dir / "load.csv"), "--load", str(data_dir / "load.csv")], "same file"),
         (["--load", str(data_dir / "run.csv")], "same file"),
     ]
     for extra, text in cases:

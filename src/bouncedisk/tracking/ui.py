@@ -16,6 +16,7 @@ The server is MLflow's own application (uvicorn on the FastAPI wrapper of its Fl
 
 from __future__ import annotations
 
+import asyncio
 import json
 import os
 import socket
@@ -141,7 +142,11 @@ def serve(
             webbrowser.open(url)
         except Exception:  # noqa: BLE001 - no usable browser: the address is printed
             pass
+    # the serving coroutine made here, so that a Ctrl-C or SIGTERM that comes before the loop
+    # has started it closes it (no "never awaited" warning at exit)
+    serving = server.serve(sockets=[sock])
     try:
-        server.run(sockets=[sock])
+        asyncio.run(serving)
     finally:
+        serving.close()
         sock.close()
