@@ -536,15 +536,9 @@ _FIT_CLAIMS = (
 
 #: What only a joint fit writes: a fit file with one of them is a joint fit, and every field
 #: the fit checks read must be in it.
-JOINT_MARKERS = (
-    "load_speed_measured",
-    "load_speed_band_low",
-    "load_speed_band_high",
-    "interval_low",
-    "interval_high",
-    "interval_identified",
-    "generating_value",
-    "data_set",
+JOINT_MARKERS = tuple(
+    v for v in FIT_VARIABLES if v not in ("search_low", "search_high", "parameter")
+) + (
     "load_curve_file",
     "load_curve_sha256",
     "load_curve_synthetic",
