@@ -19,8 +19,10 @@ from __future__ import annotations
 import asyncio
 import json
 import os
+import signal
 import socket
 import sys
+import threading
 import warnings
 import webbrowser
 from collections.abc import Callable
@@ -34,6 +36,8 @@ LAYOUT_KEY = "mlflow.workflowType_v1"
 LAYOUT = "machine_learning"
 #: The page that saves :data:`LAYOUT` and goes on to the runs table.
 LANDING = "/bouncedisk/runs"
+#: The signals that stop the server.
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
 def runs_table_path(experiment_id: str) -> str:
@@ -136,17 +140,22 @@ def serve(
     url = f"http://{HOST}:{sock.getsockname()[1]}{LANDING}"
     config = uvicorn.Config(app, log_level="warning", access_log=False, lifespan="on")
     server = uvicorn.Server(config)
-    announce(url)
-    if open_browser and has_display():
-        try:
-            webbrowser.open(url)
-        except Exception:  # noqa: BLE001 - no usable browser: the address is printed
-            pass
-    # the serving coroutine made here, so that a Ctrl-C or SIGTERM that comes before the loop
-    # has started it closes it (no "never awaited" warning at exit)
-    serving = server.serve(sockets=[sock])
+    # from here a Ctrl-C or SIGTERM only asks the server to stop (uvicorn checks the request
+    # once started, and takes the signals over while it serves): no exception can land inside
+    # the construction of the event loop or of the serving task
+    stop = {}
+    if threading.current_thread() is threading.main_thread():  # signals are the main thread's
+        for sig in STOP_SIGNALS:
+            stop[sig] = signal.signal(sig, lambda *_: setattr(server, "should_exit", True))
     try:
-        asyncio.run(serving)
+        announce(url)
+        if open_browser and has_display():
+            try:
+                webbrowser.open(url)
+            except Exception:  # noqa: BLE001 - no usable browser: the address is printed
+                pass
+        asyncio.run(server.serve(sockets=[sock]))
     finally:
-        serving.close()
+        for sig, handler in stop.items():
+            signal.signal(sig, handler)
         sock.close()
