@@ -33,6 +33,7 @@ with log_to(snakemake.log[0]) as log:
     curve = refined_torque_speed(scene, loads, resolution or 0.0, rounds, cores=snakemake.threads)
     ds = to_dataset(scene, curve, time.perf_counter() - start)
     ds.attrs["fit_file"] = "fit/prototype.nc (in the results folder)"
+    ds.attrs["motor_description"] = "the fitted model of the synthetic prototype motor, in SI units"
     write_dataset(ds, snakemake.output[0])
     s = curve.summary()
     log.info("fitted motor %s: stall %s N*m %s (%s), max power %s W (%s), %d loads", fitted,

@@ -65,7 +65,7 @@ def fig_fit_load(fit: xr.Dataset) -> Figure:
     ax.set_ylabel("mean speed [rad/s]")
     ax.legend(fontsize=8, loc="upper right")
     a = fit.attrs
-    ax.set_title(f"load curve: chi2 {a.get('chi2_load', math.nan):.3g} on "
+    ax.set_title(f"load curve: χ² {a.get('chi2_load', math.nan):.3g} on "
                  f"{a.get('n_load_readings', len(t))} readings (joint fit)", fontsize=9)  # fmt: skip
     rax.fill_between(t, v("load_speed_band_low") - mean, v("load_speed_band_high") - mean,
                      color="C0", alpha=0.15, lw=0)  # fmt: skip

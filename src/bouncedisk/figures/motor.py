@@ -71,8 +71,11 @@ def _fig5_fitted(ax, axr, fitted: xr.Dataset) -> None:
         ("trend_measured", "--", "first-order trend of the data"),
         ("trend_fitted", ":", "first-order trend of the fitted model"),
     ):
-        if name in fitted:
-            ax.plot(t, fitted[name].values, style, color="k", lw=1, label=label)
+        if name in fitted:  # from where it reaches the run-up's start (its fitted start can be
+            # below it: a run-up that is not first order at its foot)
+            y = fitted[name].values
+            y = np.where(y >= fitted["omega_measured"].values[0], y, np.nan)
+            ax.plot(t, y, style, color="k", lw=1, label=label)
     resid = fitted["omega_measured"].values - mean
     if "residual_band_low" in fitted:
         axr.fill_between(t, fitted["residual_band_low"].values,
@@ -97,7 +100,7 @@ def _fig5_fitted(ax, axr, fitted: xr.Dataset) -> None:
         f"τ = {a.get('model_time_constant_s', float('nan')):.3g} s; "
         f"not identified: {a.get('not_identified', '?')}"
         + (
-            f"\nFIT INADEQUATE: chi2 {a.get('chi2', float('nan')):.4g} on "
+            f"\nFIT INADEQUATE: χ² {a.get('chi2', float('nan')):.4g} on "
             f"{a.get('n_statistics', '?')} statistics (p = {a.get('chi2_p_value', float('nan')):.2g})"
             if not a.get("fit_adequate", 1)
             else ""
