@@ -72,7 +72,7 @@ def test_linear_statistics_of_the_mean_are_the_mean_of_the_statistics():
 
 
 def test_the_statistics_of_many_records_are_each_records_own_bit_for_bit():
-    """records_stats (one Welch call for all rows, what a fit's ensembles use) gives every row
+    """records_stats (one ripple_psd call for all rows, what a fit's ensembles use) gives every row
     the statistics record_stats gives it alone, to the bit: batching changes no fit. Rows of
     other noise levels and a flat record (no ripple: its spectral statistics are 0) included."""
     rng = np.random.default_rng(7)
@@ -101,3 +101,21 @@ def test_kicks_carry_r_phi_where_the_time_constant_scatters():
     tau = np.exp(base[:, LOG_TAU])
     assert tau.std(ddof=1) / tau.mean() > 0.2  # measured 0.53
     assert base[:, KICKS].std(ddof=1) < 0.05  # measured 0.024 (2.4 % in the variance)
+
+
+@pytest.mark.parametrize("length", [3, 100, 255, 256, 257, 1001])
+def test_the_ripple_spectrum_is_welchs_estimate(length):
+    """ripple_psd is scipy's Welch estimate with its defaults (periodic Hann, half overlap,
+    constant detrend, density, one-sided), to round-off, for segments odd and even, whole and
+    shorter than the record."""
+    from scipy.signal import welch
+
+    from bouncedisk.fitting.statistics import PSD_SEGMENT, ripple_psd
+
+    rng = np.random.default_rng(length)
+    r = rng.normal(size=(3, length)) + 5.0 * np.sin(0.3 * np.arange(length))
+    f, p = ripple_psd(r, DT)
+    f0, p0 = welch(r, fs=1.0 / DT, nperseg=min(PSD_SEGMENT, length))
+    np.testing.assert_allclose(f, f0, rtol=1e-14)
+    np.testing.assert_allclose(p, p0, rtol=1e-10, atol=1e-13 * p0.max())
+    assert ripple_psd(r[1], DT)[1].tobytes() == p[1].tobytes()

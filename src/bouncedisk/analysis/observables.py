@@ -340,29 +340,41 @@ class FirstOrderTrend:
         return self.steady * (1.0 - x) + self.omega0 * x
 
 
-def _line_fit(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
-    """Least-squares line ``y ≈ a + b x`` in closed form: ``(a, b, Σ r²)``.
+def _line_fits(
+    x: np.ndarray, y: np.ndarray, ym: float, dy: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Least-squares lines ``y ≈ a + b x`` in closed form, one per row of ``x``: ``(a, b, Σ r²)``.
 
-    Centred sums (stable when ``x`` barely varies), each a fixed-order ``np.add.reduce`` of
-    elementwise products: no BLAS call, so the result does not depend on which kernel a CPU picks
-    or on the thread count (README, "Reproducible"). A constant ``x`` gives ``b = 0``.
+    ``ym`` and ``dy`` are ``y``'s mean and centred values (the same for every row). Centred sums
+    (stable when ``x`` barely varies), each a fixed-order ``np.add.reduce`` of elementwise
+    products along the row: no BLAS call, so the result does not depend on which kernel a CPU
+    picks or on the thread count (README, "Reproducible"), and a row gives the same bits alone
+    or stacked with others. A constant row gives ``b = 0``.
     """
-    xm, ym = float(np.add.reduce(x)) / len(x), float(np.add.reduce(y)) / len(y)
-    dx, dy = x - xm, y - ym
-    sxx = float(np.add.reduce(dx * dx))
-    b = float(np.add.reduce(dx * dy)) / sxx if sxx > 0.0 else 0.0
+    n = x.shape[-1]
+    xm = np.add.reduce(x, axis=-1) / n
+    dx = x - xm[..., None]
+    sxx = np.add.reduce(dx * dx, axis=-1)
+    sxy = np.add.reduce(dx * dy, axis=-1)
+    b = np.where(sxx > 0.0, sxy / np.where(sxx > 0.0, sxx, 1.0), 0.0)
     a = ym - b * xm
-    r = y - (a + b * x)
-    return a, b, float(np.add.reduce(r * r))
+    r = y - (a[..., None] + b[..., None] * x)
+    return a, b, np.add.reduce(r * r, axis=-1)
+
+
+#: Points of the coarse grid of ``log τ`` that brackets the first-order trend's minimum.
+TREND_GRID = 25
 
 
 def first_order_trend(t: np.ndarray, omega: np.ndarray) -> FirstOrderTrend:
     """Least-squares first-order response (steady value and time constant) through ``(t, Ω)``.
 
     For a fixed ``τ`` the model ``Ω∞ (1 − x) + Ω0 x`` with ``x = exp(−(t − t0)/τ)`` is the line
-    ``Ω∞ + (Ω0 − Ω∞) x`` (:func:`_line_fit`, closed form), so the fit is a bounded 1-D search over
-    ``log τ`` with that solve inside (variable projection). Times enter only as ``t − t0``: the
-    time origin does not matter. The ripple is the RMS of the residual about the trend.
+    ``Ω∞ + (Ω0 − Ω∞) x`` (:func:`_line_fits`, closed form), so the fit is a bounded 1-D search
+    over ``log τ`` with that solve inside (variable projection): a grid of :data:`TREND_GRID`
+    values (solved together), then a bounded search between the best one's neighbours. Times
+    enter only as ``t − t0``: the time origin does not matter. The ripple is the RMS of the
+    residual about the trend.
     """
     from scipy.optimize import minimize_scalar
 
@@ -371,14 +383,16 @@ def first_order_trend(t: np.ndarray, omega: np.ndarray) -> FirstOrderTrend:
     t0 = float(t[0])
     span = float(t[-1] - t0) or 1.0
     dt = t - t0
+    ym = float(np.add.reduce(y)) / len(y)
+    dy = y - ym
 
     def solve(log_tau: float) -> tuple[float, float, float]:
-        a, b, cost = _line_fit(np.exp(-dt / math.exp(log_tau)), y)
-        return cost, a, a + b
+        a, b, cost = _line_fits(np.exp(-dt / math.exp(log_tau)), y, ym, dy)
+        return float(cost), float(a), float(a + b)
 
-    lo, hi = math.log(1e-4 * span), math.log(10.0 * span)
-    grid = np.linspace(lo, hi, 25)
-    costs = [solve(g)[0] for g in grid]
+    grid = np.linspace(math.log(1e-4 * span), math.log(10.0 * span), TREND_GRID)
+    taus = np.array([math.exp(g) for g in grid])  # the scalar exp, as in solve
+    costs = _line_fits(np.exp(-dt[None, :] / taus[:, None]), y, ym, dy)[2]
     k = int(np.argmin(costs))
     a, b = grid[max(0, k - 1)], grid[min(len(grid) - 1, k + 1)]
     best = minimize_scalar(
