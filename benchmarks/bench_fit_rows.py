@@ -31,8 +31,8 @@ from bouncedisk.engine import InitialState, simulate_arrays
 from bouncedisk.engine.loads import row_trajectories
 from bouncedisk.fitting import FitSettings, fit_curve
 from bouncedisk.fitting import objective as objective_module
-from bouncedisk.fitting.model import member_records
-from bouncedisk.fitting.statistics import EnsembleStats, records_stats
+from bouncedisk.fitting.members import member_records
+from bouncedisk.fitting.summary_stats import EnsembleStats, records_stats
 from bouncedisk.io.load_curves import read_load_curve
 from bouncedisk.io.runup_curves import read_curve
 from bouncedisk.model.engine_config import motor_config

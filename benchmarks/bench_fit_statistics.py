@@ -1,6 +1,6 @@
 """What the fit's statistics cost per ensemble: the members' statistics reduced one
 record at a time on the member threads (as before) against all records at once
-(:func:`bouncedisk.fitting.statistics.records_stats`, one Welch call for every member), at the
+(:func:`bouncedisk.fitting.summary_stats.records_stats`, one Welch call for every member), at the
 shipped motor's generating point on its run-up's grid. Both give the same bits (checked here).
 
 Run:  python benchmarks/bench_fit_statistics.py [--members 16] [--repeat 5]
@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from bouncedisk.fitting.core import data_layout, prepare_runs
-from bouncedisk.fitting.model import EnsembleSpec, member_records
-from bouncedisk.fitting.statistics import record_stats, records_stats
+from bouncedisk.fitting.members import EnsembleSpec, member_records
+from bouncedisk.fitting.summary_stats import record_stats, records_stats
 from bouncedisk.io.runup_curves import read_curve
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -1,7 +1,7 @@
 """Random-motor recovery: the joint fit on motors it was never tuned on (the test of record).
 
 A seeded scrambled Sobol' sample (``scipy.stats.qmc.Sobol``) of motors over the search box
-(``bouncedisk.fitting.model.BOUNDS``: ``e``, ``log10 R_phi``, ``psi``, ``omega_s``, and the
+(``bouncedisk.fitting.members.BOUNDS``: ``e``, ``log10 R_phi``, ``psi``, ``omega_s``, and the
 restitution noise ``e_sigma`` over [0, 0.1]); every fourth motor has ``e_sigma = 0`` (the
 deterministic limit). For each, made by the model: one run-up (one member, 0.06 s at 15 kHz,
 Gaussian reading noise 0.05 rad/s) and one load curve of ``--loads`` loads from 0 to 1.25 times
@@ -48,7 +48,7 @@ from scipy.stats import binom, binomtest
 
 from bouncedisk.fitting import FitSettings, fit_curve, fit_dataset, synthesize_curve
 from bouncedisk.fitting import loadpart as lp
-from bouncedisk.fitting.model import BOUNDS
+from bouncedisk.fitting.members import BOUNDS
 from bouncedisk.io.load_curves import LoadCurveData, read_load_curve
 from bouncedisk.io.runup_curves import read_curve, write_curve
 from bouncedisk.studies.torque_speed import synthetic_load_curve

@@ -12,8 +12,8 @@ import yaml
 from bouncedisk.cli import main
 from bouncedisk.fitting import core
 from bouncedisk.fitting.core import data_layout, prepare_runs
-from bouncedisk.fitting.model import synthesize_curve
-from bouncedisk.fitting.statistics import STATS
+from bouncedisk.fitting.members import synthesize_curve
+from bouncedisk.fitting.summary_stats import STATS
 from bouncedisk.io.runup_curves import read_curve, write_curve
 from bouncedisk.model.errors import InputError
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from bouncedisk.fitting import loadpart as lp
-from bouncedisk.fitting.model import thread_map
+from bouncedisk.fitting.members import thread_map
 
 
 def test_an_interrupt_cancels_the_members_not_started():

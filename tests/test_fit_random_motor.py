@@ -26,7 +26,7 @@ def _bench() -> SimpleNamespace:
 
 def test_the_sample_is_seeded_spans_the_box_and_has_deterministic_motors():
     """16 motors: the same every time, inside the search box, every fourth at ``e_sigma = 0``."""
-    from bouncedisk.fitting.model import BOUNDS
+    from bouncedisk.fitting.members import BOUNDS
 
     rm = _bench()
     a, b = rm.motors(16), rm.motors(16)

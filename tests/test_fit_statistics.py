@@ -1,12 +1,12 @@
-"""The fit's statistics (bouncedisk.fitting.statistics): closed forms, linearity, R_φ scaling."""
+"""The fit's statistics (bouncedisk.fitting.summary_stats): closed forms, linearity, R_φ scaling."""
 
 import math
 
 import numpy as np
 import pytest
 
-from bouncedisk.fitting.model import EnsembleSpec, member_records
-from bouncedisk.fitting.statistics import (
+from bouncedisk.fitting.members import EnsembleSpec, member_records
+from bouncedisk.fitting.summary_stats import (
     STAT_LONG_NAMES,
     STAT_UNITS,
     STATISTICS,
@@ -110,7 +110,7 @@ def test_the_ripple_spectrum_is_welchs_estimate(length):
     shorter than the record."""
     from scipy.signal import welch
 
-    from bouncedisk.fitting.statistics import PSD_SEGMENT, ripple_psd
+    from bouncedisk.fitting.summary_stats import PSD_SEGMENT, ripple_psd
 
     rng = np.random.default_rng(length)
     r = rng.normal(size=(3, length)) + 5.0 * np.sin(0.3 * np.arange(length))

@@ -22,7 +22,7 @@ from bouncedisk.fitting import (
     synthesize_curve,
 )
 from bouncedisk.fitting.core import MAX_SAMPLES
-from bouncedisk.fitting.model import MODEL_E_SIGMA, EnsembleSpec, member_records, uniform_grid
+from bouncedisk.fitting.members import MODEL_E_SIGMA, EnsembleSpec, member_records, uniform_grid
 from bouncedisk.io.runup_curves import MotorCurve, read_curve, write_curve
 from bouncedisk.model.errors import InputError
 
@@ -396,7 +396,7 @@ def test_the_mean_of_runs_weighs_m_times_more(tmp_path):
     """χ² of the mean of M run-ups: the data part of the covariance is C/M (objective docstring),
     so at one point χ²(M) / χ²(1) = (1 + 1/K) / (1/M + 1/K) exactly."""
     from bouncedisk.fitting.core import data_layout
-    from bouncedisk.fitting.model import param_names
+    from bouncedisk.fitting.members import param_names
     from bouncedisk.fitting.objective import Objective
 
     curve = read_curve(_run_curve(tmp_path / "a.csv"))

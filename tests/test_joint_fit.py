@@ -15,7 +15,7 @@ from bouncedisk.cli import main
 from bouncedisk.engine import EngineConfig, InitialState
 from bouncedisk.fitting import FitSettings, fit_curve, fit_dataset, summary_text, synthesize_curve
 from bouncedisk.fitting import loadpart as lp
-from bouncedisk.fitting.model import BOUNDS
+from bouncedisk.fitting.members import BOUNDS
 from bouncedisk.io.load_curves import read_load_curve
 from bouncedisk.io.runup_curves import read_curve, write_curve
 from bouncedisk.studies.torque_speed import synthetic_load_curve
@@ -355,7 +355,7 @@ def test_the_joint_stage_finds_the_valley_near_the_period_doubling(tmp_path):
     from bouncedisk.fitting import core
     from bouncedisk.fitting import search as se
     from bouncedisk.fitting.joint import load_part
-    from bouncedisk.fitting.model import EnsembleSpec, param_names
+    from bouncedisk.fitting.members import EnsembleSpec, param_names
     from bouncedisk.fitting.objective import Objective
     from bouncedisk.fitting.uncertainty import adequate
 
@@ -521,7 +521,7 @@ def test_a_fitted_restitution_noise_is_the_points_own_and_zero_is_deterministic(
     """With ``e_sigma`` a search coordinate the members use the point's own value, not the stated
     one; at 0 (the deterministic limit) every member runs the same orbit, so the members differ
     only by their measurement noise and the load readings of all members coincide."""
-    from bouncedisk.fitting.model import (
+    from bouncedisk.fitting.members import (
         EnsembleSpec,
         member_records,
         param_names,
@@ -579,7 +579,7 @@ def test_the_metric_is_measured_where_a_chaotic_motors_members_part():
     from types import SimpleNamespace
 
     from bouncedisk.fitting import search as se
-    from bouncedisk.fitting.model import EnsembleSpec, member_records
+    from bouncedisk.fitting.members import EnsembleSpec, member_records
     from bouncedisk.fitting.objective import snap
 
     names = ["e", "log10_r_phi", "psi", "omega_s", "e_sigma"]

@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from bouncedisk.fitting import detlinalg
-from bouncedisk.fitting.basins import CHI2_DIGITS, choose, list_basins, rank_key
 from bouncedisk.fitting.core import FitSettings, fit_curve
-from bouncedisk.fitting.model import synthesize_curve
+from bouncedisk.fitting.likelihood_basins import CHI2_DIGITS, choose, list_basins, rank_key
+from bouncedisk.fitting.members import synthesize_curve
 from bouncedisk.fitting.output import fit_dataset
 from bouncedisk.io.runup_curves import MotorCurve, read_curve, write_curve
 
@@ -37,7 +37,7 @@ import json, sys
 import numpy as np
 from bouncedisk.io.runup_curves import read_curve
 from bouncedisk.fitting.core import FitSettings, data_layout, fit_curve, prepare_runs
-from bouncedisk.fitting.statistics import EnsembleStats, record_stats
+from bouncedisk.fitting.summary_stats import EnsembleStats, record_stats
 from bouncedisk.analysis.observables import first_order_trend
 c = read_curve(sys.argv[1])
 (r,), _, _ = prepare_runs(c)
@@ -93,7 +93,7 @@ def test_fit_estimate_equal_under_kernels_threads_and_round_off(curve_csv):
     """A small fit gives the same estimate (to 1e-6 relative) under another BLAS kernel, one or
     two BLAS threads, one or two fit threads, and with the data perturbed by 1e-15 relative
     noise: every evaluated point is on a lattice, every reduction BLAS-free, every ranking a
-    total order (:mod:`bouncedisk.fitting.basins`)."""
+    total order (:mod:`bouncedisk.fitting.likelihood_basins`)."""
     curve = read_curve(curve_csv)
     ref = fit_curve(curve, SMALL).x
     rng = np.random.default_rng(0)

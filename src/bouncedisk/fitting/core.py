@@ -1,7 +1,7 @@
 """Fit the model to a curve: data preparation, search, profiles, the fitted ensemble.
 
 The steps: bound the work (:func:`prepare_curve`), reduce the data to its statistics
-(:mod:`~bouncedisk.fitting.statistics`), search the synthetic likelihood (:mod:`.search`), profile every parameter
+(:mod:`~bouncedisk.fitting.summary_stats`), search the synthetic likelihood (:mod:`.search`), profile every parameter
 (:mod:`.uncertainty`), and run the fitted model's ensemble for the band of Fig. 5.
 """
 
@@ -20,13 +20,20 @@ from ..io.load_curves import LoadCurveData
 from ..io.runup_curves import MotorCurve
 from ..model import limits
 from ..model.errors import InputError
-from .basins import Basin, choose, list_basins
 from .joint import LoadFit, joint_consistent, load_part, load_result
-from .model import MODEL_E_SIGMA, EnsembleSpec, member_records, param_names, physical, uniform_grid
+from .likelihood_basins import Basin, choose, list_basins
+from .members import (
+    MODEL_E_SIGMA,
+    EnsembleSpec,
+    member_records,
+    param_names,
+    physical,
+    uniform_grid,
+)
 from .objective import Objective
 from .runs import check_runs, mean_curve
 from .search import SearchSettings, confirm_points, search
-from .statistics import (
+from .summary_stats import (
     STATS,
     Layout,
     member_band,
@@ -280,8 +287,8 @@ def prepare_runs(
 
 def fit_basins(obj: Objective, members: int, thr: float) -> list[Basin]:
     """Every basin of evaluated points (``members`` members, current metric) within ``thr`` of
-    the best ``χ²`` (:func:`.basins.list_basins`), ordered so the chosen one
-    (:func:`.basins.choose`) is first."""
+    the best ``χ²`` (:func:`.likelihood_basins.list_basins`), ordered so the chosen one
+    (:func:`.likelihood_basins.choose`) is first."""
     pts = {tuple(ev.x): ev.x for ev in obj.log if ev.members == members}
     xs = np.array(list(pts.values()))
     chis = np.array([obj.chi2_now(x, members) for x in xs])

@@ -17,7 +17,7 @@ from ..io.runup_curves import MotorCurve
 from ..model.errors import InputError
 from .loadpart import LoadPart, check_window
 from .loadpart import band as load_band
-from .model import EnsembleSpec
+from .members import EnsembleSpec
 from .objective import Objective, snap
 from .uncertainty import Profile, all_profiles, birge, chi2_level, consistent_points, fit_limit
 

@@ -13,7 +13,7 @@ linearly from the last two steps, past a bump of the floor and with shorter step
 valley bends (:func:`_one_way`); a last refit with ``e`` free starts from the walk's best point.
 It runs only where the deterministic limit reads a ``χ²`` within :data:`WORTH` times the best
 one's (a motor with noise reads far worse there). At ``σ_e = 0`` the members coincide, so one
-run serves an ensemble (:func:`.model.rows_records`) and a step costs a few seconds. Every point
+run serves an ensemble (:func:`.members.rows_records`) and a step costs a few seconds. Every point
 is logged: the search's result is the best logged point, never worse than without the walk.
 
 The refit frees every coordinate but ``e`` and ``σ_e``: ``(R_φ, ψ, omega_s)``, and the speed scale

@@ -22,7 +22,7 @@ from ..io.provenance import sha256_file
 from .core import FitResult
 from .joint import stated_truth, truth_coordinate
 from .loadpart import LOAD_BAND, LOAD_MEMBERS
-from .model import BOUNDS
+from .members import BOUNDS
 from .uncertainty import identified
 
 #: Data sets of the identifiability table, in order: (key of ``LoadFit.intervals``, label).

@@ -42,7 +42,7 @@ from ..model.engine_config import motor_config
 from ..model.errors import InputError
 from ..model.params import Parameters, PhysicalParameters
 from . import detlinalg
-from .model import restitution_noise, thread_map
+from .members import restitution_noise, thread_map
 
 #: Load members per evaluation of the load part (local search, profiles).
 LOAD_MEMBERS = 8
@@ -208,8 +208,8 @@ class LoadPart:
 
     def set_cov(self, values: np.ndarray) -> None:
         """Hold the members' covariance across loads at that of ``values`` ``(K, n)``,
-        shrunk toward its diagonal (as the run-ups', :func:`.statistics.regularized_cov`)."""
-        from .statistics import EnsembleStats, regularized_cov
+        shrunk toward its diagonal (as the run-ups', :func:`.summary_stats.regularized_cov`)."""
+        from .summary_stats import EnsembleStats, regularized_cov
 
         ens = EnsembleStats.from_values(values)
         self.cov_model = regularized_cov(ens.cov, np.full(self.n, self.floor))
@@ -260,6 +260,6 @@ def members_for(k: int) -> int:
 def band(part: LoadPart, theta: dict[str, float], x: np.ndarray, members: int = LOAD_BAND) -> dict:
     """The fitted model's load curve: mean of ``members`` members, the 95 % interval of the mean
     (Student) and the members' 2.5–97.5 % band, at every measured load."""
-    from .statistics import member_band
+    from .summary_stats import member_band
 
     return member_band(part.values(theta, x, members))

@@ -1,7 +1,7 @@
 """The objective: a synthetic likelihood of the data's statistics under the model's ensemble.
 
-For a parameter point ``θ`` the model's ``K`` members (:func:`.model.member_records`) give
-statistics ``s_k(θ)`` (:func:`.statistics.record_stats`) with mean ``μ(θ)``. A measured curve is
+For a parameter point ``θ`` the model's ``K`` members (:func:`.members.member_records`) give
+statistics ``s_k(θ)`` (:func:`.summary_stats.record_stats`) with mean ``μ(θ)``. A measured curve is
 one more realization, so its statistics differ from ``μ(θ)`` by the across-member spread ``C``
 (which includes the measurement noise, added to every member); the data's statistics ``s_d`` are
 the mean over ``M`` run-ups of one motor (``M = 1`` for one curve, :mod:`~bouncedisk.fitting.runs`), which spreads
@@ -10,7 +10,7 @@ by ``C / M``, and the model's mean has the Monte-Carlo error ``C / K``:
     χ²(θ) = (s_d − μ(θ))ᵀ [C (1/M + 1/K)]⁻¹ (s_d − μ(θ)),
 
 ``−2 log`` of a Gaussian synthetic likelihood (Wood, Nature 466, 1102, 2010) with ``C`` held at
-its value near the optimum (regularized, :func:`.statistics.regularized_cov`). The members'
+its value near the optimum (regularized, :func:`.summary_stats.regularized_cov`). The members'
 noise streams are fixed (common random numbers), so ``χ²`` is deterministic for a seed.
 
 With load curves (:mod:`.loadpart`) the objective is the joint ``χ²`` of both experiments, the
@@ -36,10 +36,10 @@ import numpy as np
 
 from ..io.runup_curves import MotorCurve
 from . import detlinalg
-from .basins import rank_key
+from .likelihood_basins import rank_key
 from .loadpart import LoadPart, members_for
-from .model import BOUNDS, EnsembleSpec, member_records, rows_records, thread_map
-from .statistics import EnsembleStats, Layout, records_stats, regularized_cov, stat_floor
+from .members import BOUNDS, EnsembleSpec, member_records, rows_records, thread_map
+from .summary_stats import EnsembleStats, Layout, records_stats, regularized_cov, stat_floor
 
 #: The data an objective can see (:meth:`Objective.seeing`).
 PARTS = ("runup", "load", "both")
@@ -83,7 +83,7 @@ class Objective:
     curve : MotorCurve
         The (possibly downsampled) measured curve.
     names : list of str
-        Search coordinates (:func:`.model.param_names`).
+        Search coordinates (:func:`.members.param_names`).
     layout : Layout
         Where the statistics are taken.
     target : ndarray
@@ -181,7 +181,7 @@ class Objective:
 
     def prefetch(self, xs, members: int | None = None) -> None:
         """Evaluate the points ``xs`` not yet cached; those that share ``(e, omega_s, σ_e)``
-        together, one axial run per member (:func:`.model.rows_records`).
+        together, one axial run per member (:func:`.members.rows_records`).
 
         The statistics are those :meth:`ensemble` gives each point, bit for bit; a point that
         is never read costs a share of a run. The scan's ψ grid and a least-squares step's
@@ -235,7 +235,7 @@ class Objective:
 
     def own_residuals(self, x: np.ndarray, members: int) -> np.ndarray:
         """Whitened residuals with the run-ups' covariance measured at ``x`` itself, on its own
-        ``members`` members (regularized as the held one, :func:`.statistics.regularized_cov`);
+        ``members`` members (regularized as the held one, :func:`.summary_stats.regularized_cov`);
         the load part's as held.
 
         The held covariance was measured near the best point; in another regime the members
@@ -309,7 +309,7 @@ class Objective:
 
     def best(self, members: int | None = None) -> Evaluation:
         """The best logged evaluation with ``members`` members under the current metric
-        (ties, and ``χ²`` equal to :data:`.basins.CHI2_DIGITS` digits, go to the smaller point in
+        (ties, and ``χ²`` equal to :data:`.likelihood_basins.CHI2_DIGITS` digits, go to the smaller point in
         coordinate order: the choice does not depend on the order points were logged in)."""
         k = members or self.members
         pts = {tuple(ev.x): ev.x for ev in self.log if ev.members == k}

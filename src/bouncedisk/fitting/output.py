@@ -18,8 +18,8 @@ from scipy.stats import chi2 as chi2_dist
 from ..analysis.observables import first_order_trend
 from ..io.provenance import base_attrs, new_run_id, sha256_file
 from .core import FitResult
-from .model import BOUNDS
-from .statistics import STAT_LONG_NAMES, STAT_UNITS, STATS, trend_stride
+from .members import BOUNDS
+from .summary_stats import STAT_LONG_NAMES, STAT_UNITS, STATS, trend_stride
 from .uncertainty import THRESHOLD, adequate, identified
 
 #: Public name: (search coordinate, transform, units, long name).
@@ -182,7 +182,7 @@ def _statistics(fit: FitResult) -> dict:
 
 
 def _basins(fit: FitResult) -> xr.Dataset:
-    """Every acceptable basin (:mod:`.basins`): its best point, ``χ²`` and size; the first is the
+    """Every acceptable basin (:mod:`.likelihood_basins`): its best point, ``χ²`` and size; the first is the
     estimate's."""
     n = len(fit.basins)
     x = np.array([b.x for b in fit.basins]).reshape(n, len(fit.names))

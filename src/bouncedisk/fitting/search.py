@@ -30,7 +30,7 @@ under the final metric: the search never returns a point worse than one it evalu
 
 Round-off chooses nothing (README, "Reproducible"): the objective evaluates on a lattice
 (:func:`.objective.snap`) with BLAS-free reductions, and every ranking of candidates (scan, zoom,
-re-ranking, starts, the result) uses the total order :func:`.basins.rank_key`, the same whatever
+re-ranking, starts, the result) uses the total order :func:`.likelihood_basins.rank_key`, the same whatever
 order the threads logged the points in.
 """
 
@@ -44,12 +44,12 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.stats import qmc
 
-from .basins import rank_key
-from .basins import ranked as rank_order
+from .likelihood_basins import rank_key
+from .likelihood_basins import ranked as rank_order
 from .limit_walk import WALK_GAIN, deterministic_walk
 from .loadpart import LOAD_PILOT
 from .objective import SNAP_DECIMALS, Evaluation, Objective, snap
-from .statistics import regularized_cov, stat_floor
+from .summary_stats import regularized_cov, stat_floor
 
 #: Allowed sizes of the scan and of the zoom around each centre (``bouncedisk fit --scan/--zoom``,
 #: the pipeline's ``prototype.scan/zoom``; the config schema states the same bounds, tested).
@@ -619,7 +619,7 @@ def _around(obj: Objective, c: np.ndarray, dims: list[int], offsets: np.ndarray)
 
 
 def _best_of(pairs: list[tuple[np.ndarray, float]]) -> tuple[np.ndarray, float]:
-    """The best ``(x, χ²)`` by :func:`.basins.rank_key`."""
+    """The best ``(x, χ²)`` by :func:`.likelihood_basins.rank_key`."""
     return min(pairs, key=lambda p: rank_key(p[1], p[0]))
 
 

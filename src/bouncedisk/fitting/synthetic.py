@@ -14,7 +14,7 @@ from pathlib import Path
 import pandas as pd
 
 from ..model.scene import read_yaml
-from .model import RESTITUTION_SEED_OFFSET, synthesize_curve
+from .members import RESTITUTION_SEED_OFFSET, synthesize_curve
 
 #: Keys of the spec file.
 SPEC_KEYS = ("parameters", "drive_frequency_hz", "Phi0_rad", "span_s", "dt_s",
