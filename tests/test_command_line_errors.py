@@ -387,16 +387,16 @@ def test_fuzz_console_script_one_line(tmp_path):
 def test_the_settle_tolerance_has_one_bound(capsys, settle):
     """`--settle` in (0, 1) on the command line, > 0 in the library (whose error named the
     option): one bound, the option named on the command line and the parameter in the library."""
-    from bouncedisk.model.limits import SETTLE
+    from bouncedisk.model.limits import SETTLE_RANGE
     from bouncedisk.studies.basins import group
 
     with pytest.raises(InputError) as ex:
         group(None, settle=settle)
-    assert ex.value.field == "settle" and SETTLE.text() in ex.value.message
+    assert ex.value.field == "settle" and SETTLE_RANGE.text() in ex.value.message
     argv = ["basins", FIG3, "--phases", "4", "--settle", str(settle)]
     assert main(argv) == 2
     line = one_line(capsys)
-    assert "--settle" in line and SETTLE.text() in line
+    assert "--settle" in line and SETTLE_RANGE.text() in line
 
 
 def test_a_summarys_json_number_has_one_definition():

@@ -250,20 +250,20 @@ def test_a_missing_load_among_several_is_named(tmp_path, capsys, frame):
 
 
 def test_fit_settings_check_e_sigma_and_bootstrap_as_the_command_line(tmp_path, capsys, frame):
-    from bouncedisk.model.limits import BOOTSTRAP, E_SIGMA
+    from bouncedisk.model.limits import BOOTSTRAP_RANGE, E_SIGMA
 
     for kwargs in (
         {"e_sigma": 0.7},
         {"e_sigma": -0.1},
         {"e_sigma": float("nan")},
-        {"bootstrap": BOOTSTRAP.high + 1},
-        {"bootstrap": BOOTSTRAP.low - 1},
+        {"bootstrap": BOOTSTRAP_RANGE.high + 1},
+        {"bootstrap": BOOTSTRAP_RANGE.low - 1},
     ):
         with pytest.raises(InputError) as ex:
             core.FitSettings(**kwargs)
         (name,) = kwargs
         assert ex.value.field == name
-    core.FitSettings(e_sigma=E_SIGMA.high, bootstrap=BOOTSTRAP.high)
+    core.FitSettings(e_sigma=E_SIGMA.high, bootstrap=BOOTSTRAP_RANGE.high)
     p = _curve(tmp_path, frame)
     err = _fails(capsys, [str(p), "-o", str(tmp_path / "f.nc"), "--e-sigma", "0.7"], "--e-sigma")
     assert E_SIGMA.text() in err
@@ -276,12 +276,12 @@ def test_fit_settings_check_e_sigma_and_bootstrap_as_the_command_line(tmp_path, 
 def test_the_config_schema_states_the_bounds_of_the_command_line():
     from pathlib import Path
 
-    from bouncedisk.model.limits import BOOTSTRAP, E_SIGMA
+    from bouncedisk.model.limits import BOOTSTRAP_RANGE, E_SIGMA
 
     schema_file = Path(__file__).parents[1] / "workflow" / "schemas" / "config.schema.yaml"
     proto = yaml.safe_load(schema_file.read_text())["properties"]["prototype"]["properties"]
     assert (proto["bootstrap"]["minimum"], proto["bootstrap"]["maximum"]) == (
-        BOOTSTRAP.low,
-        BOOTSTRAP.high,
+        BOOTSTRAP_RANGE.low,
+        BOOTSTRAP_RANGE.high,
     )
     assert (proto["e_sigma"]["minimum"], proto["e_sigma"]["maximum"]) == (E_SIGMA.low, E_SIGMA.high)

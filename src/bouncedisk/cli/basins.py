@@ -7,7 +7,7 @@ import time
 
 from ..io.history import write_with_history
 from ..model.errors import InputError
-from ..model.limits import SETTLE as SETTLE_RULE
+from ..model.limits import SETTLE_RANGE
 from ..run.cores import available_cores
 from .common import _add_set_option, command_line, named_override, print_result
 from .tracking_options import _add_track_options, _track, _tracking_store
@@ -59,13 +59,13 @@ def basins_command(args: argparse.Namespace) -> dict:
     from ..io.output_checks import check_output_path
     from ..model.scene import load_scene
     from ..run.runner import deferred_interrupts
-    from ..studies.basins import EXTEND, SETTLE, basins, check_scene, start_grid, summary
+    from ..studies.basins import DEFAULT_SETTLE, EXTEND, basins, check_scene, start_grid, summary
 
-    settle = SETTLE if args.settle is None else args.settle
+    settle = DEFAULT_SETTLE if args.settle is None else args.settle
     extend = EXTEND if args.extend is None else args.extend
     if args.cores is not None and args.cores < 1:
         raise InputError("<arguments>", "--cores", f"must be >= 1, got {args.cores}")
-    SETTLE_RULE.check("<arguments>", "--settle", settle)
+    SETTLE_RANGE.check("<arguments>", "--settle", settle)
     if args.output is not None:
         check_output_path(args.output, "-o", inputs=[args.scene])
     scene = load_scene(args.scene, args.set or [])
@@ -144,7 +144,7 @@ def _add_basins(sub) -> None:
         help="settle tolerance: a start has settled when its halves' mean speeds differ by at "
         "most settle x scale x min(1, 10 T_s / h) (scale: the largest |mean speed|, >= 1; h: "
         "the start's half-window; T_s: the stator period; chaotic: 10 x settle x scale); "
-        "default 0.01 (bouncedisk.studies.basins.SETTLE)",
+        "default 0.01 (bouncedisk.studies.basins.DEFAULT_SETTLE)",
     )
     p.add_argument(
         "--extend",

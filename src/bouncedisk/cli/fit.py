@@ -9,7 +9,7 @@ import sys
 import time
 
 from ..model.errors import InputError
-from ..model.limits import BOOTSTRAP, E_SIGMA
+from ..model.limits import BOOTSTRAP_RANGE, E_SIGMA
 from .tracking_options import _add_track_options, _track, _tracking_store
 
 ARG = "<arguments>"
@@ -35,7 +35,7 @@ def fit_settings(args: argparse.Namespace):
 
     opts = {
         "seed": _int_option(args.seed, "--seed", 0, 2**63 - 1),
-        "bootstrap": _int_option(args.bootstrap, "--bootstrap", BOOTSTRAP.low, BOOTSTRAP.high),
+        "bootstrap": _int_option(args.bootstrap, "--bootstrap", BOOTSTRAP_RANGE.low, BOOTSTRAP_RANGE.high),
         "members": _int_option(args.members, "--members", 4, 1024) if args.members is not None else None,
     }  # fmt: skip
     for name in ("scan", "zoom"):
@@ -108,7 +108,7 @@ def _add_fit(sub) -> None:
     p.add_argument(
         "--bootstrap",
         default="40",
-        help=f"block-bootstrap resamples of the data, {BOOTSTRAP.text()} (default: %(default)s, "
+        help=f"block-bootstrap resamples of the data, {BOOTSTRAP_RANGE.text()} (default: %(default)s, "
         "the fewest the fit accepts)",
     )
     p.add_argument(

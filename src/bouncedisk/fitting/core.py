@@ -70,7 +70,7 @@ MIN_FIT_SAMPLES = limits.MIN_RUNUP_SAMPLES
 #: Fewest drive periods a record must span (the run-up is many impacts long).
 MIN_PERIODS = 50
 #: Fewest bootstrap resamples: a 95 % percentile interval needs a 2.5 % tail of at least one.
-MIN_BOOTSTRAP = limits.BOOTSTRAP.low
+MIN_BOOTSTRAP = limits.BOOTSTRAP_RANGE.low
 
 
 @dataclass(frozen=True)
@@ -96,7 +96,7 @@ class FitSettings:
     profile: tuple[str, ...] | None = None  # coordinates to profile (None: all)
 
     def __post_init__(self) -> None:
-        limits.BOOTSTRAP.check("FitSettings", "bootstrap", self.bootstrap)
+        limits.BOOTSTRAP_RANGE.check("FitSettings", "bootstrap", self.bootstrap)
         if self.e_sigma is not None:
             limits.E_SIGMA.check("FitSettings", "e_sigma", self.e_sigma)
 

@@ -73,9 +73,9 @@ class Bound:
 E_SIGMA = Bound(0.0, MAX_E_SIGMA)
 #: Block-bootstrap resamples of a fit: a 95 % percentile interval needs a 2.5 % tail of at least
 #: one resample (40); 10,000 resolve its ends to well under a percent.
-BOOTSTRAP = Bound(40, 10_000)
+BOOTSTRAP_RANGE = Bound(40, 10_000)
 #: The basins' settle tolerance, a fraction of the largest mean speed (docs/formats.md "Basins").
-SETTLE = Bound(0.0, 1.0, low_open=True, high_open=True)
+SETTLE_RANGE = Bound(0.0, 1.0, low_open=True, high_open=True)
 #: Fewest samples of a run-up: the fit's statistics (trend, ripple, a block bootstrap of blocks
 #: of at least 20 samples, at least 10 blocks) need 200.
 MIN_RUNUP_SAMPLES = 200

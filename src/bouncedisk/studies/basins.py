@@ -72,7 +72,7 @@ from ..model.scene import Scene
 from ..run.runner import scene_attrs
 
 #: The settle tolerance's default, relative to the largest mean speed (rule 2).
-SETTLE = 1e-2
+DEFAULT_SETTLE = 1e-2
 #: The chaotic class's tolerance, in units of the others' (rule 2).
 CHAOTIC_FACTOR = 10.0
 #: Half-window, in stator periods, below which a periodic class's tolerance stops shrinking: the
@@ -426,7 +426,7 @@ def run_starts(
     cores: int = 1,
     progress: Callable[[int, int], None] | None = None,
     extend: int = EXTEND,
-    settle: float = SETTLE,
+    settle: float = DEFAULT_SETTLE,
 ) -> xr.Dataset:
     """Run one shard of the starts (a contiguous block of start indices) and return their
     per-start values (:data:`START_VARS`) with the scene's provenance; join shards with
@@ -596,7 +596,7 @@ def _tolerances(ds: xr.Dataset, settle: float, scale: float) -> Callable[[tuple,
     return tolerance
 
 
-def labels(ds: xr.Dataset, settle: float = SETTLE) -> tuple[np.ndarray, float]:
+def labels(ds: xr.Dataset, settle: float = DEFAULT_SETTLE) -> tuple[np.ndarray, float]:
     """Every start's attractor label by the module's rule (:data:`RULE`), ``-1`` when it has not
     settled, and the speed scale; attractors numbered by decreasing mean speed."""
     mean = ds["mean_omega"].values
@@ -654,11 +654,11 @@ ATTRACTOR_VARS = {
 LABEL_LONG_NAME = "attractor reached (-1: not settled within the window; 0: the fastest)"
 
 
-def group(ds: xr.Dataset, settle: float = SETTLE) -> xr.Dataset:
+def group(ds: xr.Dataset, settle: float = DEFAULT_SETTLE) -> xr.Dataset:
     """The starts of a complete computation with their labels and the attractors: per attractor
     its mean speed (mean over its starts, Student interval across them), regime and period,
     basin fraction with its Wilson interval (docs/formats.md "Basins file")."""
-    limits.SETTLE.check("", "settle", settle)
+    limits.SETTLE_RANGE.check("", "settle", settle)
     lab, scale = labels(ds, settle)
     n = len(lab)
     mean = ds["mean_omega"].values
@@ -712,7 +712,7 @@ def basins(
     scene: Scene,
     grid: StartGrid,
     cores: int = 1,
-    settle: float = SETTLE,
+    settle: float = DEFAULT_SETTLE,
     progress: Callable[[int, int], None] | None = None,
     extend: int = EXTEND,
 ) -> xr.Dataset:
@@ -801,7 +801,7 @@ def startup(
     grid: StartGrid,
     fast_above: float,
     cores: int = 1,
-    settle: float = SETTLE,
+    settle: float = DEFAULT_SETTLE,
     extend: int = EXTEND,
 ) -> xr.Dataset:
     """Start-up under load: at each load torque, the starts of ``grid`` (from rest: speed 0)

@@ -9,7 +9,7 @@ stationary there) and the load before, the bracket clipped to the bound. The max
 neighbours. Either bracket is narrowed by :func:`refine`, which asks a sweep for more loads
 inside it (distinct from those it has: :func:`distinct_new`) until it is no wider than the
 ensemble's own resolution (the bootstrap interval across members) or a set floor. Each estimate
-carries a 95 % interval: the central 95 % of :data:`BOOTSTRAP` resamples of the members,
+carries a 95 % interval: the central 95 % of :data:`BOOTSTRAP_RESAMPLES` resamples of the members,
 widened to hold its bracket (the mean curve's root or peak lies in it whatever the members do),
 and no interval at all from fewer than two members.
 
@@ -30,7 +30,7 @@ from ..analysis.statistics import confidence_interval
 from ..io.records import json_number as _num
 
 #: Bootstrap resamples of the members for the derived quantities' intervals (fixed seed).
-BOOTSTRAP = 2000
+BOOTSTRAP_RESAMPLES = 2000
 BOOTSTRAP_SEED = 20261123
 #: The load curve's derived quantities (docs/formats.md), each with its ``*_ci95``.
 DERIVED = ("no_load_speed", "stall_torque", "max_power", "max_power_load")
@@ -59,7 +59,7 @@ REFINE_ROUNDS = 3
 #: A load's runs have settled when the members' mean drift (second half's mean speed less the
 #: first half's) is at most this share of the curve's largest mean speed (or within three
 #: standard errors of 0); each load's window is sampled :data:`SETTLE_SAMPLES` times for it.
-SETTLE = 0.02
+DRIFT_SHARE = 0.02
 SETTLE_SAMPLES = 256
 #: Loads closer than this (relative to the larger, or absolutely below 1) are one load.
 SAME_LOAD = 1e-9
@@ -72,11 +72,11 @@ def settled_loads(
     bound: float | None = None,
     scale: float | None = None,
 ) -> np.ndarray:
-    """Which loads' runs have settled (:data:`SETTLE`), a boolean per load.
+    """Which loads' runs have settled (:data:`DRIFT_SHARE`), a boolean per load.
 
     ``speed`` and ``drift`` are ``(members, loads)``: each member's mean speed over the window
     and its second half's mean speed less its first half's. A load has settled when the members'
-    mean drift is at most ``SETTLE`` times the curve's speed scale (its largest absolute mean
+    mean drift is at most ``DRIFT_SHARE`` times the curve's speed scale (its largest absolute mean
     speed up to the momentum ``bound``, or ``scale``: the up branch's for the down branch, whose
     runaway speeds would loosen it), or within three standard errors of 0 (a chaotic motor's
     halves differ by chance). Without ``drift`` (``None``, or not finite at a load) a load counts
@@ -100,7 +100,7 @@ def settled_loads(
     if scale is None:
         scale = speed_scale(loads, speed, bound)
     with np.errstate(invalid="ignore"):
-        moving = (np.abs(d) > SETTLE * scale) & (np.abs(d) > 3.0 * se)
+        moving = (np.abs(d) > DRIFT_SHARE * scale) & (np.abs(d) > 3.0 * se)
     return ~moving & ~past
 
 
@@ -237,7 +237,7 @@ def _mean(x: np.ndarray, axis: int = 0) -> np.ndarray:
     return np.where(n > 0, total / np.maximum(n, 1), np.nan)
 
 
-def _bootstrap(members: int, resamples: int = BOOTSTRAP) -> np.ndarray:
+def _bootstrap(members: int, resamples: int = BOOTSTRAP_RESAMPLES) -> np.ndarray:
     rng = np.random.default_rng(BOOTSTRAP_SEED)
     return rng.integers(0, members, size=(resamples, members))
 
@@ -280,7 +280,7 @@ def derived(
     bound: float | None = None,
     efficiency: np.ndarray | None = None,
     drift: np.ndarray | None = None,
-    resamples: int = BOOTSTRAP,
+    resamples: int = BOOTSTRAP_RESAMPLES,
 ) -> dict:
     """The motor's figures: no-load speed, stall torque, maximum power, its load and the
     efficiency there, with 95 % intervals, standard errors and states (the one place they are

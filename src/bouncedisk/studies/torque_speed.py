@@ -35,7 +35,7 @@ from ..model.errors import InputError
 from ..model.scene import Scene
 from ..run.cores import map_on_threads
 from .load_summary import (  # first_zero and peak: the summary's API, also from here
-    BOOTSTRAP,
+    BOOTSTRAP_RESAMPLES,
     DERIVED,
     REFINE_ROUNDS,
     SAME_LOAD,
@@ -513,7 +513,7 @@ def to_dataset(scene: Scene, curve: LoadCurve, wall_time_s: float, summary: dict
             "ensemble_members": int(members.size),
             "ensemble_seed": scene.ensemble.seed,
             "confidence_level": 0.95,
-            "bootstrap_resamples": BOOTSTRAP,
+            "bootstrap_resamples": BOOTSTRAP_RESAMPLES,
             "run_id": new_run_id(f"{scene.name}-torque-speed", scene.sha256),
             "wall_time_s": round(wall_time_s, 6),
             "status": "completed",
