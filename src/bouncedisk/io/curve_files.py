@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..engine.errors import plain
 from ..model import limits
 from ..model.errors import InputError
-from ..model.limits import shown
 from ..model.params import number
 
 #: The unit each quantity of a curve is stated in, with the spellings accepted for it.
@@ -108,12 +108,12 @@ def column(
     is_bool = raw.map(lambda x: isinstance(x, bool)).to_numpy()
     if raw.dtype == bool or is_bool.any():
         row = int(np.argmax(is_bool))
-        raise InputError(src, col, f"row {row + 2}: not a number: {shown(raw.iloc[row])}")
+        raise InputError(src, col, f"row {row + 2}: not a number: {plain(raw.iloc[row])}")
     values = pd.to_numeric(raw, errors="coerce")
     bad = values.isna() & raw.notna()
     if bad.any():
         row = int(np.argmax(bad.values))
-        raise InputError(src, col, f"row {row + 2}: not a number: {shown(raw.iloc[row])}")
+        raise InputError(src, col, f"row {row + 2}: not a number: {plain(raw.iloc[row])}")
     x = values.to_numpy(dtype=float)
     finite = np.isfinite(x)
     if not finite.all():

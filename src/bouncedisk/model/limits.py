@@ -16,6 +16,7 @@ import math
 from dataclasses import dataclass
 
 from ..engine.bounds import MAX_E_SIGMA
+from ..engine.errors import plain
 from .errors import InputError
 
 
@@ -24,15 +25,6 @@ def _text(x: float) -> str:
     if float(x).is_integer() and abs(x) < 1e7:
         return f"{int(x):,}"
     return f"{x:g}"
-
-
-def shown(value: object) -> str:
-    """A value as an error message quotes it: ``0.7``, ``1e+30`` for a huge whole number, never
-    ``np.float64(0.7)``."""
-    value = value.item() if hasattr(value, "item") else value
-    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 1e7:
-        return f"{value:.6g}"
-    return repr(value)
 
 
 @dataclass(frozen=True)
@@ -63,7 +55,7 @@ class Bound:
             Naming ``source`` and ``name`` (the option or the file's field).
         """
         if value not in self:
-            raise InputError(source, name, f"must be {self.text()}, got {shown(value)}")
+            raise InputError(source, name, f"must be {self.text()}, got {plain(value)}")
         return value
 
 
