@@ -234,7 +234,7 @@ def test_joining_refuses_missing_points():
     model = sens.IshigamiModel(list(ISHIGAMI_RANGES))
     st = settings(ranges=ISHIGAMI_RANGES, base_samples=8, shards=3)
     shards = [sens.run_shard(st, model, i) for i in range(3)]
-    with pytest.raises(ValueError, match="once each"):
+    with pytest.raises(ValueError, match="every point must appear once"):
         sens.join_shards(shards[:2])
 
 

@@ -70,6 +70,7 @@ from ..model.engine_config import engine_config
 from ..model.errors import InputError
 from ..model.scene import Scene
 from ..run.runner import scene_attrs
+from .shards import join_indexed
 
 #: The settle tolerance's default, relative to the largest mean speed (rule 2).
 DEFAULT_SETTLE = 1e-2
@@ -526,16 +527,7 @@ def join_shards(shards: Sequence[xr.Dataset]) -> xr.Dataset:
         s.attrs.get("scene_sha256") != shards[0].attrs.get("scene_sha256") for s in shards
     ):
         raise ValueError("the shards are of different basin computations")
-    index = np.concatenate([s["start"].values for s in shards])
-    counts = np.bincount(index, minlength=n) if index.size else np.zeros(n, int)
-    if len(counts) != n or np.any(counts != 1):
-        missing = np.nonzero(counts[:n] == 0)[0][:5].tolist()
-        repeated = np.nonzero(counts > 1)[0][:5].tolist()
-        raise ValueError(f"every start must appear once: missing {missing}, repeated {repeated}")
-    ds = xr.concat(list(shards), dim="start", combine_attrs="drop_conflicts").sortby("start")
-    for k in ("shard",):
-        ds.attrs.pop(k, None)
-    ds.attrs["wall_time_s"] = float(sum(float(s.attrs.get("wall_time_s", 0.0)) for s in shards))
+    ds = join_indexed(shards, "start", n, "start")
     ds.attrs["n_impacts"] = int(ds["n_impacts"].sum())
     ds.attrs["shard_run_ids"] = ",".join(str(s.attrs.get("run_id")) for s in shards)
     first = shards[0].attrs

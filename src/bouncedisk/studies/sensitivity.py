@@ -36,6 +36,7 @@ from ..io.provenance import base_attrs
 from ..io.records import json_number as _num
 from ..model.scene import Scene, scene_from_mapping
 from .sensitivity_settings import PARAMETERS, StudySettings
+from .shards import join_indexed
 
 LEVEL = 0.95
 #: Largest half-width of a 95 % interval at which an index counts as resolved (the figure greys
@@ -488,14 +489,8 @@ def join_shards(shards: Sequence[xr.Dataset]) -> xr.Dataset:
     ValueError
         When points are missing or repeated.
     """
-    parts = sorted(shards, key=lambda d: int(d["point"].values[0]) if d.sizes["point"] else 0)
-    ds = xr.concat(parts, dim="point", combine_attrs="drop_conflicts")
-    total = int(parts[0].attrs.get("total_points", ds.sizes["point"]))
-    if not np.array_equal(ds["point"].values, np.arange(total)):
-        raise ValueError(f"the shards do not hold points 0..{total - 1} once each")
-    for key in ("wall_time_s", "cpu_time_s"):
-        ds.attrs[key] = float(sum(float(s.attrs.get(key, 0.0)) for s in shards))
-    ds.attrs.pop("shard", None)
+    total = int(shards[0].attrs["total_points"])
+    ds = join_indexed(shards, "point", total, "point")
     ds.attrs["n_points"] = total
     return ds
 
