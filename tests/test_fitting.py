@@ -676,3 +676,11 @@ def test_coverage_of_r_phi():
         print(f"\nCOVERAGE {r}")
     assert all(r["identified"] for r in rows), rows
     assert sum(r["holds"] and r["two_sided"] for r in rows) >= 4, rows
+
+
+def test_the_search_sizes_have_one_default():
+    """The fit's settings take the search's sizes from SearchSettings: the default fit of one
+    run-up searches with SearchSettings() exactly."""
+    from bouncedisk.fitting.search import SearchSettings
+
+    assert FitSettings().for_runs(1).search_settings() == SearchSettings()

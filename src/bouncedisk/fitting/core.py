@@ -77,16 +77,18 @@ MIN_BOOTSTRAP = limits.BOOTSTRAP_RANGE.low
 class FitSettings:
     """Knobs of the fit; the defaults fit the shipped curve within the pipeline's budget."""
 
-    seed: int = 12345
+    seed: int = SearchSettings.seed
     bootstrap: int = 40  # block-bootstrap resamples of the data (provisional scales, trend CI)
     members: int | None = None  # members per evaluation in the local search and the profiles
-    pilot_members: int = 32  # members measuring the model's covariance
+    pilot_members: int = SearchSettings.pilot_members  # members measuring the model's covariance
     band_members: int = 128  # noise-free members of the fitted model's band and trend
     global_members: int | None = None  # members per scan point (None: 1, or 4 for several runs)
-    scan: int = 192
-    zoom: int = 16  # scan points around each of the best zoom_centres (search module)
-    zoom_centres: int = 6
-    local_nfev: int = 12
+    scan: int = SearchSettings.scan
+    zoom: int = (
+        SearchSettings.zoom
+    )  # scan points around each of the best zoom_centres (search module)
+    zoom_centres: int = SearchSettings.zoom_centres
+    local_nfev: int = SearchSettings.local_nfev
     joint_zoom: int = SearchSettings.joint_zoom  # points around each joint candidate (search)
     # restitution noise of the members (docs/model.md): a number states it; None fits it (search
     # coordinate ``e_sigma`` over [0, 0.1], the scan at MODEL_E_SIGMA; ``bouncedisk fit --e-sigma

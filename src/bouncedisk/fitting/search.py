@@ -58,14 +58,16 @@ SIZE_LIMITS: dict[str, tuple[int, int]] = {"scan": (8, 100_000), "zoom": (0, 100
 
 @dataclass(frozen=True)
 class SearchSettings:
-    """Sizes of the search stages (see the module docstring)."""
+    """Sizes of the search stages (see the module docstring); the defaults of the fit's own
+    settings (:class:`~bouncedisk.fitting.core.FitSettings` takes them from here, the one place),
+    with the ensemble sizes of one run-up."""
 
     seed: int = 12345
-    scan: int = 256
+    scan: int = 192
     global_members: int = 1
     members: int = 12
     pilot_members: int = 32
-    local_nfev: int = 40
+    local_nfev: int = 12
     zoom: int = 16
     zoom_centres: int = 6
     candidates: int = 24
