@@ -10,7 +10,7 @@ from test_joint_fit import _fake_load_data, read_curve_like
 
 from bouncedisk.fitting import limit_walk as lw
 from bouncedisk.fitting import loadpart as lp
-from bouncedisk.fitting import model as fm
+from bouncedisk.fitting import members as fm
 from bouncedisk.fitting.objective import Evaluation, Objective
 
 THETA = {"e": 0.55, "log10_r_phi": math.log10(0.002), "psi": 0.4, "omega_s": 1.7, "e_sigma": 0.0}

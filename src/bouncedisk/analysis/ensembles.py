@@ -291,9 +291,19 @@ class _Reducer:
         fl[_F_FIRST] = self.chatter_first
         fl[_F_LAST] = self.chatter_last
         kept = _reduce_chunk(
-            t, phase, v_rel, kind, self.t_from, self._noise, self.w,
-            self.vec, ints, fl, self._tail_f, self._tail_k,
-        )  # fmt: skip
+            t,
+            phase,
+            v_rel,
+            kind,
+            self.t_from,
+            self._noise,
+            self.w,
+            self.vec,
+            ints,
+            fl,
+            self._tail_f,
+            self._tail_k,
+        )
         if kept == 0:
             return
         self.n_impacts = int(ints[_I_IMPACTS])

@@ -193,11 +193,27 @@ class _Grid:
         for k, what in (("period_p", "impacts"), ("period_q", "stator periods")):
             data[k] = (dims, self.ints[k], {"long_name": f"{what} per cycle (0: not periodic)"})
         ev_dims = dims + ("impact",)
-        data["phase"] = (ev_dims, self.phase, {"long_name": "stator phase at the event, member 0 tail", "units": "rad"})  # fmt: skip
-        data["v_rel"] = (ev_dims, self.v_rel, {"long_name": "relative impact velocity, member 0 tail", "units": "1"})  # fmt: skip
-        data["is_chatter"] = (ev_dims, self.chatter, {"long_name": "the event is a complete chatter (a reset)", "units": "1"})  # fmt: skip
+        data["phase"] = (
+            ev_dims,
+            self.phase,
+            {"long_name": "stator phase at the event, member 0 tail", "units": "rad"},
+        )
+        data["v_rel"] = (
+            ev_dims,
+            self.v_rel,
+            {"long_name": "relative impact velocity, member 0 tail", "units": "1"},
+        )
+        data["is_chatter"] = (
+            ev_dims,
+            self.chatter,
+            {"long_name": "the event is a complete chatter (a reset)", "units": "1"},
+        )
         # per point, so that any join of shards (open_mfdataset too) sums to the sweep's total
-        data["n_events"] = (dims, self.n_events, {"long_name": "events after the transient, all members", "units": "1"})  # fmt: skip
+        data["n_events"] = (
+            dims,
+            self.n_events,
+            {"long_name": "events after the transient, all members", "units": "1"},
+        )
         return xr.Dataset(data, coords=coords)
 
 

@@ -35,9 +35,13 @@ def fit_settings(args: argparse.Namespace):
 
     opts = {
         "seed": _int_option(args.seed, "--seed", 0, 2**63 - 1),
-        "bootstrap": _int_option(args.bootstrap, "--bootstrap", BOOTSTRAP_RANGE.low, BOOTSTRAP_RANGE.high),
-        "members": _int_option(args.members, "--members", 4, 1024) if args.members is not None else None,
-    }  # fmt: skip
+        "bootstrap": _int_option(
+            args.bootstrap, "--bootstrap", BOOTSTRAP_RANGE.low, BOOTSTRAP_RANGE.high
+        ),
+        "members": _int_option(args.members, "--members", 4, 1024)
+        if args.members is not None
+        else None,
+    }
     for name in ("scan", "zoom"):
         if (text := getattr(args, name, None)) is not None:
             opts[name] = _int_option(text, f"--{name}", *SIZE_LIMITS[name])
@@ -69,8 +73,14 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     def progress(msg: str) -> None:
         print(f"fit: [{time.perf_counter() - start:6.1f} s] {msg}", file=sys.stderr, flush=True)
 
-    ds = run_fit(list(args.curve), args.output, settings, list(args.load or []), args.sidecar,
-                 None if args.quiet else progress)  # fmt: skip
+    ds = run_fit(
+        list(args.curve),
+        args.output,
+        settings,
+        list(args.load or []),
+        args.sidecar,
+        None if args.quiet else progress,
+    )
     if not args.quiet:
         print(summary_text(ds))
     _track(
@@ -78,9 +88,12 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         store,
         "fit",
         [args.output],
-        params={"curve": ", ".join(args.curve), "seed": args.seed,
-                "identified": ds.attrs["identified"]},
-    )  # fmt: skip
+        params={
+            "curve": ", ".join(args.curve),
+            "seed": args.seed,
+            "identified": ds.attrs["identified"],
+        },
+    )
     return 0
 
 

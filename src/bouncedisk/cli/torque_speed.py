@@ -201,8 +201,12 @@ def _add_torque_speed(sub) -> None:
 def _cmd_torque_speed(args: argparse.Namespace) -> int:
     store = _tracking_store(args)
     summary = torque_speed_command(args)
-    params = {"scene_file": args.scene, "set": args.set or [], "loads": args.loads or "",
-              "resolution": args.resolution}  # fmt: skip
+    params = {
+        "scene_file": args.scene,
+        "set": args.set or [],
+        "loads": args.loads or "",
+        "resolution": args.resolution,
+    }
     scalars = ("no_load_speed", "stall_torque", "max_power", "max_power_load")
     metrics = {k: summary[k] for k in scalars if summary[k] is not None}
     _track(args, store, "torque-speed", [args.output] if args.output else [], params, metrics)

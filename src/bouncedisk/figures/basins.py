@@ -68,8 +68,13 @@ def fig_basin_map(ds: xr.Dataset) -> Figure:
     ax.set_xlim(-0.2, 2 * np.pi)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.15), ncol=1)
     load = ds.attrs.get("load_torque", 0.0)
-    _title(ax, ds, f"Basins: e = {ds.attrs.get('e', np.nan):.3g}, load {load:.3g}",
-           "starts", "fractions with 95% Wilson intervals")  # fmt: skip
+    _title(
+        ax,
+        ds,
+        f"Basins: e = {ds.attrs.get('e', np.nan):.3g}, load {load:.3g}",
+        "starts",
+        "fractions with 95% Wilson intervals",
+    )
     return fig
 
 
@@ -87,8 +92,9 @@ def fig_startup(ds: xr.Dataset) -> Figure:
         ("unsettled_fraction", "0.5", "not settled within the longest window"),
     ]
     for name, color, label in (c for c in curves if c[0] in ds):
-        ax.fill_between(load, ds[f"{name}_ci95_low"], ds[f"{name}_ci95_high"], color=color,
-                        alpha=0.25, lw=0)  # fmt: skip
+        ax.fill_between(
+            load, ds[f"{name}_ci95_low"], ds[f"{name}_ci95_high"], color=color, alpha=0.25, lw=0
+        )
         ax.plot(load, ds[name], "o-", ms=3, lw=1.0, color=color, label=label)
     ax.set_ylim(-0.02, 1.02)
     ax.set_xlabel(r"load torque $\tau_L$")

@@ -30,13 +30,26 @@ def fig_work_precision(table: pd.DataFrame) -> Figure:
         sub = table[table["case"] == case]
         for solver, g in sub.groupby("solver", sort=False):
             g = g.sort_values("cpu_s")
-            line = ax.loglog(g["cpu_s"], g["error"].clip(lower=ZERO_ERROR), "o-", ms=4, lw=1,
-                             label=solver)  # fmt: skip
+            line = ax.loglog(
+                g["cpu_s"], g["error"].clip(lower=ZERO_ERROR), "o-", ms=4, lw=1, label=solver
+            )
             zero = g[g["error"] == 0.0]
-            ax.plot(zero["cpu_s"], np.full(len(zero), ZERO_ERROR), "v", mfc="none", ms=8,
-                    color=line[0].get_color())  # fmt: skip
-        ax.axhspan(ZERO_ERROR / 3, 1e-14, color="0.85", lw=0, zorder=0,
-                   label="double-precision rounding;\n▽ identical to the reference (0)")  # fmt: skip
+            ax.plot(
+                zero["cpu_s"],
+                np.full(len(zero), ZERO_ERROR),
+                "v",
+                mfc="none",
+                ms=8,
+                color=line[0].get_color(),
+            )
+        ax.axhspan(
+            ZERO_ERROR / 3,
+            1e-14,
+            color="0.85",
+            lw=0,
+            zorder=0,
+            label="double-precision rounding;\n▽ identical to the reference (0)",
+        )
         ax.set_xlabel("CPU time [s]")
         ax.set_ylabel("max error in impact times (first 20)")
         ax.set_title(case.replace("omega_s", r"$\omega_s$"), fontsize=10)
@@ -126,11 +139,17 @@ def fig_stats_cost(table: pd.DataFrame, singles: pd.DataFrame) -> Figure:
         ax.loglog(grp["cpu_s"], grp["half_width"], "o-", ms=4, label=f"duration {d:g}")
     x = np.array([table["cpu_s"].min(), table["cpu_s"].max()])
     ref = table.loc[table["cpu_s"].idxmin()]
-    ax.loglog(x, ref["half_width"] * np.sqrt(ref["cpu_s"] / x), "k--", lw=0.8,
-              label=r"$\propto 1/\sqrt{\mathrm{CPU}}$")  # fmt: skip
+    ax.loglog(
+        x,
+        ref["half_width"] * np.sqrt(ref["cpu_s"] / x),
+        "k--",
+        lw=0.8,
+        label=r"$\propto 1/\sqrt{\mathrm{CPU}}$",
+    )
     sd = float(singles["mean_omega"].std(ddof=1))
-    ax.axhspan(sd * 0.98, sd * 1.02, color="0.5", alpha=0.5,
-               label=f"scatter of single runs (sd {sd:.2f})")  # fmt: skip
+    ax.axhspan(
+        sd * 0.98, sd * 1.02, color="0.5", alpha=0.5, label=f"scatter of single runs (sd {sd:.2f})"
+    )
     ax.xaxis.set_minor_formatter(NullFormatter())
     # under one decade: ticks at 1, 2, 5 of each decade, not a single label
     ax.yaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
@@ -141,11 +160,21 @@ def fig_stats_cost(table: pd.DataFrame, singles: pd.DataFrame) -> Figure:
     ax.legend(fontsize=7, loc="lower left")
     ax.set_title("cost of a confidence interval", fontsize=10)
     best = table.loc[table["member_time"].idxmax()]
-    ax2.axhspan(best["ci_low"], best["ci_high"], color=COLORS["fit"], alpha=0.3,
-                label=f"ensemble: {int(best['members'])} members × {best['duration']:g}, 95%")  # fmt: skip
+    ax2.axhspan(
+        best["ci_low"],
+        best["ci_high"],
+        color=COLORS["fit"],
+        alpha=0.3,
+        label=f"ensemble: {int(best['members'])} members × {best['duration']:g}, 95%",
+    )
     ax2.axhline(best["mean_omega"], color=COLORS["fit"], lw=1)
-    ax2.plot(singles["de"] * 1e9, singles["mean_omega"], "o", color=COLORS["rotor"],
-             label="single runs (no noise)")  # fmt: skip
+    ax2.plot(
+        singles["de"] * 1e9,
+        singles["mean_omega"],
+        "o",
+        color=COLORS["rotor"],
+        label="single runs (no noise)",
+    )
     ax2.set_xlabel(r"change of $e$ [$10^{-9}$]")
     ax2.set_ylabel(r"time-averaged rotor speed $\bar\Omega$")
     ax2.set_title("single runs jump; the ensemble statistic does not", fontsize=10)

@@ -25,8 +25,16 @@ def fig_poincare(datasets: dict[str, xr.Dataset]) -> Figure:
         impacts = ds["kind"].values == 0 if "kind" in ds else slice(None)
         ax = axes[0, j]
         n = int(np.size(ds["phase"].values[impacts]))
-        ax.plot(ds["phase"].values[impacts], ds["v_rel"].values[impacts], ".", ms=1.0, mew=0,
-                color="k", alpha=0.6, label=f"all {n} impacts")  # fmt: skip
+        ax.plot(
+            ds["phase"].values[impacts],
+            ds["v_rel"].values[impacts],
+            ".",
+            ms=1.0,
+            mew=0,
+            color="k",
+            alpha=0.6,
+            label=f"all {n} impacts",
+        )
         ax.plot(
             ds["phase"].values[impacts][-50:],
             ds["v_rel"].values[impacts][-50:],
@@ -48,8 +56,9 @@ def fig_poincare(datasets: dict[str, xr.Dataset]) -> Figure:
             ax.plot(su, sv, ".", ms=1.0, color=COLORS["rotor"], label=f"all {su.size} periods")
             ax.plot(su[-50:], sv[-50:], "o", ms=3, color=COLORS["fit"], label="last 50 periods")
             ax.margins(0.08)
-            ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(0.0, -0.16), ncol=2,
-                      markerscale=2)  # fmt: skip
+            ax.legend(
+                fontsize=8, loc="upper left", bbox_to_anchor=(0.0, -0.16), ncol=2, markerscale=2
+            )
         ax.set_xlabel("rotor position at phase 0")
         ax.set_ylabel("rotor velocity at phase 0")
         ax.set_title(f"stroboscopic map, {label}", fontsize=10)
@@ -86,11 +95,24 @@ def fig_bifurcation(up: xr.Dataset, down: xr.Dataset) -> Figure:
         ee = np.broadcast_to(e[:, None], ph.shape)
         imp = ~chat & np.isfinite(ph)
         ax.plot(ee[imp], ph[imp], "o", ms=1.2, mew=0, color=color, alpha=0.6, label=label)
-        ax.plot(ee[chat], ph[chat], "x", ms=4, mew=0.8, color="#3182bd",
-                label="complete chatter (reset)" if key == "up" else None)  # fmt: skip
+        ax.plot(
+            ee[chat],
+            ph[chat],
+            "x",
+            ms=4,
+            mew=0.8,
+            color="#3182bd",
+            label="complete chatter (reset)" if key == "up" else None,
+        )
         lam = ds["lyapunov"].values
-        ax2.fill_between(e, ds["lyapunov_ci_low"].values, ds["lyapunov_ci_high"].values,
-                         color=color, alpha=0.25, lw=0)  # fmt: skip
+        ax2.fill_between(
+            e,
+            ds["lyapunov_ci_low"].values,
+            ds["lyapunov_ci_high"].values,
+            color=color,
+            alpha=0.25,
+            lw=0,
+        )
         ax2.plot(e, lam, "-", color=color, lw=0.8, label=f"{label}, mean and 95% interval")
         reset = ds["lyapunov_reset_fraction"].values > 0.5
         down_label = f"{label}: −∞ (most members reset every cycle)"
@@ -121,8 +143,13 @@ def fig_bifurcation(up: xr.Dataset, down: xr.Dataset) -> Figure:
         fontsize=10,
     )
     # above the panel: the phases fill it at every e
-    fig.legend(*ax.get_legend_handles_labels(), loc="outside upper center", ncol=3, fontsize=7,
-               markerscale=3)  # fmt: skip
+    fig.legend(
+        *ax.get_legend_handles_labels(),
+        loc="outside upper center",
+        ncol=3,
+        fontsize=7,
+        markerscale=3,
+    )
     ax2.axhline(0, color="k", lw=0.6)
     ax2.set_ylim(-2.6, max(1.5, 1.05 * top))  # holds every interval (the ▼ row at -2.4)
     ax2.set_ylabel("Lyapunov exponent\n(per impact; ▼ = −∞)")
@@ -172,8 +199,9 @@ def fig_regime_map(ds: xr.Dataset) -> Figure:
             if reg[i, j] == 1 and per[i, j] > 1 and len(e) <= 40:
                 ax.text(ej, wi, str(int(per[i, j])), ha="center", va="center", fontsize=5)
     members = ds.attrs.get("ensemble_members", "?")
-    ax.set_title(f"regime, most common of {members} members (numbers: impacts per cycle)",
-                 fontsize=9)  # fmt: skip
+    ax.set_title(
+        f"regime, most common of {members} members (numbers: impacts per cycle)", fontsize=9
+    )
     lam = ds["lyapunov"].transpose("omega_s", "e").values
     vmax = np.nanmax(np.abs(lam)) if np.isfinite(lam).any() else 1.0
     m2 = ax2.pcolormesh(e, w, lam, cmap="RdBu_r", vmin=-vmax, vmax=vmax, shading="nearest")
@@ -200,11 +228,17 @@ def fig_speed_vs_psi(ds: xr.Dataset) -> Figure:
     psi = ds["psi"].values
     for r in ds["r_phi"].values:
         sel = ds.sel(r_phi=r)
-        line = ax.plot(psi, r * sel["mean_omega"].values, ".-", lw=1, ms=3,
-                       label=f"$R_\\phi$ = {r:g}")[0]  # fmt: skip
-        ax.fill_between(psi, r * sel["mean_omega_ci_low"].values,
-                        r * sel["mean_omega_ci_high"].values, color=line.get_color(),
-                        alpha=0.3, lw=0)  # fmt: skip
+        line = ax.plot(
+            psi, r * sel["mean_omega"].values, ".-", lw=1, ms=3, label=f"$R_\\phi$ = {r:g}"
+        )[0]
+        ax.fill_between(
+            psi,
+            r * sel["mean_omega_ci_low"].values,
+            r * sel["mean_omega_ci_high"].values,
+            color=line.get_color(),
+            alpha=0.3,
+            lw=0,
+        )
     ax.axhline(0, color="k", lw=0.6)
     ax.set_xlabel(r"torsional phase $\psi$ [rad]")
     ax.set_ylabel(r"mean rotor speed $R_\phi\bar\Omega$ (stator units)")
@@ -230,10 +264,24 @@ def fig_clipped_vs_bouncing(ds: xr.Dataset) -> Figure:
     for ax, p in zip(axes, psis, strict=True):
         if "omega_bouncing_ci_low" in ds:
             b = ds.sel(psi=p)
-            _band(ax, t, b["omega_bouncing_p025"], b["omega_bouncing_p975"], "0.6",
-                  "bouncing: central 95% of members", alpha=0.3)  # fmt: skip
-            _band(ax, t, b["omega_bouncing_ci_low"], b["omega_bouncing_ci_high"], COLORS["rotor"],
-                  "bouncing: 95% interval of the ensemble mean", alpha=0.5)  # fmt: skip
+            _band(
+                ax,
+                t,
+                b["omega_bouncing_p025"],
+                b["omega_bouncing_p975"],
+                "0.6",
+                "bouncing: central 95% of members",
+                alpha=0.3,
+            )
+            _band(
+                ax,
+                t,
+                b["omega_bouncing_ci_low"],
+                b["omega_bouncing_ci_high"],
+                COLORS["rotor"],
+                "bouncing: 95% interval of the ensemble mean",
+                alpha=0.5,
+            )
         for model, color in (("bouncing", COLORS["rotor"]), ("clipped", COLORS["fit"])):
             ax.plot(
                 t,
@@ -246,8 +294,7 @@ def fig_clipped_vs_bouncing(ds: xr.Dataset) -> Figure:
         ax.set_title(f"$\\psi$ = {p:.3g}", fontsize=10)
     axes[-1].set_xlabel("time $t/t_c$")
     # one legend for every panel, below them: the runs fill each panel's corners
-    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncol=2,
-               fontsize=7)  # fmt: skip
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncol=2, fontsize=7)
     fig.suptitle(
         "bouncing disk vs clipped spring contact (refs. [2, 3] of the paper): "
         f"e = {_param(ds, 'e'):.3g}, $\\omega_s$ = {_param(ds, 'omega_s'):.3g}",

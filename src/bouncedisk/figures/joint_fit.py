@@ -53,24 +53,62 @@ def fig_fit_load(fit: xr.Dataset) -> Figure:
         return fit[name].values[order]
 
     mean = v("load_speed_fitted")
-    ax.fill_between(t, v("load_speed_band_low"), v("load_speed_band_high"), color="C0", alpha=0.15,
-                    lw=0, label="fitted model: members' 95% range")  # fmt: skip
-    ax.fill_between(t, v("load_speed_fitted_low"), v("load_speed_fitted_high"), color="C0",
-                    alpha=0.45, lw=0, label="fitted model: 95% interval of the mean")  # fmt: skip
+    ax.fill_between(
+        t,
+        v("load_speed_band_low"),
+        v("load_speed_band_high"),
+        color="C0",
+        alpha=0.15,
+        lw=0,
+        label="fitted model: members' 95% range",
+    )
+    ax.fill_between(
+        t,
+        v("load_speed_fitted_low"),
+        v("load_speed_fitted_high"),
+        color="C0",
+        alpha=0.45,
+        lw=0,
+        label="fitted model: 95% interval of the mean",
+    )
     ax.plot(t, mean, color="C0", lw=1.2)
     word = data_word(fit, "load_curve_synthetic")
-    ax.errorbar(t, v("load_speed_measured"), yerr=v("load_speed_sigma"), fmt="o", ms=4, color="k",
-                capsize=2, label=f"{word} (±1 sd in the likelihood)")  # fmt: skip
+    ax.errorbar(
+        t,
+        v("load_speed_measured"),
+        yerr=v("load_speed_sigma"),
+        fmt="o",
+        ms=4,
+        color="k",
+        capsize=2,
+        label=f"{word} (±1 sd in the likelihood)",
+    )
     ax.axhline(0.0, color="0.6", lw=0.6)
     ax.set_ylabel("mean speed [rad/s]")
     ax.legend(fontsize=8, loc="upper right")
     a = fit.attrs
-    ax.set_title(f"load curve: χ² {a.get('chi2_load', math.nan):.3g} on "
-                 f"{a.get('n_load_readings', len(t))} readings (joint fit)", fontsize=9)  # fmt: skip
-    rax.fill_between(t, v("load_speed_band_low") - mean, v("load_speed_band_high") - mean,
-                     color="C0", alpha=0.15, lw=0)  # fmt: skip
-    rax.errorbar(t, v("load_speed_measured") - mean, yerr=v("load_speed_sigma"), fmt="o", ms=4,
-                 color="k", capsize=2)  # fmt: skip
+    ax.set_title(
+        f"load curve: χ² {a.get('chi2_load', math.nan):.3g} on "
+        f"{a.get('n_load_readings', len(t))} readings (joint fit)",
+        fontsize=9,
+    )
+    rax.fill_between(
+        t,
+        v("load_speed_band_low") - mean,
+        v("load_speed_band_high") - mean,
+        color="C0",
+        alpha=0.15,
+        lw=0,
+    )
+    rax.errorbar(
+        t,
+        v("load_speed_measured") - mean,
+        yerr=v("load_speed_sigma"),
+        fmt="o",
+        ms=4,
+        color="k",
+        capsize=2,
+    )
     rax.axhline(0.0, color="C0", lw=1.0)
     rax.set_xlabel("load torque [mN·m]")
     rax.set_ylabel(f"{word} − fitted [rad/s]")
@@ -104,8 +142,17 @@ def fig_fit_identifiability(fit: xr.Dataset) -> Figure:
             ok = bool(fit["interval_identified"].values[k, j])
             drawn["hatched"] |= not ok
             y = len(sets) - 1 - k
-            ax.barh(y, hi - lo, left=lo, height=0.6, color=DATA_SET_STYLE.get(ds_name, "0.5"),
-                    alpha=0.8 if ok else 0.3, hatch=None if ok else "//", edgecolor="k", lw=0.5)  # fmt: skip
+            ax.barh(
+                y,
+                hi - lo,
+                left=lo,
+                height=0.6,
+                color=DATA_SET_STYLE.get(ds_name, "0.5"),
+                alpha=0.8 if ok else 0.3,
+                hatch=None if ok else "//",
+                edgecolor="k",
+                lw=0.5,
+            )
         est = _estimate(fit, name)
         if est is not None:
             ax.plot(
@@ -118,8 +165,10 @@ def fig_fit_identifiability(fit: xr.Dataset) -> Figure:
         ax.set_xlim(fn(lo_b), fn(hi_b))
         ax.set_yticks(range(len(sets)), sets[::-1], fontsize=8)
         ax.set_xlabel(label, labelpad=1)
-    handles = [Patch(color=DATA_SET_STYLE.get(s, "0.5"), alpha=0.8, label=f"95% interval: {s}")
-               for s in sets]  # fmt: skip
+    handles = [
+        Patch(color=DATA_SET_STYLE.get(s, "0.5"), alpha=0.8, label=f"95% interval: {s}")
+        for s in sets
+    ]
     if drawn["hatched"]:
         handles.append(Patch(facecolor="w", edgecolor="k", hatch="//", label="not identified"))
     handles.append(Line2D([], [], ls="", marker="o", color="w", mec="k", ms=4, label="estimate"))

@@ -81,8 +81,15 @@ def fig_torque_speed(ds: xr.Dataset) -> Figure:
             low = np.where(keep, sel[f"{name}_ci95_low"].values, np.nan) * k
             high = np.where(keep, sel[f"{name}_ci95_high"].values, np.nan) * k
             ax.fill_between(load, low, high, color=color, alpha=0.25, lw=0)
-            ax.plot(load, np.where(keep, sel[name].values, np.nan) * k, "o-", ms=3, lw=1.0,
-                    color=color, label=text)  # fmt: skip
+            ax.plot(
+                load,
+                np.where(keep, sel[name].values, np.nan) * k,
+                "o-",
+                ms=3,
+                lw=1.0,
+                color=color,
+                label=text,
+            )
         ax.axhline(0.0, color="0.5", lw=0.6)
         ax.set_ylabel(label)
     if not steady.all():  # the readings that are no stationary speed: named, not drawn
@@ -91,8 +98,15 @@ def fig_torque_speed(ds: xr.Dataset) -> Figure:
             for x in load[gone]:
                 ax.axvline(x, color="0.85", lw=2.0, zorder=0)
         n = int((~steady).sum())
-        axes[0].plot([], [], "|", color="0.85", ms=10, mew=2,
-                     label=f"{n} readings not stationary (grey lines): not drawn")  # fmt: skip
+        axes[0].plot(
+            [],
+            [],
+            "|",
+            color="0.85",
+            ms=10,
+            mew=2,
+            label=f"{n} readings not stationary (grey lines): not drawn",
+        )
     _stall(axes[0], ds, kt, tu)
     _max_power(axes[1], ds, kt, kp, tu, pu)
     axes[0].legend(fontsize=8, loc="best")
@@ -144,8 +158,14 @@ def _stall(ax, ds: xr.Dataset, kt: float, tu: str) -> None:
     lo, hi = _interval(ds, "stall_torque")
     ax.axvline(x * kt, color="k", lw=0.8, ls="--", label=f"stall torque {x * kt:.3g}{tu}")
     if np.isfinite(lo) and np.isfinite(hi):
-        ax.axvspan(lo * kt, hi * kt, color="k", alpha=0.12, lw=0,
-                   label=f"its 95% interval [{lo * kt:.3g}, {hi * kt:.3g}]")  # fmt: skip
+        ax.axvspan(
+            lo * kt,
+            hi * kt,
+            color="k",
+            alpha=0.12,
+            lw=0,
+            label=f"its 95% interval [{lo * kt:.3g}, {hi * kt:.3g}]",
+        )
 
 
 def _max_power(ax, ds: xr.Dataset, kt: float, kp: float, tu: str, pu: str) -> None:
@@ -158,10 +178,13 @@ def _max_power(ax, ds: xr.Dataset, kt: float, kp: float, tu: str, pu: str) -> No
         return
     p = float(ds.attrs.get("max_power", np.nan)) * kp
     lo, hi = _interval(ds, "max_power_load")
-    where = (f" (located in [{lo * kt:.3g}, {hi * kt:.3g}])"
-             if np.isfinite(lo) and np.isfinite(hi) else "")  # fmt: skip
-    ax.plot([x * kt], [p], "k*", ms=9,
-            label=f"max. power {p:.3g}{pu} at load {x * kt:.3g}{tu}{where}")  # fmt: skip
+    where = (
+        f" (located in [{lo * kt:.3g}, {hi * kt:.3g}])"
+        if np.isfinite(lo) and np.isfinite(hi)
+        else ""
+    )
+    ax.plot(
+        [x * kt], [p], "k*", ms=9, label=f"max. power {p:.3g}{pu} at load {x * kt:.3g}{tu}{where}"
+    )
     if np.isfinite(lo) and np.isfinite(hi):
-        ax.axvspan(lo * kt, hi * kt, color="k", alpha=0.12, lw=0,
-                   label="95% interval of its load")  # fmt: skip
+        ax.axvspan(lo * kt, hi * kt, color="k", alpha=0.12, lw=0, label="95% interval of its load")

@@ -42,16 +42,31 @@ def fig5_motor(
         ax, axr = fig.add_subplot(), None
     runs = int(fitted.attrs.get("runs", 1)) if fitted is not None else 1
     if runs > 1:  # run-ups fitted together: the data the fit compares with is their mean
-        ax.plot(fitted["time"], fitted["omega_measured"], color=COLORS["data"], lw=0.6,
-                label=f"{data_word(fitted)}: mean of {runs} run-ups")  # fmt: skip
+        ax.plot(
+            fitted["time"],
+            fitted["omega_measured"],
+            color=COLORS["data"],
+            lw=0.6,
+            label=f"{data_word(fitted)}: mean of {runs} run-ups",
+        )
     else:
-        ax.plot(curve["time_s"], curve["omega_rad_s"], color=COLORS["data"], lw=0.6,
-                label=f"{data_word(fitted)} (prototype curve)")  # fmt: skip
+        ax.plot(
+            curve["time_s"],
+            curve["omega_rad_s"],
+            color=COLORS["data"],
+            lw=0.6,
+            label=f"{data_word(fitted)} (prototype curve)",
+        )
     if fitted is not None:
         _fig5_fitted(ax, axr, fitted)
     elif simulated is not None:
-        ax.plot(simulated["time_s"], simulated["omega_rad_s"], color=COLORS["rotor"], lw=0.8,
-                label=sim_label)  # fmt: skip
+        ax.plot(
+            simulated["time_s"],
+            simulated["omega_rad_s"],
+            color=COLORS["rotor"],
+            lw=0.8,
+            label=sim_label,
+        )
         ax.set_xlabel("time [s]")
     ax.set_ylabel("rotor angular velocity [rad/s]")
     ax.legend(loc="lower right", fontsize=8)
@@ -63,9 +78,15 @@ def _fig5_fitted(ax, axr, fitted: xr.Dataset) -> None:
     t = fitted["time"].values
     mean = fitted["omega_fitted"].values
     if "omega_fitted_low" in fitted:
-        ax.fill_between(t, fitted["omega_fitted_low"].values, fitted["omega_fitted_high"].values,
-                        color=COLORS["fit"], alpha=0.35, lw=0,
-                        label="fitted model: 95% interval of the ensemble mean")  # fmt: skip
+        ax.fill_between(
+            t,
+            fitted["omega_fitted_low"].values,
+            fitted["omega_fitted_high"].values,
+            color=COLORS["fit"],
+            alpha=0.35,
+            lw=0,
+            label="fitted model: 95% interval of the ensemble mean",
+        )
     ax.plot(t, mean, color=COLORS["fit"], lw=0.9, label="fitted model: ensemble mean")
     for name, style, label in (
         ("trend_measured", "--", "first-order trend of the data"),
@@ -78,15 +99,23 @@ def _fig5_fitted(ax, axr, fitted: xr.Dataset) -> None:
             ax.plot(t, y, style, color="k", lw=1, label=label)
     resid = fitted["omega_measured"].values - mean
     if "residual_band_low" in fitted:
-        axr.fill_between(t, fitted["residual_band_low"].values,
-                         fitted["residual_band_high"].values, color=COLORS["fit"], alpha=0.3,
-                         lw=0, label="95% of the members + noise")  # fmt: skip
+        axr.fill_between(
+            t,
+            fitted["residual_band_low"].values,
+            fitted["residual_band_high"].values,
+            color=COLORS["fit"],
+            alpha=0.3,
+            lw=0,
+            label="95% of the members + noise",
+        )
         # said in the title, not a legend over the residuals
         title = "band: 95% of the members + noise"
         if "residual_outside_fraction" in fitted.attrs:
             a = fitted.attrs
-            title += (f"; outside it: {100 * a['residual_outside_fraction']:.1f} % of the "
-                      f"samples, longest run {1e3 * a['residual_longest_run_s']:.2g} ms")  # fmt: skip
+            title += (
+                f"; outside it: {100 * a['residual_outside_fraction']:.1f} % of the "
+                f"samples, longest run {1e3 * a['residual_longest_run_s']:.2g} ms"
+            )
         axr.set_title(title, fontsize=7)
     axr.plot(t, resid, color="k", lw=0.4)
     axr.axhline(0, color=COLORS["fit"], lw=0.8)
@@ -132,16 +161,20 @@ def fig_fit_profiles(fitted: xr.Dataset) -> Figure:
     The axis is linear up to 10 and logarithmic above, so that it holds every profile point shown
     and still shows the threshold.
     """
-    names = [n for n in ("e", "r_phi", "psi", "omega_s", "speed_scale", "e_sigma")
-             if f"profile_chi2_{n}" in fitted]  # fmt: skip
+    names = [
+        n
+        for n in ("e", "r_phi", "psi", "omega_s", "speed_scale", "e_sigma")
+        if f"profile_chi2_{n}" in fitted
+    ]
     fig = Figure(figsize=(3.0 * max(1, len(names)), 3.6), layout="constrained")
     axes = np.atleast_1d(fig.subplots(1, max(1, len(names)), squeeze=False)[0])
     for ax, n in zip(axes, names, strict=False):
         _profile_panel(ax, fitted, n)
     axes[0].set_ylabel("Δχ² (profile)")
     if names:
-        fig.legend(*axes[0].get_legend_handles_labels(), loc="outside upper center", ncol=4,
-                   fontsize=7)  # fmt: skip
+        fig.legend(
+            *axes[0].get_legend_handles_labels(), loc="outside upper center", ncol=4, fontsize=7
+        )
     return fig
 
 
@@ -153,8 +186,9 @@ def _profile_panel(ax, fitted: xr.Dataset, n: str) -> None:
     log = n in ("r_phi", "speed_scale")
     has_ci = bool(np.isfinite(a["ci_low"]) and np.isfinite(a["ci_high"]))
     if has_ci:
-        ax.axvspan(a["ci_low"], a["ci_high"], color=COLORS["fit"], alpha=0.2, lw=0,
-                   label="95% interval")  # fmt: skip
+        ax.axvspan(
+            a["ci_low"], a["ci_high"], color=COLORS["fit"], alpha=0.2, lw=0, label="95% interval"
+        )
     ax.plot(x, y, "o-", color=COLORS["fit"], ms=3, lw=1, label="profile")
     ax.axhline(3.841, ls="--", color="k", lw=0.8, label=r"95% threshold $\chi^2_1$ = 3.84")
     ax.plot([float(fitted[n])], [0.0], "k*", ms=8, label="estimate")

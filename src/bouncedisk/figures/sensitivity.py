@@ -65,29 +65,53 @@ def fig_sensitivity_indices(ds: xr.Dataset) -> Figure:
             shown = np.clip(value, 0.0, 1.0)  # an index is a share of the variance: in [0, 1]
             x = pos + (k - 0.5) * 0.38
             ax.bar(x, shown, 0.38, color=colors, label=key)
-            ax.errorbar(x, shown, yerr=[shown - np.clip(value - conf, -0.1, 1.1),
-                                        np.clip(value + conf, -0.1, 1.1) - shown],
-                        fmt="none", ecolor="k", capsize=3, lw=0.8)  # fmt: skip
+            ax.errorbar(
+                x,
+                shown,
+                yerr=[
+                    shown - np.clip(value - conf, -0.1, 1.1),
+                    np.clip(value + conf, -0.1, 1.1) - shown,
+                ],
+                fmt="none",
+                ecolor="k",
+                capsize=3,
+                lw=0.8,
+            )
             out = np.flatnonzero((value > 1.0 + CLIP_NOTE) | (value < -CLIP_NOTE))
             clipped += [
                 f"{key}({_parameter(names[i])}) = {value[i]:.2f} ±{conf[i]:.2f}" for i in out
             ]
         share = float(row["noise_share"])
         undefined = int(row["n_undefined"])
-        note = (f"undefined at {undefined} points: no indices" if undefined
-                else f"ensemble noise: {100 * share:.1f} % of the variance")  # fmt: skip
+        note = (
+            f"undefined at {undefined} points: no indices"
+            if undefined
+            else f"ensemble noise: {100 * share:.1f} % of the variance"
+        )
         ax.set_title(f"{_short(o)}\n{note}", fontsize=9)
         ax.set_xticks(pos, [_parameter(n) for n in names], fontsize=8)
         ax.axhline(0, color="k", lw=0.5)
         ax.set_ylim(-0.12, 1.12)
         if clipped:
-            ax.text(0.5, 0.02, "drawn clipped to [0, 1]: " + "; ".join(clipped),
-                    transform=ax.transAxes, fontsize=6, ha="center", va="bottom")  # fmt: skip
+            ax.text(
+                0.5,
+                0.02,
+                "drawn clipped to [0, 1]: " + "; ".join(clipped),
+                transform=ax.transAxes,
+                fontsize=6,
+                ha="center",
+                va="bottom",
+            )
     for ax in axes[len(outputs) :]:
         ax.set_visible(False)
-    handles = [Rectangle((0, 0), 1, 1, color=c, label=lab) for c, lab in
-               (("#1f77b4", "S1 (RBD-FAST)"), ("#ff7f0e", "ST (Jansen)"),
-                ("#bbbbbb", f"not resolved (half-width > {limit:g})"))]  # fmt: skip
+    handles = [
+        Rectangle((0, 0), 1, 1, color=c, label=lab)
+        for c, lab in (
+            ("#1f77b4", "S1 (RBD-FAST)"),
+            ("#ff7f0e", "ST (Jansen)"),
+            ("#bbbbbb", f"not resolved (half-width > {limit:g})"),
+        )
+    ]
     axes[0].legend(handles=handles, fontsize=7, loc="upper left")
     axes[0].set_ylabel("Sobol' index (95 % bootstrap interval)")
     n = ds.attrs.get("n_points", "?")
@@ -96,13 +120,22 @@ def fig_sensitivity_indices(ds: xr.Dataset) -> Figure:
     from ..studies.sensitivity_settings import FULL_MIN_BASE_SAMPLES
 
     small = not isinstance(base, int) or base < FULL_MIN_BASE_SAMPLES
-    fig.suptitle(f"Sobol' indices from {n} points (SALib, N = {base} base samples); "
-                 f"grey: interval wider than ±{limit:g}; indices outside [0, 1] drawn clipped"
-                 + ("\nthe total indices are resolved only by the full study "
-                    "(config sensitivity: full)" if small else "")
-                 + ("\nstall torque, power, efficiency: each motor loaded against its own "
-                    "running direction ($\\psi \\to \\psi + \\pi$ mirrors it)" if running else ""),
-                 fontsize=10)  # fmt: skip
+    fig.suptitle(
+        f"Sobol' indices from {n} points (SALib, N = {base} base samples); "
+        f"grey: interval wider than ±{limit:g}; indices outside [0, 1] drawn clipped"
+        + (
+            "\nthe total indices are resolved only by the full study (config sensitivity: full)"
+            if small
+            else ""
+        )
+        + (
+            "\nstall torque, power, efficiency: each motor loaded against its own "
+            "running direction ($\\psi \\to \\psi + \\pi$ mirrors it)"
+            if running
+            else ""
+        ),
+        fontsize=10,
+    )
     return fig
 
 
@@ -163,8 +196,9 @@ def fig_design_maps(ds: xr.Dataset) -> Figure:
                 ax.scatter(xp[backwards], xr_[backwards], marker="x", c="k", s=18, lw=0.8)
             beyond = ~np.isfinite(m[o].values) & ~backwards
             rings |= bool(beyond.any())
-            ax.scatter(xp[beyond], xr_[beyond], marker="o", s=30, facecolors="none",
-                       edgecolors="k", lw=0.8)  # fmt: skip
+            ax.scatter(
+                xp[beyond], xr_[beyond], marker="o", s=30, facecolors="none", edgecolors="k", lw=0.8
+            )
             mesh = ax.pcolormesh(
                 psi, lr, z.reshape(n_psi, n_r).T, shading="nearest", cmap="viridis"
             )
@@ -182,9 +216,14 @@ def fig_design_maps(ds: xr.Dataset) -> Figure:
             at_edge = xr_[i] in (xr_.min(), xr_.max()) or xp[i] in (xp.min(), xp.max())
             edge |= bool(at_edge)
             where = " (at the edge of the swept range)" if at_edge else ""
-            axes[0, j].text(0.02, 0.02, f"best {_short(best_by)}: {best['value']:.3g} "
-                            f"[{lo:.3g}, {hi:.3g}]{where}",
-                            transform=axes[0, j].transAxes, fontsize=7, color="w")  # fmt: skip
+            axes[0, j].text(
+                0.02,
+                0.02,
+                f"best {_short(best_by)}: {best['value']:.3g} [{lo:.3g}, {hi:.3g}]{where}",
+                transform=axes[0, j].transAxes,
+                fontsize=7,
+                color="w",
+            )
     fig.suptitle(
         f"red star: largest {_short(best_by)}"
         + (" (at the edge: the maximum may lie outside the swept range)" if edge else "")

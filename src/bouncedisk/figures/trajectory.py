@@ -60,10 +60,24 @@ def fig_trajectory(ds: xr.Dataset, band: xr.Dataset | None = None, window: float
             zero = _zero_width(band["omega_p025"].values, band["omega_p975"].values)
             note = " (zero width: the members coincide)" if zero else ""
             note += _band_end(bt, t, band.attrs.get("stop"))
-            _band(axes[2], bt, band["omega_p025"], band["omega_p975"], "0.6",
-                  f"central 95% of {k} members{note}", alpha=0.3)  # fmt: skip
-            _band(axes[2], bt, band["omega_ci_low"], band["omega_ci_high"], COLORS["fit"],
-                  "95% interval of the ensemble mean", alpha=0.45)  # fmt: skip
+            _band(
+                axes[2],
+                bt,
+                band["omega_p025"],
+                band["omega_p975"],
+                "0.6",
+                f"central 95% of {k} members{note}",
+                alpha=0.3,
+            )
+            _band(
+                axes[2],
+                bt,
+                band["omega_ci_low"],
+                band["omega_ci_high"],
+                COLORS["fit"],
+                "95% interval of the ensemble mean",
+                alpha=0.45,
+            )
         axes[2].plot(t, ds["omega_rotor"].values, color=COLORS["rotor"], lw=0.8, label="this run")
         if "t_impact" in ds:
             axes[2].plot(

@@ -119,11 +119,16 @@ class FitSettings:
     def search_settings(self) -> SearchSettings:
         """The search's share of the settings (sizes resolved by :meth:`for_runs`)."""
         return SearchSettings(
-            seed=self.seed, scan=self.scan, zoom=self.zoom, zoom_centres=self.zoom_centres,
-            global_members=self.global_members, members=self.members,
-            pilot_members=self.pilot_members, local_nfev=self.local_nfev,
+            seed=self.seed,
+            scan=self.scan,
+            zoom=self.zoom,
+            zoom_centres=self.zoom_centres,
+            global_members=self.global_members,
+            members=self.members,
+            pilot_members=self.pilot_members,
+            local_nfev=self.local_nfev,
             joint_zoom=self.joint_zoom,
-        )  # fmt: skip
+        )
 
 
 def prepare_curve(curve: MotorCurve) -> tuple[MotorCurve, str]:
@@ -169,17 +174,29 @@ def check_fittable(curve: MotorCurve) -> None:
     side = curve.sidecar_path or curve.path
     f, span, n = curve.drive_frequency_hz, float(curve.time[-1] - curve.time[0]), len(curve.time)
     if n < MIN_FIT_SAMPLES:
-        raise InputError(curve.path, "time_s", f"has {n} samples; the fit's statistics need at "
-                         f"least {MIN_FIT_SAMPLES} (trend, ripple and a block bootstrap)")  # fmt: skip
+        raise InputError(
+            curve.path,
+            "time_s",
+            f"has {n} samples; the fit's statistics need at "
+            f"least {MIN_FIT_SAMPLES} (trend, ripple and a block bootstrap)",
+        )
     if not span * f >= MIN_PERIODS:
-        raise InputError(side, "motor.drive_frequency_hz", f"{f:g} Hz: the record ({span:.6g} s) "
-                         f"spans {span * f:.3g} drive periods; the fit needs at least {MIN_PERIODS}")  # fmt: skip
+        raise InputError(
+            side,
+            "motor.drive_frequency_hz",
+            f"{f:g} Hz: the record ({span:.6g} s) "
+            f"spans {span * f:.3g} drive periods; the fit needs at least {MIN_PERIODS}",
+        )
     per_sample = curve.dt * f
     kept = min(n, int(MAX_PERIODS / per_sample) + 1)
     if kept < MIN_FIT_SAMPLES:
-        raise InputError(side, "motor.drive_frequency_hz", f"{f:g} Hz: one sampling interval "
-                         f"spans {per_sample:.3g} drive periods, so the first {MAX_PERIODS} "
-                         f"periods hold {kept} samples; the fit needs at least {MIN_FIT_SAMPLES}")  # fmt: skip
+        raise InputError(
+            side,
+            "motor.drive_frequency_hz",
+            f"{f:g} Hz: one sampling interval "
+            f"spans {per_sample:.3g} drive periods, so the first {MAX_PERIODS} "
+            f"periods hold {kept} samples; the fit needs at least {MIN_FIT_SAMPLES}",
+        )
 
 
 def data_layout(curves: Sequence[MotorCurve]) -> tuple[Layout, np.ndarray, np.ndarray]:
@@ -266,8 +283,9 @@ def fitted_band(
     theta: dict[str, float], curve: MotorCurve, layout: Layout, members: int, spec: EnsembleSpec
 ) -> dict[str, np.ndarray]:
     """The fitted model's noise-free members: ensemble mean, its 95 % interval, member band."""
-    runs = np.array(member_records(theta, dataclasses.replace(curve, sigma=0.0),
-                                   range(members), spec))  # fmt: skip
+    runs = np.array(
+        member_records(theta, dataclasses.replace(curve, sigma=0.0), range(members), spec)
+    )
     return {**member_band(runs), "member0": runs[0]}
 
 
@@ -340,10 +358,42 @@ def pose_fit(
     spec = EnsembleSpec(e_sigma=stated, seed=s.seed, cores=max(1, s.cores))
     part = load_part(list(load or []), fitted, spec, progress)
     names = param_names(fitted, fit_e_sigma=s.e_sigma is None)
-    obj = Objective(fitted, names, layout, target, spec, s.members,
-                    cov=provisional_cov(target, boot), runs=len(runs), load=part,
-                    parts="both" if part is not None else "runup")  # fmt: skip
+    obj = Objective(
+        fitted,
+        names,
+        layout,
+        target,
+        spec,
+        s.members,
+        cov=provisional_cov(target, boot),
+        runs=len(runs),
+        load=part,
+        parts="both" if part is not None else "runup",
+    )
     return PosedFit(obj, s, runs, note, records, boot)
+
+
+def scan_candidates(
+    obj: Objective, s: FitSettings, best_chi2: float, progress: Callable[[str], None] | None
+) -> np.ndarray:
+    """The scan's points that reproduce the data's statistics within its bootstrap scales and,
+    with a load curve, the joint candidates that reproduce the run-ups and the load curve
+    together (first): the points the intervals are also judged on."""
+    extra = scan_acceptable(obj, s.global_members)
+    if progress is not None:
+        progress(
+            f"scan: {len(extra)} points reproduce the data's statistics within its bootstrap scales"
+        )
+    if obj.load is not None:
+        joint = joint_consistent(obj, s.global_members, best_chi2)
+        if progress is not None:
+            progress(
+                f"scan: {len(joint)} of the joint candidates reproduce the run-ups and the "
+                "load curve together (chi2 below its 95 % point)"
+            )
+        # with the run-ups' own candidates: their intervals alone are judged on them too
+        extra = np.concatenate([joint, extra])
+    return extra
 
 
 def fit_curve(
@@ -363,19 +413,11 @@ def fit_curve(
     best = search(obj, s.search_settings(), progress)
     thr = birge(best.chi2, obj.n_stats, len(obj.names))
     if progress is not None and thr > THRESHOLD:
-        progress(f"chi2 {best.chi2:.4g} on {obj.n_stats} statistics: intervals widened "
-                 f"(delta chi2 {thr:.4g} instead of {THRESHOLD:.3f})")  # fmt: skip
-    extra = scan_acceptable(obj, s.global_members)
-    if progress is not None:
-        progress(f"scan: {len(extra)} points reproduce the data's statistics within its "
-                 "bootstrap scales")  # fmt: skip
-    if part is not None:
-        joint = joint_consistent(obj, s.global_members, best.chi2)
-        if progress is not None:
-            progress(f"scan: {len(joint)} of the joint candidates reproduce the run-ups and the "
-                     "load curve together (chi2 below its 95 % point)")  # fmt: skip
-        # with the run-ups' own candidates: their intervals alone are judged on them too
-        extra = np.concatenate([joint, extra])
+        progress(
+            f"chi2 {best.chi2:.4g} on {obj.n_stats} statistics: intervals widened "
+            f"(delta chi2 {thr:.4g} instead of {THRESHOLD:.3f})"
+        )
+    extra = scan_candidates(obj, s, best.chi2, progress)
     level = chi2_level(obj, best.x, s.members)
     # polished within three thresholds of the level (held metric) or three times the 95 % point
     # of chi2(n) (own covariance): a polish of four steps moves chi2 that far, not further
@@ -383,22 +425,29 @@ def fit_curve(
     reread = confirm_points(obj, extra, s.members, near=level + 3.0 * thr, near_own=3.0 * gof)
     consistent = consistent_points(obj, reread, s.members, best.chi2)
     if progress is not None:
-        progress(f"chi2 {best.chi2:.4g} at the best point, {level:.4g} on fresh members; "
-                 f"{len(reread)} points read on {s.members} members for the scan's candidates "
-                 f"(refinements included), {len(consistent)} within their own spread")  # fmt: skip
-    profiles, jac, corr, sd = all_profiles(obj, best.x, s.members, s.profile and list(s.profile),
-                                           progress, thr, consistent, level)  # fmt: skip
+        progress(
+            f"chi2 {best.chi2:.4g} at the best point, {level:.4g} on fresh members; "
+            f"{len(reread)} points read on {s.members} members for the scan's candidates "
+            f"(refinements included), {len(consistent)} within their own spread"
+        )
+    profiles, jac, corr, sd = all_profiles(
+        obj, best.x, s.members, s.profile and list(s.profile), progress, thr, consistent, level
+    )
     final = obj.best(s.members)  # a profile may have found a better point
     basins = fit_basins(obj, s.members, thr)
     if progress is not None and len(basins) > 1:
-        progress(f"{len(basins)} basins within delta chi2 {thr:.3g} of the best: the data do not "
-                 "single one out; the estimate is the lowest chi2 (basins.choose)")  # fmt: skip
+        progress(
+            f"{len(basins)} basins within delta chi2 {thr:.3g} of the best: the data do not "
+            "single one out; the estimate is the lowest chi2 (basins.choose)"
+        )
     if not adequate(final.chi2, obj.n_stats):
         # the best point found does not reproduce the data: nothing is identified by it
         profiles = [dataclasses.replace(p, identified=False) for p in profiles]
         if progress is not None:
-            progress(f"chi2 {final.chi2:.4g} on {obj.n_stats} statistics (p < {ADEQUATE_P:g}): "
-                     "the fit does not reproduce the data; no parameter reported identified")  # fmt: skip
+            progress(
+                f"chi2 {final.chi2:.4g} on {obj.n_stats} statistics (p < {ADEQUATE_P:g}): "
+                "the fit does not reproduce the data; no parameter reported identified"
+            )
     comb_sd, comb_vec = combinations(jac, obj.span)
     ens = obj.ensemble(final.x, s.pilot_members)
     theta = obj.theta(final.x)
@@ -411,13 +460,33 @@ def fit_curve(
         which = s.profile and list(s.profile)
         load_fit = load_result(obj, final.x, s.members, which, profiles, reread, progress)
     return FitResult(
-        names=obj.names, x=final.x, chi2=final.chi2, profiles=profiles, correlation=corr,
-        local_sd=sd, comb_sd=comb_sd, comb_vectors=comb_vec, target=target,
-        fitted_stats=ens.mean, fitted_sd=np.sqrt(np.diag(ens.cov)), layout=layout, band=band,
-        trend_data=(td.steady, td.tau), trend_model=(tm.steady, tm.tau),
-        trend_ci=(tuple(np.percentile(boot[:, 0], [2.5, 97.5])),
-                  tuple(np.exp(np.percentile(boot[:, 1], [2.5, 97.5])))),
-        physical=physical(theta, fitted), basins=basins, curve=fitted, note=note, evaluations=len(obj.read),
-        wall_time_s=_time.perf_counter() - start, settings=s, runs=tuple(runs), load=load_fit,
+        names=obj.names,
+        x=final.x,
+        chi2=final.chi2,
+        profiles=profiles,
+        correlation=corr,
+        local_sd=sd,
+        comb_sd=comb_sd,
+        comb_vectors=comb_vec,
+        target=target,
+        fitted_stats=ens.mean,
+        fitted_sd=np.sqrt(np.diag(ens.cov)),
+        layout=layout,
+        band=band,
+        trend_data=(td.steady, td.tau),
+        trend_model=(tm.steady, tm.tau),
+        trend_ci=(
+            tuple(np.percentile(boot[:, 0], [2.5, 97.5])),
+            tuple(np.exp(np.percentile(boot[:, 1], [2.5, 97.5]))),
+        ),
+        physical=physical(theta, fitted),
+        basins=basins,
+        curve=fitted,
+        note=note,
+        evaluations=len(obj.read),
+        wall_time_s=_time.perf_counter() - start,
+        settings=s,
+        runs=tuple(runs),
+        load=load_fit,
         chi2_level=level,
-    )  # fmt: skip
+    )

@@ -69,8 +69,10 @@ def lower_inverse(low: np.ndarray) -> np.ndarray:
     inv = np.zeros((n, n))
     for col in range(n):
         for i in range(col, n):
-            s = math.fsum([1.0 if i == col else 0.0]
-                          + [-float(low[i, m] * inv[m, col]) for m in range(col, i)])  # fmt: skip
+            s = math.fsum(
+                [1.0 if i == col else 0.0]
+                + [-float(low[i, m] * inv[m, col]) for m in range(col, i)]
+            )
             inv[i, col] = s / low[i, i]
     return inv
 

@@ -86,9 +86,11 @@ def chi2_at_truth(obj: Objective, members: int) -> dict[str, float] | None:
 
 
 def load_part(
-    curves: list[LoadCurveData], fitted: MotorCurve, spec: EnsembleSpec,
+    curves: list[LoadCurveData],
+    fitted: MotorCurve,
+    spec: EnsembleSpec,
     progress: Callable[[str], None] | None = None,
-) -> LoadPart | None:  # fmt: skip
+) -> LoadPart | None:
     """The load curves' part of the likelihood (``None`` without load curves), after checking
     that they share the run-ups' drive and state ``Φ0`` (the torque scale needs it)."""
     if not curves:
@@ -97,8 +99,12 @@ def load_part(
         check_same_setup(d, fitted.drive_frequency_hz, fitted.phi0_rad)
         check_window(d)
         if fitted.phi0_rad is None:
-            raise InputError(d.path, "motor.Phi0_rad", "the run-ups' sidecar must state Phi0_rad "
-                             "for a joint fit with a load curve (its torque scale needs it)")  # fmt: skip
+            raise InputError(
+                d.path,
+                "motor.Phi0_rad",
+                "the run-ups' sidecar must state Phi0_rad "
+                "for a joint fit with a load curve (its torque scale needs it)",
+            )
     return LoadPart(curves, spec.e_sigma, spec.seed, cores=spec.cores, progress=progress)
 
 
@@ -111,8 +117,11 @@ def joint_consistent(obj: Objective, members: int, best_chi2: float) -> np.ndarr
     ``sqrt(1/M + 1/k)``, the load curves' by ``D + C_L/k``), so no further factor for the few
     members is due. Every basin among them widens the joint intervals."""
     limit = fit_limit(best_chi2, obj.n_stats)
-    pts = {tuple(ev.x): ev.x for ev in obj.log
-           if ev.members == members and ev.parts == "both" and ev.chi2 <= limit}  # fmt: skip
+    pts = {
+        tuple(ev.x): ev.x
+        for ev in obj.log
+        if ev.members == members and ev.parts == "both" and ev.chi2 <= limit
+    }
     return np.array(list(pts.values())).reshape(-1, len(obj.names))
 
 
@@ -137,9 +146,14 @@ def identifiability(
 
 
 def load_result(
-    obj: Objective, x: np.ndarray, members: int, which: list[str] | None,
-    profiles: list[Profile], reread: np.ndarray, progress: Callable[[str], None] | None,
-) -> LoadFit:  # fmt: skip
+    obj: Objective,
+    x: np.ndarray,
+    members: int,
+    which: list[str] | None,
+    profiles: list[Profile],
+    reread: np.ndarray,
+    progress: Callable[[str], None] | None,
+) -> LoadFit:
     """The joint fit's load part: identifiability intervals, the fitted load curve's band and
     the load part's ``χ²`` at the estimate."""
     part = obj.load
@@ -147,12 +161,20 @@ def load_result(
     intervals["both"] = profiles
     if progress is not None:
         for j, name in enumerate(p.name for p in profiles):
-            cells = [f"{k} [{intervals[k][j].ci_low:.4g}, {intervals[k][j].ci_high:.4g}]"
-                     for k in ("runup", "load", "both")]  # fmt: skip
+            cells = [
+                f"{k} [{intervals[k][j].ci_low:.4g}, {intervals[k][j].ci_high:.4g}]"
+                for k in ("runup", "load", "both")
+            ]
             progress(f"identifiability {name}: " + "; ".join(cells))
     xs = snap(x)
     theta = obj.theta(xs)
     chi2_load = obj.seeing("load").chi2_now(xs, members)
-    return LoadFit(curves=part.curves, band=load_band(part, theta, xs), chi2=chi2_load, n=part.n,
-                   intervals=intervals, data_var=part.data_var(),
-                   chi2_generating=chi2_at_truth(obj, members))  # fmt: skip
+    return LoadFit(
+        curves=part.curves,
+        band=load_band(part, theta, xs),
+        chi2=chi2_load,
+        n=part.n,
+        intervals=intervals,
+        data_var=part.data_var(),
+        chi2_generating=chi2_at_truth(obj, members),
+    )

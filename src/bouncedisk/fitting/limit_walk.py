@@ -58,17 +58,24 @@ DIFF_STEP = 1e-4
 
 
 def _refit(
-    obj: Objective, y0: np.ndarray, members: int, held: tuple[str, ...] = ("e", "e_sigma"),
+    obj: Objective,
+    y0: np.ndarray,
+    members: int,
+    held: tuple[str, ...] = ("e", "e_sigma"),
     nfev: int = NFEV,
-) -> tuple[np.ndarray, float]:  # fmt: skip
+) -> tuple[np.ndarray, float]:
     """Every coordinate but ``held`` refitted from ``y0`` by least squares (at most ``nfev``
     evaluations); the end point and its ``χ²`` (logged)."""
     free = [k for k, n in enumerate(obj.names) if n not in held]
     if not np.isfinite(obj.residuals(y0, members)).all():
         return y0, obj.chi2(y0, members)  # a run that did not reach its window: no refit from it
-    res = least_squares(lambda u: obj.residuals(obj.from_unit(u, y0, free), members),
-                        obj.to_unit(y0, free), bounds=(0.0, 1.0), diff_step=DIFF_STEP,
-                        max_nfev=nfev)  # fmt: skip
+    res = least_squares(
+        lambda u: obj.residuals(obj.from_unit(u, y0, free), members),
+        obj.to_unit(y0, free),
+        bounds=(0.0, 1.0),
+        diff_step=DIFF_STEP,
+        max_nfev=nfev,
+    )
     y = obj.from_unit(res.x, y0, free)
     return y, obj.chi2(y, members)
 
@@ -148,14 +155,17 @@ def deterministic_walk(
     start, chi2 = _refit(obj, start, members)
     if chi2 > WORTH * best.chi2:
         if progress is not None:
-            progress(f"deterministic limit: chi2 {chi2:.4g} at e_sigma 0, no walk (best "
-                     f"{best.chi2:.4g})")  # fmt: skip
+            progress(
+                f"deterministic limit: chi2 {chi2:.4g} at e_sigma 0, no walk (best {best.chi2:.4g})"
+            )
         return obj.best(members)
     ends = [_one_way(obj, start, chi2, sign, members) for sign in (1.0, -1.0)]
     # where the valley bends the walk stops short of its floor: e joins the refit there
     _refit(obj, min(ends, key=lambda p: p[1])[0], members, ("e_sigma",), FINAL_NFEV)
     out = obj.best(members)
     if progress is not None:
-        progress(f"deterministic limit: valley walk at e_sigma 0 from chi2 {chi2:.4g}; best "
-                 f"chi2 {out.chi2:.4g} (before: {best.chi2:.4g})")  # fmt: skip
+        progress(
+            f"deterministic limit: valley walk at e_sigma 0 from chi2 {chi2:.4g}; best "
+            f"chi2 {out.chi2:.4g} (before: {best.chi2:.4g})"
+        )
     return out

@@ -33,8 +33,12 @@ def _readings(fit: FitResult) -> dict:
     """Per-reading variables (module docstring)."""
     lf = fit.load
     torque = np.concatenate([d.torque for d in lf.curves])
-    sd = np.concatenate([d.speed_sd if d.speed_sd is not None else np.full(len(d.torque), np.nan)
-                         for d in lf.curves])  # fmt: skip
+    sd = np.concatenate(
+        [
+            d.speed_sd if d.speed_sd is not None else np.full(len(d.torque), np.nan)
+            for d in lf.curves
+        ]
+    )
     which = np.concatenate([np.full(len(d.torque), k) for k, d in enumerate(lf.curves)])
     b = lf.band
 
@@ -43,19 +47,27 @@ def _readings(fit: FitResult) -> dict:
 
     return {
         "load_torque": ("reading", torque, {"units": "N m", "long_name": "load torque"}),
-        "load_curve_index": ("reading", which.astype(np.int32), {"units": "1", "long_name":
-                             "which load curve the reading is from (order of --load)"}),
-        "load_speed_measured": var(np.concatenate([d.speed for d in lf.curves]),
-                                   "measured mean rotor speed over the window after a start from rest"),
+        "load_curve_index": (
+            "reading",
+            which.astype(np.int32),
+            {"units": "1", "long_name": "which load curve the reading is from (order of --load)"},
+        ),
+        "load_speed_measured": var(
+            np.concatenate([d.speed for d in lf.curves]),
+            "measured mean rotor speed over the window after a start from rest",
+        ),
         "load_speed_sd": var(sd, "spread of repeated readings (the data's; nan: not given)"),
-        "load_speed_sigma": var(np.sqrt(lf.data_var), "standard deviation of the reading in the "
-                                "likelihood: max(spread, model members' sd) / sqrt(repeats)"),
+        "load_speed_sigma": var(
+            np.sqrt(lf.data_var),
+            "standard deviation of the reading in the "
+            "likelihood: max(spread, model members' sd) / sqrt(repeats)",
+        ),
         "load_speed_fitted": var(b["mean"], "fitted model's ensemble mean of the reading"),
         "load_speed_fitted_low": var(b["low"], "lower end of the 95% interval of that mean"),
         "load_speed_fitted_high": var(b["high"], "upper end of the 95% interval of that mean"),
         "load_speed_band_low": var(b["p025"], "2.5th percentile of the fitted model's members"),
         "load_speed_band_high": var(b["p975"], "97.5th percentile of the fitted model's members"),
-    }  # fmt: skip
+    }
 
 
 def _intervals(fit: FitResult) -> dict:
@@ -77,20 +89,49 @@ def _intervals(fit: FitResult) -> dict:
     gen = truth(fit)
     truth_x = [truth_coordinate({f"generating_{k}": v for k, v in gen.items()}, n) for n in names]
     return {
-        "search_low": ("parameter", np.array([BOUNDS[n][0] for n in names]), {"units": "1",
-                       "long_name": "lower end of the search range of each search coordinate"}),
-        "search_high": ("parameter", np.array([BOUNDS[n][1] for n in names]), {"units": "1",
-                        "long_name": "upper end of the search range of each search coordinate"}),
-        "generating_value": ("parameter", np.array([np.nan if v is None else v for v in truth_x]),
-                             {"units": "1", "long_name": "generating value of each search "
-                              "coordinate stated by synthetic data (nan: not stated)"}),
-        "interval_low": (dims, low, {"units": "1", "long_name": "lower end of the "
-                         "95% interval of each search coordinate from each data set"}),
-        "interval_high": (dims, high, {"units": "1", "long_name": "upper end of the "
-                          "95% interval of each search coordinate from each data set"}),
-        "interval_identified": (dims, ident.astype(np.int8), {"units": "1",
-                                "long_name": "1: the profile is not flat over the search range"}),
-    }  # fmt: skip
+        "search_low": (
+            "parameter",
+            np.array([BOUNDS[n][0] for n in names]),
+            {"units": "1", "long_name": "lower end of the search range of each search coordinate"},
+        ),
+        "search_high": (
+            "parameter",
+            np.array([BOUNDS[n][1] for n in names]),
+            {"units": "1", "long_name": "upper end of the search range of each search coordinate"},
+        ),
+        "generating_value": (
+            "parameter",
+            np.array([np.nan if v is None else v for v in truth_x]),
+            {
+                "units": "1",
+                "long_name": "generating value of each search "
+                "coordinate stated by synthetic data (nan: not stated)",
+            },
+        ),
+        "interval_low": (
+            dims,
+            low,
+            {
+                "units": "1",
+                "long_name": "lower end of the "
+                "95% interval of each search coordinate from each data set",
+            },
+        ),
+        "interval_high": (
+            dims,
+            high,
+            {
+                "units": "1",
+                "long_name": "upper end of the "
+                "95% interval of each search coordinate from each data set",
+            },
+        ),
+        "interval_identified": (
+            dims,
+            ident.astype(np.int8),
+            {"units": "1", "long_name": "1: the profile is not flat over the search range"},
+        ),
+    }
 
 
 def truth(fit: FitResult) -> dict[str, float]:
@@ -107,7 +148,7 @@ def load_dataset(fit: FitResult) -> xr.Dataset:
         coords={
             "reading": ("reading", np.arange(n)),
             "data_set": ("data_set", [label for _, label in DATA_SETS]),
-        },  # fmt: skip
+        },
     )
     ds.attrs.update(
         load_curve_file=", ".join(d.path for d in lf.curves),
@@ -133,8 +174,10 @@ def identifiability_lines(ds: xr.Dataset) -> list[str]:
     """The summary's lines for a joint fit: the load part's ``χ²`` and the identifiability
     table (search coordinates; ``*``: the profile is flat, not identified)."""
     a = ds.attrs
-    lines = [f"  load curve: chi2 {a['chi2_load']:.4g} on {a['n_load_readings']} readings "
-             f"({a['load_curve_file']})"]  # fmt: skip
+    lines = [
+        f"  load curve: chi2 {a['chi2_load']:.4g} on {a['n_load_readings']} readings "
+        f"({a['load_curve_file']})"
+    ]
     if a.get("identified", "yes") == "no":
         return [*lines, "  95% intervals by data set: none (inadequate fit)", *_truth_lines(a)]
     lines.append("  95% intervals by data set (search coordinates; * not identified):")
@@ -146,8 +189,11 @@ def identifiability_lines(ds: xr.Dataset) -> list[str]:
             flag = "" if ds["interval_identified"].values[k, j] else "*"
             cells.append(f"{label} [{lo:.4g}, {hi:.4g}]{flag}")
         truth = float(ds["generating_value"].values[j]) if "generating_value" in ds else math.nan
-        lines.append(f"    {name:>12}: " + "; ".join(cells)
-                     + (f"  (generating {truth:.4g})" if math.isfinite(truth) else ""))  # fmt: skip
+        lines.append(
+            f"    {name:>12}: "
+            + "; ".join(cells)
+            + (f"  (generating {truth:.4g})" if math.isfinite(truth) else "")
+        )
     return lines + _truth_lines(a)
 
 
@@ -157,7 +203,12 @@ def _truth_lines(attrs: dict) -> list[str]:
     if "chi2_generating_both" not in attrs:
         return []
     at, fit = attrs["chi2_generating_both"], attrs["chi2"]
-    verdict = ("below the fit's: the search missed a better basin (a larger --scan and --zoom)"
-               if at < fit else "not below the fit's")  # fmt: skip
-    return [f"  at the generating point: chi2 {at:.4g} (run-ups {attrs['chi2_generating_runup']:.4g}, "
-            f"load curve {attrs['chi2_generating_load']:.4g}), {verdict} {fit:.4g}"]  # fmt: skip
+    verdict = (
+        "below the fit's: the search missed a better basin (a larger --scan and --zoom)"
+        if at < fit
+        else "not below the fit's"
+    )
+    return [
+        f"  at the generating point: chi2 {at:.4g} (run-ups {attrs['chi2_generating_runup']:.4g}, "
+        f"load curve {attrs['chi2_generating_load']:.4g}), {verdict} {fit:.4g}"
+    ]

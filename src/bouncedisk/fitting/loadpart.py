@@ -68,13 +68,19 @@ def motor_scales(theta: dict[str, float], data: LoadCurveData) -> tuple[float, f
     """``(t_c [s], speed scale [rad/s], torque scale [N·m])`` of a parameter point for a motor
     (docs/model.md "Physical conversion"; the torque scale ``μ m_r g_eff r_eff`` of "The motor under
     load"), by :meth:`~bouncedisk.model.params.PhysicalParameters.from_nondimensional`."""
-    p = Parameters(e=theta["e"], omega_s=theta["omega_s"], r_phi=10.0 ** theta["log10_r_phi"],
-                   psi=theta["psi"])  # fmt: skip
+    p = Parameters(
+        e=theta["e"], omega_s=theta["omega_s"], r_phi=10.0 ** theta["log10_r_phi"], psi=theta["psi"]
+    )
     r = data.rotor
     phys = PhysicalParameters.from_nondimensional(
-        p, data.drive_frequency_hz, data.phi0_rad, r["m_r_kg"], r["r_g_m"], r["r_c_m"],
+        p,
+        data.drive_frequency_hz,
+        data.phi0_rad,
+        r["m_r_kg"],
+        r["r_g_m"],
+        r["r_c_m"],
         F_preload=data.preload_n,
-    )  # fmt: skip
+    )
     sc = phys.scales()
     return sc.t_c, sc.omega_scale, sc.torque
 
@@ -88,11 +94,17 @@ def curve_readings(
     t_c, speed, torque = motor_scales(theta, data)
     t0, t1 = (w / t_c for w in data.window_s)
     cfg = motor_config(
-        theta["e"], theta["omega_s"], 10.0 ** theta["log10_r_phi"], theta["psi"],
-        t_end=t1, max_events=MAX_EVENTS,
-        e_sigma=restitution_noise(theta, e_sigma), seed=seed, member=LOAD_STREAM + member,
+        theta["e"],
+        theta["omega_s"],
+        10.0 ** theta["log10_r_phi"],
+        theta["psi"],
+        t_end=t1,
+        max_events=MAX_EVENTS,
+        e_sigma=restitution_noise(theta, e_sigma),
+        seed=seed,
+        member=LOAD_STREAM + member,
         stats_from=t0,
-    )  # fmt: skip
+    )
     # a run stopped by the event budget before t1 has not read the window: NaN, never the part
     # it reached divided by the whole window (the objective rejects the point)
     integrals = omega_integrals(
@@ -112,9 +124,13 @@ def check_window(data: LoadCurveData) -> None:
     periods = t1 * data.drive_frequency_hz
     if periods > MAX_EVENTS:
         side = str(Path(data.path).with_suffix(".yaml"))
-        raise InputError(side, "window_s", f"ends at {t1:g} s = {periods:.3g} drive periods "
-                         f"after the start; a reading can follow at most {MAX_EVENTS:.3g} "
-                         "impacts, so the model cannot read that window")  # fmt: skip
+        raise InputError(
+            side,
+            "window_s",
+            f"ends at {t1:g} s = {periods:.3g} drive periods "
+            f"after the start; a reading can follow at most {MAX_EVENTS:.3g} "
+            "impacts, so the model cannot read that window",
+        )
 
 
 @dataclass
@@ -147,8 +163,10 @@ class LoadPart:
 
     def __post_init__(self) -> None:
         self.y = np.concatenate([d.speed for d in self.curves])
-        sd = [d.speed_sd if d.speed_sd is not None else np.full(len(d.torque), np.nan)
-              for d in self.curves]  # fmt: skip
+        sd = [
+            d.speed_sd if d.speed_sd is not None else np.full(len(d.torque), np.nan)
+            for d in self.curves
+        ]
         self.sd = np.concatenate(sd)
         self.repeats = np.concatenate([np.full(len(d.torque), _repeats(d)) for d in self.curves])
         self.floor = LOAD_FLOOR * max(float(np.max(np.abs(self.y))), 1e-12)
@@ -190,8 +208,10 @@ class LoadPart:
                 now = time.perf_counter()
                 if self.progress is not None and now - last[0] >= PROGRESS_S:
                     last[0] = now
-                    self.progress(f"load curve: {j}/{len(tasks)} member curves read at this "
-                                  f"point ({now - started:.0f} s)")  # fmt: skip
+                    self.progress(
+                        f"load curve: {j}/{len(tasks)} member curves read at this "
+                        f"point ({now - started:.0f} s)"
+                    )
 
             if serial or self.cores <= 1 or len(tasks) < 2:
                 flat = []

@@ -89,8 +89,14 @@ def physical(theta: dict[str, float], curve: MotorCurve) -> dict[str, float]:
         scale = r_phi * curve.phi0_rad / t_c
     else:
         scale = 10.0 ** theta["log10_speed_scale"]
-    return {"e": theta["e"], "r_phi": r_phi, "psi": theta["psi"], "omega_s": w, "t_c": t_c,
-            "speed_scale": scale}  # fmt: skip
+    return {
+        "e": theta["e"],
+        "r_phi": r_phi,
+        "psi": theta["psi"],
+        "omega_s": w,
+        "t_c": t_c,
+        "speed_scale": scale,
+    }
 
 
 def uniform_grid(curve: MotorCurve) -> np.ndarray:
@@ -134,8 +140,14 @@ def thread_map(
     return out
 
 
-def _member_config(theta: dict[str, float], curve: MotorCurve, member: int, e_sigma: float,
-                   seed: int, grid: np.ndarray) -> EngineConfig:  # fmt: skip
+def _member_config(
+    theta: dict[str, float],
+    curve: MotorCurve,
+    member: int,
+    e_sigma: float,
+    seed: int,
+    grid: np.ndarray,
+) -> EngineConfig:
     """The engine configuration of one member at ``theta`` sampled on the curve's ``grid``."""
     p = physical(theta, curve)
     t_c = p["t_c"]
@@ -182,8 +194,14 @@ def simulate_curve(
     return _simulated([theta], curve, member, e_sigma, seed, uniform_grid(curve))[0]
 
 
-def _simulated(thetas: Sequence[dict[str, float]], curve: MotorCurve, member: int,
-               e_sigma: float, seed: int, grid: np.ndarray) -> list[np.ndarray]:  # fmt: skip
+def _simulated(
+    thetas: Sequence[dict[str, float]],
+    curve: MotorCurve,
+    member: int,
+    e_sigma: float,
+    seed: int,
+    grid: np.ndarray,
+) -> list[np.ndarray]:
     """:func:`simulate_curve` of each of ``thetas`` on the curve's ``grid``, bit for bit.
 
     Several points must share ``e``, ``omega_s`` and ``σ_e``: they differ in ``R_φ``, ``ψ`` and
@@ -290,8 +308,16 @@ def synthesize_curve(
     """
     n = int(math.floor(span_s / dt_s + 1e-9)) + 1
     t = dt_s * np.arange(n)
-    dummy = MotorCurve(time=t, omega=np.zeros(n), sigma=0.0, drive_frequency_hz=drive_frequency_hz,
-                       phi0_rad=phi0_rad, source="", synthetic=True, path="")  # fmt: skip
+    dummy = MotorCurve(
+        time=t,
+        omega=np.zeros(n),
+        sigma=0.0,
+        drive_frequency_hz=drive_frequency_hz,
+        phi0_rad=phi0_rad,
+        source="",
+        synthetic=True,
+        path="",
+    )
     theta = {
         "e": true["e"],
         "log10_r_phi": math.log10(true["r_phi"]),

@@ -248,8 +248,9 @@ class Objective:
         def runup() -> np.ndarray:
             ens = self.ensemble(x, members)
             cov = regularized_cov(ens.cov, stat_floor(self.target))
-            return self._whitened(ens.mean, detlinalg.lower_inverse(detlinalg.cholesky(cov)),
-                                  members)  # fmt: skip
+            return self._whitened(
+                ens.mean, detlinalg.lower_inverse(detlinalg.cholesky(cov)), members
+            )
 
         return self._joined(
             runup, lambda: self.load.residuals(self.theta(x), x, members_for(members))
@@ -272,8 +273,9 @@ class Objective:
         th = self.theta(x)
 
         def runup() -> np.ndarray:
-            recs = member_records(th, self.curve, range(block * members, (block + 1) * members),
-                                  self.spec)  # fmt: skip
+            recs = member_records(
+                th, self.curve, range(block * members, (block + 1) * members), self.spec
+            )
             mean = EnsembleStats.from_values(records_stats(np.array(recs), self.layout)).mean
             return self._whitened(mean, self._white, members)
 

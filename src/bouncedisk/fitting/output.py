@@ -28,11 +28,19 @@ PUBLIC = {
     "r_phi": ("log10_r_phi", lambda v: 10.0**v, "1", "angular amplitude ratio R_phi"),
     "psi": ("psi", lambda v: v, "rad", "phase of the torsional vibration"),
     "omega_s": ("omega_s", lambda v: v, "1", "nondimensional stator frequency"),
-    "speed_scale": ("log10_speed_scale", lambda v: 10.0**v, "rad/s",
-                    "rad/s per unit of nondimensional rotor angular velocity"),
-    "e_sigma": ("e_sigma", lambda v: v, "1", "restitution noise: standard deviation of an "
-                "impact's coefficient of restitution about e"),
-}  # fmt: skip
+    "speed_scale": (
+        "log10_speed_scale",
+        lambda v: 10.0**v,
+        "rad/s",
+        "rad/s per unit of nondimensional rotor angular velocity",
+    ),
+    "e_sigma": (
+        "e_sigma",
+        lambda v: v,
+        "1",
+        "restitution noise: standard deviation of an impact's coefficient of restitution about e",
+    ),
+}
 
 
 def _curves(fit: FitResult, ds_time: np.ndarray) -> dict:
@@ -53,17 +61,29 @@ def _curves(fit: FitResult, ds_time: np.ndarray) -> dict:
     lo, hi = residual_band(b, fit.curve.sigma, len(fit.runs))
     runs = np.array([np.interp(ds_time, r.time, r.omega) for r in fit.runs])
     return {
-        "omega_measured_run": (("run", "time"), runs, {"units": "rad/s", "long_name":
-                               "measured rotor angular velocity of each run-up"}),
-        "residual_band_low": var(on_time(lo), "lower end of the 95% band of data minus the "
-                                 "ensemble mean: members' 2.5th percentile and the measurement "
-                                 "noise in quadrature"),
-        "residual_band_high": var(on_time(hi), "upper end of the 95% band of data minus the "
-                                  "ensemble mean (see residual_band_low)"),
-        "omega_measured": var(fit.curve.omega, "measured rotor angular velocity (the mean of "
-                              "the run-ups when several are fitted)"),
-        "omega_fitted": var(on_time(b["mean"]), "fitted model: ensemble mean of the rotor "
-                            "angular velocity (noise-free members)"),
+        "omega_measured_run": (
+            ("run", "time"),
+            runs,
+            {"units": "rad/s", "long_name": "measured rotor angular velocity of each run-up"},
+        ),
+        "residual_band_low": var(
+            on_time(lo),
+            "lower end of the 95% band of data minus the "
+            "ensemble mean: members' 2.5th percentile and the measurement "
+            "noise in quadrature",
+        ),
+        "residual_band_high": var(
+            on_time(hi),
+            "upper end of the 95% band of data minus the ensemble mean (see residual_band_low)",
+        ),
+        "omega_measured": var(
+            fit.curve.omega,
+            "measured rotor angular velocity (the mean of the run-ups when several are fitted)",
+        ),
+        "omega_fitted": var(
+            on_time(b["mean"]),
+            "fitted model: ensemble mean of the rotor angular velocity (noise-free members)",
+        ),
         "omega_fitted_low": var(on_time(b["low"]), "lower end of the 95% interval of the mean"),
         "omega_fitted_high": var(on_time(b["high"]), "upper end of the 95% interval of the mean"),
         "omega_fitted_p025": var(on_time(b["p025"]), "2.5th percentile of the fitted members"),
@@ -71,7 +91,7 @@ def _curves(fit: FitResult, ds_time: np.ndarray) -> dict:
         "omega_fitted_member0": var(on_time(b["member0"]), "one member of the fitted model"),
         "trend_fitted": var(tm(ds_time), "first-order trend of the fitted model's ensemble mean"),
         "trend_measured": var(td(ds_time), "first-order trend of the data"),
-    }  # fmt: skip
+    }
 
 
 def residual_band(band: dict, sigma: float, runs: int = 1) -> tuple[np.ndarray, np.ndarray]:
@@ -119,8 +139,12 @@ def residual_check(ds: xr.Dataset) -> dict[str, float]:
         longest = max(longest, run)
     frac = float(out.mean())
     passed = frac <= RESIDUAL_MAX_OUTSIDE and longest * dt <= RESIDUAL_MAX_RUN_TAU * tau
-    return {"outside_fraction": frac, "longest_run_s": longest * dt, "time_constant_s": tau,
-            "passed": bool(passed)}  # fmt: skip
+    return {
+        "outside_fraction": frac,
+        "longest_run_s": longest * dt,
+        "time_constant_s": tau,
+        "passed": bool(passed),
+    }
 
 
 def _parameters(fit: FitResult) -> tuple[dict, list[str]]:
@@ -134,22 +158,40 @@ def _parameters(fit: FitResult) -> tuple[dict, list[str]]:
             continue
         j = fit.names.index(internal)
         lo_b, hi_b = BOUNDS[internal]
-        attrs = {"units": units, "long_name": long_name, "ci_level": 0.95,
-                 "search_low": fn(lo_b), "search_high": fn(hi_b),
-                 "search_coordinate": internal, "local_sd_search_coordinate": fit.local_sd[j]}  # fmt: skip
+        attrs = {
+            "units": units,
+            "long_name": long_name,
+            "ci_level": 0.95,
+            "search_low": fn(lo_b),
+            "search_high": fn(hi_b),
+            "search_coordinate": internal,
+            "local_sd_search_coordinate": fit.local_sd[j],
+        }
         p = prof.get(internal)
         if p is None:
-            attrs.update(ci_low=fn(lo_b), ci_high=fn(hi_b), identified=0,
-                         interval="not profiled: the search range")  # fmt: skip
+            attrs.update(
+                ci_low=fn(lo_b),
+                ci_high=fn(hi_b),
+                identified=0,
+                interval="not profiled: the search range",
+            )
         else:
-            attrs.update(ci_low=fn(p.ci_low), ci_high=fn(p.ci_high), identified=int(p.identified),
-                         interval=f"profile likelihood, delta chi2 <= {p.threshold:.4g}"
-                         + (f" (scaled from {THRESHOLD:.3f} by chi2/dof)" if p.threshold > THRESHOLD
-                            else "")
-                         + ("; widened to every acceptable point found (several basins)"
-                            if p.multimodal else ""),
-                         multimodal=int(p.multimodal), delta_chi2=p.threshold,
-                         open_low=int(p.open_low), open_high=int(p.open_high))  # fmt: skip
+            attrs.update(
+                ci_low=fn(p.ci_low),
+                ci_high=fn(p.ci_high),
+                identified=int(p.identified),
+                interval=f"profile likelihood, delta chi2 <= {p.threshold:.4g}"
+                + (f" (scaled from {THRESHOLD:.3f} by chi2/dof)" if p.threshold > THRESHOLD else "")
+                + (
+                    "; widened to every acceptable point found (several basins)"
+                    if p.multimodal
+                    else ""
+                ),
+                multimodal=int(p.multimodal),
+                delta_chi2=p.threshold,
+                open_low=int(p.open_low),
+                open_high=int(p.open_high),
+            )
             if not p.identified:
                 not_identified.append(pub)
         if not ok:
@@ -167,8 +209,11 @@ def _profiles(fit: FitResult) -> dict:
         fn, units = PUBLIC[pub][1], PUBLIC[pub][2]
         dim = f"profile_{pub}"
         out[dim] = (dim, fn(p.values), {"units": units, "long_name": f"profiled value of {pub}"})
-        out[f"profile_chi2_{pub}"] = (dim, p.chi2 - fit.chi2, {"units": "1", "long_name":
-                                      f"profile of chi2 over {pub}, minus the best chi2"})  # fmt: skip
+        out[f"profile_chi2_{pub}"] = (
+            dim,
+            p.chi2 - fit.chi2,
+            {"units": "1", "long_name": f"profile of chi2 over {pub}, minus the best chi2"},
+        )
     return out
 
 
@@ -176,8 +221,11 @@ def _statistics(fit: FitResult) -> dict:
     out = {}
     for k, name in enumerate(STATS):
         vals = [fit.target[k], fit.fitted_stats[k], fit.fitted_sd[k]]
-        out[f"stat_{name}"] = ("source", np.array(vals), {"units": STAT_UNITS[k],
-                               "long_name": STAT_LONG_NAMES[k]})  # fmt: skip
+        out[f"stat_{name}"] = (
+            "source",
+            np.array(vals),
+            {"units": STAT_UNITS[k], "long_name": STAT_LONG_NAMES[k]},
+        )
     return out
 
 
@@ -186,14 +234,30 @@ def _basins(fit: FitResult) -> xr.Dataset:
     estimate's."""
     n = len(fit.basins)
     x = np.array([b.x for b in fit.basins]).reshape(n, len(fit.names))
-    return xr.Dataset({
-        "basin_x": (("basin", "parameter"), x, {"units": "1", "long_name": "best point of each "
-                    "acceptable basin in search coordinates (basin 0: the estimate)"}),
-        "basin_chi2": ("basin", np.array([b.chi2 for b in fit.basins]), {"units": "1",
-                       "long_name": "chi2 of each basin's best point"}),
-        "basin_points": ("basin", np.array([b.points for b in fit.basins], dtype=np.int64),
-                         {"units": "1", "long_name": "evaluated points in each basin"}),
-    }, coords={"basin": ("basin", np.arange(n)), "parameter": ("parameter", fit.names)})  # fmt: skip
+    return xr.Dataset(
+        {
+            "basin_x": (
+                ("basin", "parameter"),
+                x,
+                {
+                    "units": "1",
+                    "long_name": "best point of each "
+                    "acceptable basin in search coordinates (basin 0: the estimate)",
+                },
+            ),
+            "basin_chi2": (
+                "basin",
+                np.array([b.chi2 for b in fit.basins]),
+                {"units": "1", "long_name": "chi2 of each basin's best point"},
+            ),
+            "basin_points": (
+                "basin",
+                np.array([b.points for b in fit.basins], dtype=np.int64),
+                {"units": "1", "long_name": "evaluated points in each basin"},
+            ),
+        },
+        coords={"basin": ("basin", np.arange(n)), "parameter": ("parameter", fit.names)},
+    )
 
 
 def fit_dataset(fit: FitResult) -> xr.Dataset:
@@ -212,23 +276,41 @@ def fit_dataset(fit: FitResult) -> xr.Dataset:
             "combination": ("combination", np.arange(len(fit.names))),
         },
     )
-    ds["correlation"] = (("parameter", "parameter2"), fit.correlation,
-                         {"units": "1", "long_name": "correlation of the search coordinates "
-                          "(inverse of J^T J at the estimate)"})  # fmt: skip
-    ds["combination_sd"] = ("combination", fit.comb_sd, {"units": "1", "long_name":
-                            "standard deviation of each eigen-combination, as a fraction of "
-                            "the search ranges (< 1: identified by the curve)"})  # fmt: skip
+    ds["correlation"] = (
+        ("parameter", "parameter2"),
+        fit.correlation,
+        {
+            "units": "1",
+            "long_name": "correlation of the search coordinates (inverse of J^T J at the estimate)",
+        },
+    )
+    ds["combination_sd"] = (
+        "combination",
+        fit.comb_sd,
+        {
+            "units": "1",
+            "long_name": "standard deviation of each eigen-combination, as a fraction of "
+            "the search ranges (< 1: identified by the curve)",
+        },
+    )
     ds = ds.merge(_basins(fit))
-    ds["combination_vector"] = (("combination", "parameter"), fit.comb_vectors,
-                                {"units": "1", "long_name": "eigen-combination of the search "
-                                 "coordinates scaled to their ranges"})  # fmt: skip
+    ds["combination_vector"] = (
+        ("combination", "parameter"),
+        fit.comb_vectors,
+        {
+            "units": "1",
+            "long_name": "eigen-combination of the search coordinates scaled to their ranges",
+        },
+    )
     params, not_identified = _parameters(fit)
     for k, v in params.items():
         ds[k] = v
     ds["t_c"] = xr.DataArray(fit.physical["t_c"], attrs={"units": "s", "long_name": "t_c"})
     if "speed_scale" not in ds:
-        ds["speed_scale"] = xr.DataArray(fit.physical["speed_scale"], attrs={
-            "units": "rad/s", "long_name": "R_phi Phi0 / t_c (from the known Phi0)"})  # fmt: skip
+        ds["speed_scale"] = xr.DataArray(
+            fit.physical["speed_scale"],
+            attrs={"units": "rad/s", "long_name": "R_phi Phi0 / t_c (from the known Phi0)"},
+        )
     ds.attrs.update(base_attrs(f"bouncedisk fit to {path}", kind="fit"))
     ds.attrs.update(_global_attrs(fit, paths, not_identified))
     if fit.load is not None:
@@ -236,9 +318,11 @@ def fit_dataset(fit: FitResult) -> xr.Dataset:
 
         ds = ds.merge(load_dataset(fit), combine_attrs="no_conflicts")
     check = residual_check(ds)
-    ds.attrs.update(residual_outside_fraction=check["outside_fraction"],
-                    residual_longest_run_s=check["longest_run_s"],
-                    residual_within_band=int(check["passed"]))  # fmt: skip
+    ds.attrs.update(
+        residual_outside_fraction=check["outside_fraction"],
+        residual_longest_run_s=check["longest_run_s"],
+        residual_within_band=int(check["passed"]),
+    )
     return ds
 
 
@@ -248,12 +332,19 @@ def _global_attrs(fit: FitResult, paths: list[str], not_identified: list[str]) -
     n_stats = fit.n_statistics
     ok, reason = identified(fit.chi2, fit.n_statistics)
     return {
-        "identified": "yes" if ok else "no", "identified_reason": reason,
-        "run_id": new_run_id("fit", sha), "scene_name": "fit",
-        "status": "completed", "e": th["e"], "omega_s": th["omega_s"], "r_phi": th["r_phi"],
-        "psi": th["psi"], "effects": "contact,impacts,impulse_cap,restitution_noise,torsion",
+        "identified": "yes" if ok else "no",
+        "identified_reason": reason,
+        "run_id": new_run_id("fit", sha),
+        "scene_name": "fit",
+        "status": "completed",
+        "e": th["e"],
+        "omega_s": th["omega_s"],
+        "r_phi": th["r_phi"],
+        "psi": th["psi"],
+        "effects": "contact,impacts,impulse_cap,restitution_noise,torsion",
         "solver": "exact",
-        "steady_speed_rad_s": fit.trend_data[0], "time_constant_s": fit.trend_data[1],
+        "steady_speed_rad_s": fit.trend_data[0],
+        "time_constant_s": fit.trend_data[1],
         "steady_speed_ci_rad_s": np.asarray(fit.trend_ci[0]),
         "time_constant_ci_s": np.asarray(fit.trend_ci[1]),
         "model_steady_speed_rad_s": fit.trend_model[0],
@@ -266,63 +357,89 @@ def _global_attrs(fit: FitResult, paths: list[str], not_identified: list[str]) -
         "grouped within 5% of every search range; the estimate is the basin with the lowest chi2 "
         "(10 significant digits, ties to the smaller point); more than one basin: the data do not "
         "single one out",
-        "chi2": fit.chi2, "n_statistics": n_stats,
+        "chi2": fit.chi2,
+        "n_statistics": n_stats,
         "chi2_p_value": float(chi2_dist.sf(fit.chi2, n_stats)),
         "chi2_fresh_members": fit.chi2_level,
-        "fit_adequate": int(adequate(fit.chi2, n_stats)), "evaluations": fit.evaluations,
-        "ensemble_members": fit.settings.members, "band_members": fit.settings.band_members,
+        "fit_adequate": int(adequate(fit.chi2, n_stats)),
+        "evaluations": fit.evaluations,
+        "ensemble_members": fit.settings.members,
+        "band_members": fit.settings.band_members,
         "e_sigma": fit.theta.get("e_sigma", fit.settings.e_sigma),
-        "e_sigma_fitted": int("e_sigma" in fit.names), "seed": fit.settings.seed,
-        "n_bootstrap": fit.settings.bootstrap, "scan_points": fit.settings.scan,
-        "zoom_points": fit.settings.zoom, "joint_zoom_points": fit.settings.joint_zoom,
+        "e_sigma_fitted": int("e_sigma" in fit.names),
+        "seed": fit.settings.seed,
+        "n_bootstrap": fit.settings.bootstrap,
+        "scan_points": fit.settings.scan,
+        "zoom_points": fit.settings.zoom,
+        "joint_zoom_points": fit.settings.joint_zoom,
         "work_note": fit.note or "none",
-        "curve_file": ", ".join(paths), "curve_sha256": sha, "runs": len(paths),
-        "curve_source": fit.curve.source, "curve_synthetic": int(fit.curve.synthetic),
+        "curve_file": ", ".join(paths),
+        "curve_sha256": sha,
+        "runs": len(paths),
+        "curve_source": fit.curve.source,
+        "curve_synthetic": int(fit.curve.synthetic),
         "drive_frequency_hz": fit.curve.drive_frequency_hz,
         "Phi0_rad": fit.curve.phi0_rad if fit.curve.phi0_rad is not None else "unknown",
-        "noise_sigma_rad_s": fit.curve.sigma, "wall_time_s": round(fit.wall_time_s, 3),
+        "noise_sigma_rad_s": fit.curve.sigma,
+        "wall_time_s": round(fit.wall_time_s, 3),
         "method": "synthetic likelihood of ensemble statistics; Sobol scan of (e, omega_s) with "
         "psi from a grid and r_phi matched to the trend, then multi-start least squares; profile "
         "likelihoods widened to every acceptable point found",
-    }  # fmt: skip
+    }
 
 
 def summary_text(ds: xr.Dataset) -> str:
     """A human-readable summary of a fit file."""
     a = ds.attrs
-    lines = [f"fit of {a.get('curve_file')} (seed {a.get('seed')}, {a.get('wall_time_s')} s, "
-             f"chi2 {a.get('chi2', float('nan')):.4g} on {a.get('n_statistics')} statistics)"]  # fmt: skip
+    lines = [
+        f"fit of {a.get('curve_file')} (seed {a.get('seed')}, {a.get('wall_time_s')} s, "
+        f"chi2 {a.get('chi2', float('nan')):.4g} on {a.get('n_statistics')} statistics)"
+    ]
     if a.get("identified", "yes") == "no":
         lines.append(f"  NOT IDENTIFIED: {a.get('identified_reason', 'inadequate fit')}")
     for name in PUBLIC:
         if name in ds and "ci_low" in ds[name].attrs:
             v = ds[name].attrs
             flag = "" if v["identified"] else "   <- not identified"
-            ci = (f"95% [{v['ci_low']:.5g}, {v['ci_high']:.5g}]"
-                  if np.isfinite(v["ci_low"]) else "no interval (inadequate fit)")  # fmt: skip
+            ci = (
+                f"95% [{v['ci_low']:.5g}, {v['ci_high']:.5g}]"
+                if np.isfinite(v["ci_low"])
+                else "no interval (inadequate fit)"
+            )
             lines.append(f"  {name:>12} = {float(ds[name]):.5g}   {ci} {v['units']}{flag}")
     s_ci, t_ci = a["steady_speed_ci_rad_s"], a["time_constant_ci_s"]
-    lines.append(f"  trend of the data: steady speed {a['steady_speed_rad_s']:.5g} rad/s "
-                 f"[{s_ci[0]:.5g}, {s_ci[1]:.5g}], time constant {a['time_constant_s']:.4g} s "
-                 f"[{t_ci[0]:.4g}, {t_ci[1]:.4g}]")  # fmt: skip
-    lines.append(f"  trend of the fitted model: {a['model_steady_speed_rad_s']:.5g} rad/s, "
-                 f"{a['model_time_constant_s']:.4g} s; not identified: {a['not_identified']}")  # fmt: skip
+    lines.append(
+        f"  trend of the data: steady speed {a['steady_speed_rad_s']:.5g} rad/s "
+        f"[{s_ci[0]:.5g}, {s_ci[1]:.5g}], time constant {a['time_constant_s']:.4g} s "
+        f"[{t_ci[0]:.4g}, {t_ci[1]:.4g}]"
+    )
+    lines.append(
+        f"  trend of the fitted model: {a['model_steady_speed_rad_s']:.5g} rad/s, "
+        f"{a['model_time_constant_s']:.4g} s; not identified: {a['not_identified']}"
+    )
     if not a.get("fit_adequate", 1):
-        lines.append(f"  WARNING: chi2 {a['chi2']:.4g} on {a['n_statistics']} statistics "
-                     f"(p = {a['chi2_p_value']:.2g}): the best point found does not reproduce "
-                     "the data's statistics; the intervals are not trustworthy")  # fmt: skip
+        lines.append(
+            f"  WARNING: chi2 {a['chi2']:.4g} on {a['n_statistics']} statistics "
+            f"(p = {a['chi2_p_value']:.2g}): the best point found does not reproduce "
+            "the data's statistics; the intervals are not trustworthy"
+        )
     if "combination_sd" in ds:
         names = [str(n) for n in ds["parameter"].values]
         for k in range(min(2, ds.sizes["combination"])):
             v = ds["combination_vector"].values[k]
-            terms = " ".join(f"{c:+.2f}·{n}" for c, n in zip(v, names, strict=True)
-                             if abs(c) >= 0.1)  # fmt: skip
-            lines.append(f"  combination {k + 1} (coordinates scaled to their ranges): {terms}, "
-                         f"sd {float(ds['combination_sd'].values[k]):.3g} of the ranges")  # fmt: skip
+            terms = " ".join(
+                f"{c:+.2f}·{n}" for c, n in zip(v, names, strict=True) if abs(c) >= 0.1
+            )
+            lines.append(
+                f"  combination {k + 1} (coordinates scaled to their ranges): {terms}, "
+                f"sd {float(ds['combination_sd'].values[k]):.3g} of the ranges"
+            )
     if "residual_outside_fraction" in a:
-        lines.append(f"  residual outside the 95% band: {100 * a['residual_outside_fraction']:.1f} % "
-                     f"of the samples, longest run {a['residual_longest_run_s']:.3g} s"
-                     + ("" if a.get("residual_within_band", 1) else "  <- systematic excursion"))  # fmt: skip
+        lines.append(
+            f"  residual outside the 95% band: {100 * a['residual_outside_fraction']:.1f} % "
+            f"of the samples, longest run {a['residual_longest_run_s']:.3g} s"
+            + ("" if a.get("residual_within_band", 1) else "  <- systematic excursion")
+        )
     if "interval_low" in ds:
         from .load_output import identifiability_lines
 

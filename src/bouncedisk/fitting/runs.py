@@ -51,12 +51,20 @@ def check_runs(curves: Sequence[MotorCurve]) -> None:
         )
         for name, want, got in checks:
             if not _same(want, got):
-                raise InputError(c.path, name, f"is {_text(got)}, but {_text(want)} in {first.path}: "
-                                 "the run-ups of one fit must come from one motor and one "
-                                 "measurement set-up")  # fmt: skip
+                raise InputError(
+                    c.path,
+                    name,
+                    f"is {_text(got)}, but {_text(want)} in {first.path}: "
+                    "the run-ups of one fit must come from one motor and one "
+                    "measurement set-up",
+                )
         if len(c.time) != len(first.time):
-            raise InputError(c.path, "time_s", f"has {len(c.time)} samples, {first.path} has "
-                             f"{len(first.time)}: the run-ups of one fit must be equally long")  # fmt: skip
+            raise InputError(
+                c.path,
+                "time_s",
+                f"has {len(c.time)} samples, {first.path} has "
+                f"{len(first.time)}: the run-ups of one fit must be equally long",
+            )
 
 
 def mean_curve(curves: Sequence[MotorCurve]) -> MotorCurve:

@@ -194,8 +194,14 @@ def polish(
         obj.prefetch([at(u) for u in us], members)
         return [fun(u) for u in us]
 
-    res = least_squares(step, obj.to_unit(start, free), bounds=(0.0, 1.0), diff_step=DIFF_STEP,
-                        max_nfev=nfev, workers=differences)  # fmt: skip
+    res = least_squares(
+        step,
+        obj.to_unit(start, free),
+        bounds=(0.0, 1.0),
+        diff_step=DIFF_STEP,
+        max_nfev=nfev,
+        workers=differences,
+    )
     y = at(res.x)
     return y, obj.chi2(y, members)
 
@@ -265,8 +271,9 @@ def confirm_points(
     pts = np.unique(snap(np.asarray(points, float)).reshape(-1, len(obj.names)), axis=0)
     if len(pts) > CONFIRM_CAP:
         score = _cheap_scores(obj)
-        order = sorted(range(len(pts)), key=lambda i: rank_key(score.get(tuple(pts[i]), np.inf),
-                                                               pts[i]))  # fmt: skip
+        order = sorted(
+            range(len(pts)), key=lambda i: rank_key(score.get(tuple(pts[i]), np.inf), pts[i])
+        )
         pts = pts[np.sort(order[:CONFIRM_CAP])]
 
     def one(x: np.ndarray) -> list[np.ndarray]:
@@ -312,8 +319,10 @@ def global_stage(
         # narrow basins (periodic windows) fall between scan points: sample around the best
         half = 1.0 / np.sqrt(s.scan)
         patch = (2.0 * _sobol(s.zoom, s.seed + 1) - 1.0) * half
-        units = [(ev.x[axial] - obj.lo[axial]) / obj.span[axial] + patch
-                 for ev in _distinct(ranked, obj.span, s.zoom_centres)]  # fmt: skip
+        units = [
+            (ev.x[axial] - obj.lo[axial]) / obj.span[axial] + patch
+            for ev in _distinct(ranked, obj.span, s.zoom_centres)
+        ]
         ranked = _scan(obj, at(np.concatenate(units)), s.global_members, "zoom", progress)
     return ranked
 
@@ -340,10 +349,14 @@ def _scan(
     for i in range(0, len(pts), chunk):
         obj.map(lambda x: _inner(obj, x, members), pts[i : i + chunk])
         best = min(ev.chi2 for ev in obj.log if ev.members == members)
-        _say(progress, f"{label}: {min(i + chunk, len(pts))}/{len(pts)} (e, omega_s) points, "
-                       f"best chi2 {best:.4g}")  # fmt: skip
-    return sorted((ev for ev in obj.log if ev.members == members),
-                  key=lambda ev: rank_key(ev.chi2, ev.x))  # fmt: skip
+        _say(
+            progress,
+            f"{label}: {min(i + chunk, len(pts))}/{len(pts)} (e, omega_s) points, "
+            f"best chi2 {best:.4g}",
+        )
+    return sorted(
+        (ev for ev in obj.log if ev.members == members), key=lambda ev: rank_key(ev.chi2, ev.x)
+    )
 
 
 #: The least restitution noise a covariance is measured at (:func:`metric_point`): the objective's
@@ -417,9 +430,12 @@ def joint_candidates(
     if joint_missed(obj, scores):
         # no candidate reproduces both data sets: the joint valley lies between the scan's
         # points; refine the best run-up candidates (distinct in (e, omega_s)) into it
-        _say(progress, f"no joint candidate reproduces both data sets (best chi2 "
-                       f"{min(scores):.4g} on {s.global_members} member(s)): the best run-up "
-                       "candidates refined into the joint valley")  # fmt: skip
+        _say(
+            progress,
+            f"no joint candidate reproduces both data sets (best chi2 "
+            f"{min(scores):.4g} on {s.global_members} member(s)): the best run-up "
+            "candidates refined into the joint valley",
+        )
         more = joint_refine(obj, _distinct_axial(obj, runup, REFINE_CENTRES), s)
         pool = pool + [x for x, _ in more]
         scores = scores + [c for _, c in more]
@@ -594,9 +610,14 @@ def valley_walk(obj: Objective, start: np.ndarray, s: SearchSettings) -> list[tu
 
 
 def _patches(
-    obj: Objective, centres: list[np.ndarray], dims: list[int], half: np.ndarray,
-    seeds: list[int], n: int, s: SearchSettings,
-) -> list[list[tuple[np.ndarray, float]]]:  # fmt: skip
+    obj: Objective,
+    centres: list[np.ndarray],
+    dims: list[int],
+    half: np.ndarray,
+    seeds: list[int],
+    n: int,
+    s: SearchSettings,
+) -> list[list[tuple[np.ndarray, float]]]:
     """``n`` Sobol points ``± half`` of the ranges in coordinates ``dims`` around each centre
     (its own seed), ``R_φ`` load-matched, with their joint ``χ²`` on the scan's ensemble size;
     all centres' points evaluated together (threads). One list of ``(x, χ²)`` per centre."""
@@ -712,10 +733,14 @@ def local_stage(
         return obj.residuals(x, members)
 
     for k, x0 in enumerate(starts):
-        least_squares(logged, obj.to_unit(x0), bounds=(0.0, 1.0), diff_step=2e-3, max_nfev=nfev,
-                      x_scale=1.0)  # fmt: skip
-        _say(progress, f"local search ({members} members): start {k + 1}/{len(starts)}, best "
-                       f"chi2 {obj.best(members).chi2:.4g}")  # fmt: skip
+        least_squares(
+            logged, obj.to_unit(x0), bounds=(0.0, 1.0), diff_step=2e-3, max_nfev=nfev, x_scale=1.0
+        )
+        _say(
+            progress,
+            f"local search ({members} members): start {k + 1}/{len(starts)}, best "
+            f"chi2 {obj.best(members).chi2:.4g}",
+        )
     best = obj.best(members)
     _say(progress, f"local search: chi2 {best.chi2:.4g} ({len(obj.read)} ensembles evaluated)")
     return best
@@ -731,16 +756,22 @@ def search(
     # scan points on `members` members under the model's covariance, measured at the best of them
     cands = joint_candidates(obj, ranked, s, progress)
     if obj.load is not None:
-        _say(progress, f"load curve read at the distinct scan points that reproduce the run-ups, "
-                       f"R_phi matched to its torque scale; the best {len(cands)} by the joint "
-                       "chi2 go on")  # fmt: skip
+        _say(
+            progress,
+            f"load curve read at the distinct scan points that reproduce the run-ups, "
+            f"R_phi matched to its torque scale; the best {len(cands)} by the joint "
+            "chi2 go on",
+        )
     scores = rerank(obj, cands, s)
     starts = [cands[i] for i in rank_order(scores, cands)[: s.starts]]
     if obj.load is not None:
         # the joint valley is narrow in (e, omega_s): one start per distinct (e, omega_s)
         starts = _distinct_axial(obj, [cands[i] for i in rank_order(scores, cands)], JOINT_STARTS)
-    _say(progress, f"pilot: model covariance from {s.pilot_members} members; {len(cands)} scan "
-                   f"points re-ranked on {s.members} members, best chi2 {min(scores):.4g}")  # fmt: skip
+    _say(
+        progress,
+        f"pilot: model covariance from {s.pilot_members} members; {len(cands)} scan "
+        f"points re-ranked on {s.members} members, best chi2 {min(scores):.4g}",
+    )
     # the starts themselves, then each refined (never worse than the best start)
     # joint: more starts (distinct in (e, omega_s)), each refined half as long, then polished
     nfev = s.local_nfev if obj.load is None else max(4, s.local_nfev // 2)
@@ -775,8 +806,11 @@ def noise_sweep(
     j = obj.names.index("e_sigma")
     obj.map(lambda x: obj.chi2(x, members), noise_copies(obj, best.x, NOISE_GRID))
     out = obj.best(members)
-    _say(progress, f"noise sweep: e_sigma {out.x[j]:.4g}, chi2 {out.chi2:.4g} (before: "
-                   f"{best.x[j]:.4g}, {best.chi2:.4g})")  # fmt: skip
+    _say(
+        progress,
+        f"noise sweep: e_sigma {out.x[j]:.4g}, chi2 {out.chi2:.4g} (before: "
+        f"{best.x[j]:.4g}, {best.chi2:.4g})",
+    )
     return out
 
 

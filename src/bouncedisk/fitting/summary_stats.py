@@ -61,25 +61,53 @@ class Statistic:
 #: The statistics, in vector order (:func:`record_stats`).
 STATISTICS: tuple[Statistic, ...] = (
     Statistic("steady_speed", "rad/s", "steady speed S of the first-order trend", 1e-3, 0.02),
-    Statistic("log_time_constant", "1",
-              "natural log of the time constant of the first-order trend (tau in s)", 2e-3, 0.05),
+    Statistic(
+        "log_time_constant",
+        "1",
+        "natural log of the time constant of the first-order trend (tau in s)",
+        2e-3,
+        0.05,
+    ),
     Statistic("rise_mean_1", "rad/s", "mean speed over [0, tau_ref/2]", 1e-3, 0.02),
     Statistic("rise_mean_2", "rad/s", "mean speed over [tau_ref/2, tau_ref]", 1e-3, 0.02),
     Statistic("rise_mean_3", "rad/s", "mean speed over [tau_ref, 2 tau_ref]", 1e-3, 0.02),
-    Statistic("log_ripple_rms", "1",
-              "natural log of the RMS ripple about the trend (rms in rad/s)", 5e-3, 0.05),
-    Statistic("ripple_frequency", "1",
-              "power-weighted mean ripple frequency over the drive frequency", 2e-3, 0.03),
-    Statistic("ripple_low_band", "1",
-              "fraction of the ripple power below 1/8 of the Nyquist frequency", 2e-3, 0.03),
-    Statistic("ripple_mid_band", "1",
-              "fraction of the ripple power between 1/8 and 1/2 of the Nyquist frequency",
-              2e-3, 0.03),
-    Statistic("log_increment_var", "1",
-              "natural log of the variance of sample-to-sample increments after the rise "
-              "(in (rad/s)^2)", 5e-3, 0.05),
+    Statistic(
+        "log_ripple_rms",
+        "1",
+        "natural log of the RMS ripple about the trend (rms in rad/s)",
+        5e-3,
+        0.05,
+    ),
+    Statistic(
+        "ripple_frequency",
+        "1",
+        "power-weighted mean ripple frequency over the drive frequency",
+        2e-3,
+        0.03,
+    ),
+    Statistic(
+        "ripple_low_band",
+        "1",
+        "fraction of the ripple power below 1/8 of the Nyquist frequency",
+        2e-3,
+        0.03,
+    ),
+    Statistic(
+        "ripple_mid_band",
+        "1",
+        "fraction of the ripple power between 1/8 and 1/2 of the Nyquist frequency",
+        2e-3,
+        0.03,
+    ),
+    Statistic(
+        "log_increment_var",
+        "1",
+        "natural log of the variance of sample-to-sample increments after the rise (in (rad/s)^2)",
+        5e-3,
+        0.05,
+    ),
     Statistic("steady_mean", "rad/s", "mean speed after the rise (the ripple part)", 1e-3, 0.02),
-)  # fmt: skip
+)
 STATS: tuple[str, ...] = tuple(st.name for st in STATISTICS)
 STAT_UNITS: tuple[str, ...] = tuple(st.units for st in STATISTICS)
 STAT_LONG_NAMES: tuple[str, ...] = tuple(st.long_name for st in STATISTICS)

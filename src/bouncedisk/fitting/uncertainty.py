@@ -127,9 +127,16 @@ def _reference(chi2: float, level: float | None) -> float:
 
 
 def profile(
-    obj: Objective, x0: np.ndarray, j: int, members: int, jac: np.ndarray, sd: float,
-    max_steps: int = 6, thr: float = THRESHOLD, level: float | None = None,
-) -> Profile:  # fmt: skip
+    obj: Objective,
+    x0: np.ndarray,
+    j: int,
+    members: int,
+    jac: np.ndarray,
+    sd: float,
+    max_steps: int = 6,
+    thr: float = THRESHOLD,
+    level: float | None = None,
+) -> Profile:
     """Profile likelihood of coordinate ``j`` about the estimate ``x0`` (module docstring);
     ``Δχ²`` is measured from ``level`` (:func:`chi2_level`) when that is above ``x0``'s."""
     chi0 = obj.chi2(x0, members)
@@ -151,8 +158,9 @@ def profile(
         half = float(np.sqrt(thr) * sd)
         low = max(float(obj.lo[j]), min(low, float(x0[j]) - half))
         high = min(float(obj.hi[j]), max(high, float(x0[j]) + half))
-    return Profile(obj.names[j], values, chis, points, low, high, open_low, open_high,
-                   identified, thr)  # fmt: skip
+    return Profile(
+        obj.names[j], values, chis, points, low, high, open_low, open_high, identified, thr
+    )
 
 
 def _interval(values, chis, obj, j, thr=THRESHOLD, level=None):
@@ -219,9 +227,11 @@ def all_profiles(
     out = [widen(obj, p, members, extra, level) for p in out]
     if progress is not None:
         for p in out:
-            progress(f"interval {p.name}: 95% [{p.ci_low:.4g}, {p.ci_high:.4g}]"
-                     f"{'' if p.identified else ' (not identified)'}"
-                     f"{' (several basins)' if p.multimodal else ''}")  # fmt: skip
+            progress(
+                f"interval {p.name}: 95% [{p.ci_low:.4g}, {p.ci_high:.4g}]"
+                f"{'' if p.identified else ' (not identified)'}"
+                f"{' (several basins)' if p.multimodal else ''}"
+            )
     return out, jac, corr, sd
 
 
@@ -303,8 +313,19 @@ def widen(
     edge = EDGE * obj.span[j]
     covers = lo <= obj.lo[j] + edge and hi >= obj.hi[j] - edge
     identified = p.identified and not covers
-    return Profile(p.name, p.values, p.chi2, p.points, lo, hi, p.open_low, p.open_high,
-                   identified, p.threshold, multimodal)  # fmt: skip
+    return Profile(
+        p.name,
+        p.values,
+        p.chi2,
+        p.points,
+        lo,
+        hi,
+        p.open_low,
+        p.open_high,
+        identified,
+        p.threshold,
+        multimodal,
+    )
 
 
 def birge(chi2_min: float, n_stats: int, n_params: int) -> float:
@@ -364,8 +385,12 @@ def identified(chi2_min: float, n_stats: int) -> tuple[bool, str]:
     about a point the data reject, so its intervals are not reported (NaN), whatever their widths.
     """
     if adequate(chi2_min, n_stats):
-        return True, (f"the best point reproduces the data (chi2 {chi2_min:.4g} on {n_stats} "
-                      f"statistics, p >= {ADEQUATE_P:g})")  # fmt: skip
-    return False, (f"inadequate fit: chi2 {chi2_min:.4g} on {n_stats} statistics (p = "
-                   f"{float(chi2_dist.sf(chi2_min, n_stats)):.2g} < {ADEQUATE_P:g}); the best "
-                   "point found does not reproduce the data, so no interval is reported")  # fmt: skip
+        return True, (
+            f"the best point reproduces the data (chi2 {chi2_min:.4g} on {n_stats} "
+            f"statistics, p >= {ADEQUATE_P:g})"
+        )
+    return False, (
+        f"inadequate fit: chi2 {chi2_min:.4g} on {n_stats} statistics (p = "
+        f"{float(chi2_dist.sf(chi2_min, n_stats)):.2g} < {ADEQUATE_P:g}); the best "
+        "point found does not reproduce the data, so no interval is reported"
+    )

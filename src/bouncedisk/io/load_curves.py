@@ -38,9 +38,19 @@ from .output_checks import sidecar_of
 COLUMNS = ("torque_Nm", "speed_rad_s")
 OPTIONAL_COLUMNS = ("speed_sd_rad_s",)
 SIDECAR_KEYS = (
-    "source", "synthetic", "units", "motor", "rotor", "preload_N", "window_s", "protocol",
-    "description", "generating_parameters", "generator", "repeats",
-)  # fmt: skip
+    "source",
+    "synthetic",
+    "units",
+    "motor",
+    "rotor",
+    "preload_N",
+    "window_s",
+    "protocol",
+    "description",
+    "generating_parameters",
+    "generator",
+    "repeats",
+)
 #: The rotor's fields, each with its bound.
 ROTOR_FIELDS = {
     "m_r_kg": limits.ROTOR_MASS_KG,
@@ -229,9 +239,10 @@ def check_same_setup(
     side = str(Path(load.path).with_suffix(".yaml"))
     if not np.isclose(load.drive_frequency_hz, drive_frequency_hz, rtol=1e-9):
         raise InputError(
-            side, "motor.drive_frequency_hz",
+            side,
+            "motor.drive_frequency_hz",
             f"{load.drive_frequency_hz:.6g} Hz differs from the run-ups' {drive_frequency_hz:.6g} Hz",
-        )  # fmt: skip
+        )
     if phi0_rad is not None and not np.isclose(load.phi0_rad, phi0_rad, rtol=1e-9):
         raise InputError(
             side,

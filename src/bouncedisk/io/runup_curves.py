@@ -159,8 +159,11 @@ def read_curve(path: str | Path, sidecar: str | Path | None = None) -> MotorCurv
     spread = float(np.std(omega))
     if sigma > MAX_NOISE_OVER_SPREAD * spread:
         where = (src, "sigma_rad_s") if s is not None else (str(side), "noise_sigma_rad_s")
-        raise InputError(*where, f"measurement noise {sigma:g} rad/s exceeds {MAX_NOISE_OVER_SPREAD:g} "
-                         f"times the spread of the data themselves ({spread:g} rad/s)")  # fmt: skip
+        raise InputError(
+            *where,
+            f"measurement noise {sigma:g} rad/s exceeds {MAX_NOISE_OVER_SPREAD:g} "
+            f"times the spread of the data themselves ({spread:g} rad/s)",
+        )
     return MotorCurve(
         time=t,
         omega=omega,

@@ -349,6 +349,17 @@ class PhysicalParameters:
         r_eff = 2.0 * r_c / 3.0
         mu = p.r_phi * (r_eff * Phi0 / u0) * (r_g / r_eff) ** 2
         return cls(
-            m_r=m_r, r_g=r_g, r_c=r_c, mu=mu, e=p.e, g=g, f=f, U0=u0, Phi0=Phi0, psi=p.psi,
-            F_preload=F_preload, load_torque=load_torque, e_sigma=p.e_sigma,
-        )  # fmt: skip
+            m_r=m_r,
+            r_g=r_g,
+            r_c=r_c,
+            mu=mu,
+            e=p.e,
+            g=g,
+            f=f,
+            U0=u0,
+            Phi0=Phi0,
+            psi=p.psi,
+            F_preload=F_preload,
+            load_torque=load_torque,
+            e_sigma=p.e_sigma,
+        )

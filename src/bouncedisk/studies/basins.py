@@ -669,9 +669,12 @@ def group(ds: xr.Dataset, settle: float = DEFAULT_SETTLE) -> xr.Dataset:
     out = ds.copy()
     out["label"] = ("start", lab, {"long_name": LABEL_LONG_NAME, "units": "1"})
     out = out.assign_coords(
-        attractor=("attractor", np.arange(len(rows), dtype=np.int64),
-                   {"long_name": "attractor label (0: the fastest)"})
-    )  # fmt: skip
+        attractor=(
+            "attractor",
+            np.arange(len(rows), dtype=np.int64),
+            {"long_name": "attractor label (0: the fastest)"},
+        )
+    )
     for j, (name, (long_name, whole)) in enumerate(ATTRACTOR_VARS.items()):
         values = arr[:, j].astype(np.int64) if whole else arr[:, j]
         out[name] = (("attractor",), values, {"long_name": long_name, "units": "1"})
@@ -832,8 +835,11 @@ def startup(
     for name, values in (("phase", phase), ("speed", speed), ("height", height)):
         long_name, units = START_VARS[name]
         coords[name] = ("start", values, {"long_name": long_name, "units": units})
-    coords["load_torque"] = ("load_torque", np.asarray(loads, float), {
-        "long_name": "load torque tau_L (units of mu m_r g_eff r_eff)", "units": "1"})  # fmt: skip
+    coords["load_torque"] = (
+        "load_torque",
+        np.asarray(loads, float),
+        {"long_name": "load torque tau_L (units of mu m_r g_eff r_eff)", "units": "1"},
+    )
     out = xr.Dataset(data, coords=coords)
     out.attrs.update(_attrs(scene, grid, start, "startup"))
     out.attrs.pop("load_torque", None)

@@ -181,8 +181,13 @@ def _peak_rows(
     return np.where(np.isfinite(best), best, np.nan), k, state
 
 
-_STALL_CODES = ("found", "beyond_largest_load", "below_smallest_load", "backwards_at_no_load",
-                "none")  # fmt: skip
+_STALL_CODES = (
+    "found",
+    "beyond_largest_load",
+    "below_smallest_load",
+    "backwards_at_no_load",
+    "none",
+)
 _PEAK_CODES = ("found", "beyond_largest_load", "at_smallest_load", "none")
 
 
@@ -268,9 +273,18 @@ def _figures(loads, speed, power, eff, settled, bound) -> dict[str, np.ndarray]:
     hi = loads[np.minimum(k + 1, len(loads) - 1)]
     if bound is not None:  # no power is stationary past the bound
         hi = np.minimum(hi, np.maximum(loads[k], bound))
-    return {"stall_torque": root, "stall_state": state, "stall_a": a, "stall_b": b,
-            "max_power": p, "max_power_load": at, "peak_state": pstate, "peak_a": lo,
-            "peak_b": hi, "efficiency_at_max_power": eta}  # fmt: skip
+    return {
+        "stall_torque": root,
+        "stall_state": state,
+        "stall_a": a,
+        "stall_b": b,
+        "max_power": p,
+        "max_power_load": at,
+        "peak_state": pstate,
+        "peak_a": lo,
+        "peak_b": hi,
+        "efficiency_at_max_power": eta,
+    }
 
 
 def derived(
@@ -315,8 +329,9 @@ def derived(
         out["no_load_speed"], out["no_load_speed_ci95"] = _num(mean), [_num(lo), _num(hi)]
         x = speed[np.isfinite(speed[:, 0]), 0]
         se["no_load_speed"] = float(np.std(x, ddof=1) / math.sqrt(x.size)) if x.size > 1 else None
-    f = _figures(loads, _mean(speed)[None, :], _mean(power)[None, :], _mean(eff)[None, :],
-                 below, bound)  # fmt: skip
+    f = _figures(
+        loads, _mean(speed)[None, :], _mean(power)[None, :], _mean(eff)[None, :], below, bound
+    )
     state, pstate = _STALL_CODES[int(f["stall_state"][0])], _PEAK_CODES[int(f["peak_state"][0])]
     found, peaked = state == "found", pstate == "found"
     out["stall_torque"] = _num(f["stall_torque"][0]) if found else None
@@ -448,8 +463,11 @@ def refine(
                 branches[branch] = got.branches[branch][part]
                 if getattr(got, "drift", None) is not None:
                     drift[branch] = got.drift[branch][:, part]
-            extra = (type(curve)(group, branches, drift) if len(drift) == len(branches)
-                     else type(curve)(group, branches))  # fmt: skip
+            extra = (
+                type(curve)(group, branches, drift)
+                if len(drift) == len(branches)
+                else type(curve)(group, branches)
+            )
             curve = merged(curve, extra)
             loads = np.asarray(curve.loads, float)
     return curve
@@ -467,9 +485,13 @@ def summary_of(curve) -> dict:
     without the standard errors (the study's, not the summary's)."""
     drift = getattr(curve, "drift", None)
     out = derived(
-        curve.loads, curve.matrix("up", "mean_omega"), curve.power("up"), MOMENTUM_BOUND,
-        efficiency=_efficiency(curve), drift=None if drift is None else drift.get("up"),
-    )  # fmt: skip
+        curve.loads,
+        curve.matrix("up", "mean_omega"),
+        curve.power("up"),
+        MOMENTUM_BOUND,
+        efficiency=_efficiency(curve),
+        drift=None if drift is None else drift.get("up"),
+    )
     out.pop("standard_errors", None)
     return out
 

@@ -293,10 +293,11 @@ def _continue_up(cfg, first: list, s: StudySettings, duration: float, discard: f
         finals = [{**f, "omega": -f["omega"]} for f in finals]
         drift0 = [-d for d in drift0]
     rest = [
-        member_sweep(cfg, continued_state(f, cfg.omega_s), m, s.loads[1:], discard, duration,
-                     ("up",))
+        member_sweep(
+            cfg, continued_state(f, cfg.omega_s), m, s.loads[1:], discard, duration, ("up",)
+        )
         for m, f in enumerate(finals)
-    ]  # fmt: skip
+    ]
     per_load = [stats0, *(list(at) for at in zip(*(r["up"] for r in rest), strict=True))]
     drift = np.column_stack([drift0, np.array([r["drift"]["up"] for r in rest], float)])
     return per_load, drift
@@ -343,9 +344,13 @@ def load_figures(curve, r: float) -> dict[str, tuple[float, float, float, float]
     drift = getattr(curve, "drift", None)
     drift = None if drift is None else drift["up"][:, order]
     d = derived(
-        loads, curve.matrix("up", "mean_omega")[:, order], curve.power("up")[:, order],
-        MOMENTUM_BOUND, curve.matrix("up", "efficiency_torsion")[:, order], drift,
-    )  # fmt: skip
+        loads,
+        curve.matrix("up", "mean_omega")[:, order],
+        curve.power("up")[:, order],
+        MOMENTUM_BOUND,
+        curve.matrix("up", "efficiency_torsion")[:, order],
+        drift,
+    )
     zero = (0.0, 0.0, 0.0, 0.0)
     none = (math.nan, math.nan, math.nan, math.nan)
     out = {}
@@ -365,7 +370,11 @@ def load_figures(curve, r: float) -> dict[str, tuple[float, float, float, float]
 # ----------------------------------------------------------------------------- sampling
 def problem(ranges: Mapping[str, tuple[float, float]]) -> dict:
     """SALib's problem definition of ``ranges`` (parameter -> ``(low, high)``)."""
-    return {"num_vars": len(ranges), "names": list(ranges), "bounds": [list(b) for b in ranges.values()]}  # fmt: skip
+    return {
+        "num_vars": len(ranges),
+        "names": list(ranges),
+        "bounds": [list(b) for b in ranges.values()],
+    }
 
 
 def sample(ranges: Mapping[str, tuple[float, float]], base_samples: int, seed: int) -> np.ndarray:
@@ -434,10 +443,13 @@ def evaluate(
     for o in outputs:
         long_name, units = OUTPUTS.get(o, (o, "1", False))[:2]
         for j, (suffix, what) in enumerate(
-            (("", long_name), ("_ci_low", f"lower end of the 95% interval of {o}"),
-             ("_ci_high", f"upper end of the 95% interval of {o}"),
-             ("_se", f"standard error of {o} (ensemble noise)"))
-        ):  # fmt: skip
+            (
+                ("", long_name),
+                ("_ci_low", f"lower end of the 95% interval of {o}"),
+                ("_ci_high", f"upper end of the 95% interval of {o}"),
+                ("_se", f"standard error of {o} (ensemble noise)"),
+            )
+        ):
             data[o + suffix] = ("point", vals[o][:, j], {"long_name": what, "units": units})
     data["regime"] = ("point", regime, regime_attrs())
     coords = {
@@ -508,10 +520,16 @@ def design_map(
     x, shape = map_sample(settings, e)
     ds = evaluate(x, PARAMETERS, model, progress=progress)
     ds.attrs.update(
-        {"map_e": e, "map_omega_s": settings.map_omega_s, "map_n_psi": shape[0],
-         "map_n_r_phi": shape[1], "map_loads": list(settings.loads),
-         "members": settings.members, "seed": settings.seed}
-    )  # fmt: skip
+        {
+            "map_e": e,
+            "map_omega_s": settings.map_omega_s,
+            "map_n_psi": shape[0],
+            "map_n_r_phi": shape[1],
+            "map_loads": list(settings.loads),
+            "members": settings.members,
+            "seed": settings.seed,
+        }
+    )
     return ds
 
 
@@ -571,9 +589,13 @@ def analyse(points: xr.Dataset, ranges: Mapping, resamples: int, seed: int) -> x
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             total = sobol.analyze(
-                prob, y, calc_second_order=False, num_resamples=resamples,
-                conf_level=LEVEL, seed=seed,
-            )  # fmt: skip
+                prob,
+                y,
+                calc_second_order=False,
+                num_resamples=resamples,
+                conf_level=LEVEL,
+                seed=seed,
+            )
             first = total
             if len(y) >= RBD_FAST_MIN_POINTS:
                 first = rbd_fast.analyze(
@@ -586,7 +608,10 @@ def analyse(points: xr.Dataset, ranges: Mapping, resamples: int, seed: int) -> x
         per["noise_share"][i] = noise_share(y, points[f"{o}_se"].values)
         per["variance"][i], per["mean"][i] = float(np.var(y, ddof=1)), float(np.mean(y))
     data = _index_variables(res, per, undefined)
-    coords = {"output": ("output", np.array(outputs, dtype=str)), "parameter": ("parameter", np.array(prob["names"], dtype=str))}  # fmt: skip
+    coords = {
+        "output": ("output", np.array(outputs, dtype=str)),
+        "parameter": ("parameter", np.array(prob["names"], dtype=str)),
+    }
     ds = xr.Dataset(data, coords=coords)
     ds.attrs.update(base_attrs("bouncedisk global sensitivity: Sobol' indices (SALib)"))
     ds.attrs.update(

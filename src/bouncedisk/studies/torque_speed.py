@@ -473,9 +473,14 @@ def to_dataset(scene: Scene, curve: LoadCurve, wall_time_s: float, summary: dict
             np.array([[np.nanmax(s.column(q)) for s in curve.branches[b]] for b in names]),
             {"long_name": long_name},
         )
-    data["settled"] = (dims, _settled(curve, names).astype(np.int8), {
-        "long_name": "1 where the load's runs settled (second half's mean speed within 2% of "
-        "the first half's; none past the momentum bound): a stationary speed"})  # fmt: skip
+    data["settled"] = (
+        dims,
+        _settled(curve, names).astype(np.int8),
+        {
+            "long_name": "1 where the load's runs settled (second half's mean speed within 2% of "
+            "the first half's; none past the momentum bound): a stationary speed"
+        },
+    )
     for var in data.values():
         var[2].setdefault("units", "1")
     members = np.arange(curve.branches[names[0]][0].column("mean_omega").size)
@@ -530,8 +535,9 @@ def _settled(curve: LoadCurve, names: list[str]) -> np.ndarray:
     rows = []
     for b in names:
         drift = None if curve.drift is None else curve.drift[b]
-        rows.append(settled_loads(curve.loads, curve.matrix(b, "mean_omega"), drift,
-                                  MOMENTUM_BOUND, scale))  # fmt: skip
+        rows.append(
+            settled_loads(curve.loads, curve.matrix(b, "mean_omega"), drift, MOMENTUM_BOUND, scale)
+        )
     return np.array(rows)
 
 
@@ -557,9 +563,14 @@ def motor_scene(
     from ..model.scene import scene_from_mapping
 
     phys = PhysicalParameters.from_nondimensional(
-        params, drive_frequency_hz, phi0_rad, rotor["m_r_kg"], rotor["r_g_m"], rotor["r_c_m"],
+        params,
+        drive_frequency_hz,
+        phi0_rad,
+        rotor["m_r_kg"],
+        rotor["r_g_m"],
+        rotor["r_c_m"],
         F_preload=preload_n,
-    )  # fmt: skip
+    )
     physical = {k: v for k, v in phys.as_dict().items()}
     raw = {
         "name": name,
@@ -621,9 +632,17 @@ def synthetic_load_curve(spec: dict, spec_path: str = "") -> tuple:
     t_c = p.omega_s / (2.0 * math.pi * spec["drive_frequency_hz"])
     t0, t1 = (float(x) for x in lc["window_s"])
     scene = motor_scene(
-        p, spec["drive_frequency_hz"], spec["Phi0_rad"], spec["rotor"], spec["preload_N"],
-        lc["repeats"], t1 / t_c, t0 / t_c, seed=lc["seed"], name="synthetic_load_curve",
-    )  # fmt: skip
+        p,
+        spec["drive_frequency_hz"],
+        spec["Phi0_rad"],
+        spec["rotor"],
+        spec["preload_N"],
+        lc["repeats"],
+        t1 / t_c,
+        t0 / t_c,
+        seed=lc["seed"],
+        name="synthetic_load_curve",
+    )
     sc = scene.physical.scales()
     loads = np.asarray(lc["loads_Nm"], dtype=float)
     readings = readings_from_rest(scene, loads / sc.torque, independent=True)
@@ -655,7 +674,7 @@ def synthetic_load_curve(spec: dict, spec_path: str = "") -> tuple:
             "e_sigma": spec["e_sigma"],
             "ensemble_seed": lc["seed"],
             "load_seeds": "ensemble_seed + j + 1 at the j-th load (j from 0)",
-        },  # fmt: skip
+        },
         "generator": "workflow/scripts/make_synthetic_load_curve.py ("
         + (spec_path or "workflow/config/synthetic_motor.yaml")
         + ")",
