@@ -49,9 +49,9 @@ from scipy.stats import binom, binomtest
 from bouncedisk.fitting import FitSettings, fit_curve, fit_dataset, synthesize_curve
 from bouncedisk.fitting import loadpart as lp
 from bouncedisk.fitting.members import BOUNDS
+from bouncedisk.fitting.synthetic import synthetic_load_curve
 from bouncedisk.io.load_curves import LoadCurveData, read_load_curve
 from bouncedisk.io.runup_curves import read_curve, write_curve
-from bouncedisk.studies.torque_speed import synthetic_load_curve
 
 F_HZ, PHI0, SPAN, DT, SIGMA = 15000.0, 3.0e-4, 0.06, 2.5e-5, 0.05
 ROTOR = {"m_r_kg": 0.01, "r_g_m": 0.004, "r_c_m": 0.002}

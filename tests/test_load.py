@@ -428,8 +428,8 @@ def test_clipped_model_takes_the_load():
 def test_shipped_synthetic_load_curve_is_regenerated_byte_for_byte(tmp_path):
     import yaml
 
+    from bouncedisk.fitting.synthetic import synthetic_load_curve
     from bouncedisk.io.runup_curves import write_curve
-    from bouncedisk.studies.torque_speed import synthetic_load_curve
 
     root = Path(__file__).resolve().parents[1]
     spec = yaml.safe_load((root / "workflow/config/synthetic_motor.yaml").read_text())

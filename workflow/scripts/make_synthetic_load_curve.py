@@ -4,9 +4,9 @@ import filecmp
 
 import yaml
 
+from bouncedisk.fitting.synthetic import synthetic_load_curve
 from bouncedisk.io.job_log import log_to
 from bouncedisk.io.runup_curves import write_curve
-from bouncedisk.studies.torque_speed import synthetic_load_curve
 
 with log_to(snakemake.log[0]) as log:
     spec = yaml.safe_load(open(snakemake.input.spec))
