@@ -78,6 +78,15 @@ def write_api_pages(out: Path = DOCS / "api") -> list[str]:
         if not path.exists() or path.read_text() != text:  # unchanged pages stay up to date
             path.write_text(text)
         index.append(f"   {name}")
+    for page in out.glob("bouncedisk*.rst"):  # modules gone (renamed or removed)
+        if page.stem not in modules:
+            page.unlink()
+    generated = out / "generated"
+    if generated.is_dir():  # autosummary's pages of objects no longer public
+        keep = set(public_pages())
+        for page in generated.glob("bouncedisk*.rst"):
+            if page.stem not in keep:
+                page.unlink()
     text = "\n".join(index) + "\n"
     if not (out / "index.rst").exists() or (out / "index.rst").read_text() != text:
         (out / "index.rst").write_text(text)

@@ -17,7 +17,7 @@ THETA = {"e": 0.55, "log10_r_phi": math.log10(0.002), "psi": 0.4, "omega_s": 1.7
 
 
 def test_at_zero_noise_one_run_gives_every_member_bit_for_bit(monkeypatch):
-    """The shortcut of :func:`.model.rows_records` and :meth:`.loadpart.LoadPart.values` at
+    """The shortcut of :func:`.members.rows_records` and :meth:`.loadpart.LoadPart.values` at
     ``σ_e = 0``: the same records and readings as running each member, with one run."""
     curve = read_curve_like()
     spec = fm.EnsembleSpec(e_sigma=0.03, seed=4, cores=1)

@@ -34,3 +34,11 @@ def test_a_missing_repeated_or_foreign_index_is_named(parts, needle):
     with pytest.raises(ValueError) as ex:
         join_indexed(parts, "point", 9, "point")
     assert needle in str(ex.value)
+
+
+def test_no_shards_or_fractional_indices_are_refused():
+    with pytest.raises(ValueError, match="no shards"):
+        join_indexed([], "point", 3, "point")
+    bad = _shard(0, 3, 0).assign_coords(point=[0.0, 1.5, 2.0])
+    with pytest.raises(ValueError, match="whole number"):
+        join_indexed([bad], "point", 3, "point")

@@ -162,3 +162,36 @@ def test_runs_ui_refusals_are_one_line(small_store, tmp_path, capsys):
             assert len(err.strip().splitlines()) == 1 and err.startswith("bouncedisk: error: ")
             assert needle in err, (argv, err)
     assert not (tmp_path / "none").exists()
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_before_the_server_runs_stops_it_cleanly(monkeypatch, sig):
+    """A Ctrl-C or SIGTERM that comes while the address is being announced (before the event
+    loop runs) stops the server normally: no exception, no 'never awaited' warning, the port
+    closed and the previous handlers back."""
+    import warnings
+
+    from bouncedisk.tracking import ui
+
+    async def app(scope, receive, send):  # an ASGI application that serves nothing
+        if scope["type"] == "lifespan":
+            while (await receive())["type"] != "lifespan.shutdown":
+                await send({"type": "lifespan.startup.complete"})
+            await send({"type": "lifespan.shutdown.complete"})
+
+    monkeypatch.setattr(ui, "application", lambda store, exp: app)
+    before = {s: signal.getsignal(s) for s in ui.STOP_SIGNALS}
+    seen = []
+
+    def announce(url):
+        seen.append(url)
+        os.kill(os.getpid(), sig)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ui.serve(None, "1", port=None, open_browser=False, announce=announce)
+    assert len(seen) == 1 and seen[0].endswith(ui.LANDING)
+    assert {s: signal.getsignal(s) for s in ui.STOP_SIGNALS} == before
+    port = int(seen[0].split(":")[2].split("/")[0])
+    with socket.socket() as s:  # the port is free again
+        s.bind(("127.0.0.1", port))

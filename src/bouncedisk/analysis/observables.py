@@ -364,6 +364,8 @@ def _line_fits(
 
 #: Points of the coarse grid of ``log τ`` that brackets the first-order trend's minimum.
 TREND_GRID = 25
+#: Grid values times samples solved in one stacked call (a few MB of temporaries at most).
+TREND_BLOCK = 1 << 17
 
 
 def first_order_trend(t: np.ndarray, omega: np.ndarray) -> FirstOrderTrend:
@@ -392,7 +394,13 @@ def first_order_trend(t: np.ndarray, omega: np.ndarray) -> FirstOrderTrend:
 
     grid = np.linspace(math.log(1e-4 * span), math.log(10.0 * span), TREND_GRID)
     taus = np.array([math.exp(g) for g in grid])  # the scalar exp, as in solve
-    costs = _line_fits(np.exp(-dt[None, :] / taus[:, None]), y, ym, dy)[2]
+    rows = max(1, min(TREND_GRID, TREND_BLOCK // max(1, len(dt))))  # bounded temporaries
+    costs = np.concatenate(
+        [
+            _line_fits(np.exp(-dt[None, :] / taus[i : i + rows, None]), y, ym, dy)[2]
+            for i in range(0, TREND_GRID, rows)
+        ]
+    )
     k = int(np.argmin(costs))
     a, b = grid[max(0, k - 1)], grid[min(len(grid) - 1, k + 1)]
     best = minimize_scalar(

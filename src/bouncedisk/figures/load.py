@@ -121,8 +121,9 @@ def fig_torque_speed(ds: xr.Dataset) -> Figure:
         half = np.nanmax(width) / 2 * kw
         bands = f"95% bands, the mean speed's half-width at most {half:.2g}{wu}"
     about = ds.attrs.get("motor_description")  # a fitted motor's load file says what it is
+    head = f"Load characteristic of {about}\n" if about else "Load characteristic: "
     fig.suptitle(
-        f"Load characteristic{' of ' + about if about else ''}: e = {ds.attrs.get('e', np.nan):.3g}, "
+        f"{head}e = {ds.attrs.get('e', np.nan):.3g}, "
         f"$\\omega_s$ = {ds.attrs.get('omega_s', np.nan):.4g}, "
         f"$R_\\phi$ = {ds.attrs.get('r_phi', np.nan):.3g}, $\\psi$ = {ds.attrs.get('psi', np.nan):.3g}"
         f"\n({members} members, {bands})",

@@ -73,6 +73,16 @@ def fig5_motor(
     return fig
 
 
+def _from_start(trend: np.ndarray, start: float) -> np.ndarray:
+    """A rising first-order trend from where it reaches the run-up's first reading ``start``
+    (NaN before): its fitted start can lie below the rotor's, at a foot that is not first order.
+    Any other trend is drawn whole."""
+    y = np.array(trend, float)
+    if len(y) and y[-1] > y[0] and np.any(y >= start):
+        y[: int(np.argmax(y >= start))] = np.nan
+    return y
+
+
 def _fig5_fitted(ax, axr, fitted: xr.Dataset) -> None:
     """Fig. 5's fitted model, trends and residual panel."""
     t = fitted["time"].values
@@ -92,11 +102,15 @@ def _fig5_fitted(ax, axr, fitted: xr.Dataset) -> None:
         ("trend_measured", "--", "first-order trend of the data"),
         ("trend_fitted", ":", "first-order trend of the fitted model"),
     ):
-        if name in fitted:  # from where it reaches the run-up's start (its fitted start can be
-            # below it: a run-up that is not first order at its foot)
-            y = fitted[name].values
-            y = np.where(y >= fitted["omega_measured"].values[0], y, np.nan)
-            ax.plot(t, y, style, color="k", lw=1, label=label)
+        if name in fitted:
+            ax.plot(
+                t,
+                _from_start(fitted[name].values, fitted["omega_measured"].values[0]),
+                style,
+                color="k",
+                lw=1,
+                label=label,
+            )
     resid = fitted["omega_measured"].values - mean
     if "residual_band_low" in fitted:
         axr.fill_between(

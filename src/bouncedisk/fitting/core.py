@@ -438,7 +438,7 @@ def fit_curve(
     if progress is not None and len(basins) > 1:
         progress(
             f"{len(basins)} basins within delta chi2 {thr:.3g} of the best: the data do not "
-            "single one out; the estimate is the lowest chi2 (basins.choose)"
+            "single one out; the estimate is the lowest chi2 (likelihood_basins.choose)"
         )
     if not adequate(final.chi2, obj.n_stats):
         # the best point found does not reproduce the data: nothing is identified by it

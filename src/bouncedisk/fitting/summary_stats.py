@@ -206,7 +206,8 @@ PSD_SEGMENT = 256
 @lru_cache(maxsize=8)
 def _hann(n: int) -> tuple[np.ndarray, float]:
     """The periodic Hann window of ``n`` samples and the sum of its squares."""
-    w = 0.5 - 0.5 * np.cos(2.0 * np.pi * np.arange(n) / n)
+    w = 0.5 - 0.5 * np.cos(2.0 * np.pi * np.arange(n) / n) if n > 1 else np.ones(n)
+    w.flags.writeable = False  # shared by every call (cached)
     return w, float(np.add.reduce(w * w))
 
 
@@ -230,6 +231,8 @@ def ripple_psd(r: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
     r = np.asarray(r, float)
     rows = np.atleast_2d(r)
     n = min(PSD_SEGMENT, rows.shape[1])
+    if n == 0:  # no samples: no frequencies
+        return np.zeros(0), np.zeros(rows.shape[:-1] + (0,)) if r.ndim > 1 else np.zeros(0)
     hop = n - n // 2
     starts = np.arange(0, rows.shape[1] - n + 1, hop)
     seg = np.lib.stride_tricks.sliding_window_view(rows, n, axis=1)[:, starts, :]

@@ -13,9 +13,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..engine.errors import plain
 from ..model import limits
-from ..model.errors import InputError
+from ..model.errors import InputError, plain
 from ..model.params import number
 
 #: The unit each quantity of a curve is stated in, with the spellings accepted for it.

@@ -27,9 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..engine.errors import plain
 from ..model import limits
-from ..model.errors import InputError
+from ..model.errors import InputError, plain
 from ..model.params import number, whole_number
 from ..model.scene import read_yaml
 from .curve_files import check_units, column, read_motor, read_table

@@ -16,8 +16,7 @@ import math
 from dataclasses import dataclass
 
 from ..engine.bounds import MAX_E_SIGMA
-from ..engine.errors import plain
-from .errors import InputError
+from .errors import InputError, plain
 
 
 def _text(x: float) -> str:

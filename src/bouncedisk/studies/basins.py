@@ -522,6 +522,8 @@ def join_shards(shards: Sequence[xr.Dataset]) -> xr.Dataset:
     ValueError
         A start missing or repeated, or shards of different computations.
     """
+    if not shards:
+        raise ValueError("no shards to join")
     n = int(shards[0].attrs["n_starts"])
     if any(int(s.attrs["n_starts"]) != n for s in shards) or any(
         s.attrs.get("scene_sha256") != shards[0].attrs.get("scene_sha256") for s in shards

@@ -501,6 +501,11 @@ def join_shards(shards: Sequence[xr.Dataset]) -> xr.Dataset:
     ValueError
         When points are missing or repeated.
     """
+    if not shards:
+        raise ValueError("no shards to join")
+    keys = ("total_points", "seed", "base_samples")
+    if any(s.attrs.get(k) != shards[0].attrs.get(k) for s in shards for k in keys):
+        raise ValueError(f"the shards are of different studies (their {', '.join(keys)} differ)")
     total = int(shards[0].attrs["total_points"])
     ds = join_indexed(shards, "point", total, "point")
     ds.attrs["n_points"] = total

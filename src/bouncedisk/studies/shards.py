@@ -32,7 +32,12 @@ def join_indexed(shards: Sequence[xr.Dataset], dim: str, total: int, what: str) 
     ValueError
         An index missing or repeated (the first five of each named).
     """
-    index = np.concatenate([s[dim].values for s in shards]).astype(np.int64)
+    if not shards:
+        raise ValueError(f"no shards to join: every {what} is missing")
+    raw = np.concatenate([s[dim].values for s in shards])
+    index = raw.astype(np.int64)
+    if not np.array_equal(index, raw):
+        raise ValueError(f"every {what} must be a whole number")
     if index.size and (index.min() < 0 or index.max() >= total):
         raise ValueError(
             f"every {what} must lie in 0..{total - 1}: got {index.min()}..{index.max()}"

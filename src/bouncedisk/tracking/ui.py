@@ -17,6 +17,7 @@ The server is MLflow's own application (uvicorn on the FastAPI wrapper of its Fl
 from __future__ import annotations
 
 import asyncio
+import inspect
 import json
 import os
 import signal
@@ -146,7 +147,9 @@ def serve(
     stop = {}
     if threading.current_thread() is threading.main_thread():  # signals are the main thread's
         for sig in STOP_SIGNALS:
-            stop[sig] = signal.signal(sig, lambda *_: setattr(server, "should_exit", True))
+            stop[sig] = signal.getsignal(sig)
+            signal.signal(sig, lambda *_: setattr(server, "should_exit", True))
+    serving = server.serve(sockets=[sock])
     try:
         announce(url)
         if open_browser and has_display():
@@ -154,8 +157,11 @@ def serve(
                 webbrowser.open(url)
             except Exception:  # noqa: BLE001 - no usable browser: the address is printed
                 pass
-        asyncio.run(server.serve(sockets=[sock]))
+        asyncio.run(serving)
     finally:
-        for sig, handler in stop.items():
-            signal.signal(sig, handler)
+        if inspect.getcoroutinestate(serving) == inspect.CORO_CREATED:
+            serving.close()  # never started (asyncio.run refused, e.g. inside a running loop)
         sock.close()
+        for sig, handler in stop.items():
+            if handler is not None:  # None: a handler not set from Python, left as it is
+                signal.signal(sig, handler)
