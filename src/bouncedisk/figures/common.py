@@ -16,6 +16,11 @@ TWO_PI = 2 * math.pi
 COLORS = {"rotor": "#1f77b4", "stator": "#7f7f7f", "fit": "#d62728", "data": "#2ca02c"}
 
 
+def band(ax, x, low, high, color, label: str | None = None, alpha: float = 0.25) -> None:
+    """A shaded band between ``low`` and ``high`` over ``x`` (an interval, no edge line)."""
+    ax.fill_between(x, low, high, color=color, alpha=alpha, lw=0, label=label)
+
+
 def save_figure(fig: Figure, *paths: str | Path, dpi: int = 150) -> None:
     """Save ``fig`` to each path (format from the suffix), atomically."""
     for p in paths:

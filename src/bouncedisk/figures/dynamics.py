@@ -11,10 +11,9 @@ import xarray as xr
 from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure
 
-from .common import COLORS, TWO_PI, _param
+from .common import COLORS, TWO_PI, _param, band
 from .joint_fit import fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
 from .load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
-from .trajectory import _band
 
 
 def fig_poincare(datasets: dict[str, xr.Dataset]) -> Figure:
@@ -105,14 +104,7 @@ def fig_bifurcation(up: xr.Dataset, down: xr.Dataset) -> Figure:
             label="complete chatter (reset)" if key == "up" else None,
         )
         lam = ds["lyapunov"].values
-        ax2.fill_between(
-            e,
-            ds["lyapunov_ci_low"].values,
-            ds["lyapunov_ci_high"].values,
-            color=color,
-            alpha=0.25,
-            lw=0,
-        )
+        band(ax2, e, ds["lyapunov_ci_low"].values, ds["lyapunov_ci_high"].values, color, alpha=0.25)
         ax2.plot(e, lam, "-", color=color, lw=0.8, label=f"{label}, mean and 95% interval")
         reset = ds["lyapunov_reset_fraction"].values > 0.5
         down_label = f"{label}: −∞ (most members reset every cycle)"
@@ -231,13 +223,13 @@ def fig_speed_vs_psi(ds: xr.Dataset) -> Figure:
         line = ax.plot(
             psi, r * sel["mean_omega"].values, ".-", lw=1, ms=3, label=f"$R_\\phi$ = {r:g}"
         )[0]
-        ax.fill_between(
+        band(
+            ax,
             psi,
             r * sel["mean_omega_ci_low"].values,
             r * sel["mean_omega_ci_high"].values,
-            color=line.get_color(),
+            line.get_color(),
             alpha=0.3,
-            lw=0,
         )
     ax.axhline(0, color="k", lw=0.6)
     ax.set_xlabel(r"torsional phase $\psi$ [rad]")
@@ -264,7 +256,7 @@ def fig_clipped_vs_bouncing(ds: xr.Dataset) -> Figure:
     for ax, p in zip(axes, psis, strict=True):
         if "omega_bouncing_ci_low" in ds:
             b = ds.sel(psi=p)
-            _band(
+            band(
                 ax,
                 t,
                 b["omega_bouncing_p025"],
@@ -273,7 +265,7 @@ def fig_clipped_vs_bouncing(ds: xr.Dataset) -> Figure:
                 "bouncing: central 95% of members",
                 alpha=0.3,
             )
-            _band(
+            band(
                 ax,
                 t,
                 b["omega_bouncing_ci_low"],

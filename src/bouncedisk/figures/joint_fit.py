@@ -10,6 +10,8 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
+from .common import band
+
 #: Colours and labels of the data sets in the identifiability figure (file's ``data_set`` order).
 DATA_SET_STYLE = {"run-ups": "C0", "load curve": "C1", "both": "k"}
 #: Display of every search coordinate: (label, transform to the displayed value).
@@ -53,23 +55,23 @@ def fig_fit_load(fit: xr.Dataset) -> Figure:
         return fit[name].values[order]
 
     mean = v("load_speed_fitted")
-    ax.fill_between(
+    band(
+        ax,
         t,
         v("load_speed_band_low"),
         v("load_speed_band_high"),
-        color="C0",
+        "C0",
+        "fitted model: members' 95% range",
         alpha=0.15,
-        lw=0,
-        label="fitted model: members' 95% range",
     )
-    ax.fill_between(
+    band(
+        ax,
         t,
         v("load_speed_fitted_low"),
         v("load_speed_fitted_high"),
-        color="C0",
+        "C0",
+        "fitted model: 95% interval of the mean",
         alpha=0.45,
-        lw=0,
-        label="fitted model: 95% interval of the mean",
     )
     ax.plot(t, mean, color="C0", lw=1.2)
     word = data_word(fit, "load_curve_synthetic")
@@ -92,13 +94,8 @@ def fig_fit_load(fit: xr.Dataset) -> Figure:
         f"{a.get('n_load_readings', len(t))} readings (joint fit)",
         fontsize=9,
     )
-    rax.fill_between(
-        t,
-        v("load_speed_band_low") - mean,
-        v("load_speed_band_high") - mean,
-        color="C0",
-        alpha=0.15,
-        lw=0,
+    band(
+        rax, t, v("load_speed_band_low") - mean, v("load_speed_band_high") - mean, "C0", alpha=0.15
     )
     rax.errorbar(
         t,

@@ -7,6 +7,8 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
+from .common import band
+
 #: Colours of the continuation branches.
 BRANCH_STYLE = {"up": ("C0", "loads increasing"), "down": ("C3", "loads decreasing")}
 #: What the figure says when there is no stall torque or no maximum (the file's states).
@@ -80,7 +82,7 @@ def fig_torque_speed(ds: xr.Dataset) -> Figure:
             )
             low = np.where(keep, sel[f"{name}_ci95_low"].values, np.nan) * k
             high = np.where(keep, sel[f"{name}_ci95_high"].values, np.nan) * k
-            ax.fill_between(load, low, high, color=color, alpha=0.25, lw=0)
+            band(ax, load, low, high, color, alpha=0.25)
             ax.plot(
                 load,
                 np.where(keep, sel[name].values, np.nan) * k,

@@ -8,7 +8,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.ticker import FixedLocator, FormatStrFormatter, NullLocator
 
-from .common import COLORS
+from .common import COLORS, band
 from .joint_fit import data_word, fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
 from .load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
 
@@ -42,21 +42,11 @@ def fig5_motor(
         ax, axr = fig.add_subplot(), None
     runs = int(fitted.attrs.get("runs", 1)) if fitted is not None else 1
     if runs > 1:  # run-ups fitted together: the data the fit compares with is their mean
-        ax.plot(
-            fitted["time"],
-            fitted["omega_measured"],
-            color=COLORS["data"],
-            lw=0.6,
-            label=f"{data_word(fitted)}: mean of {runs} run-ups",
-        )
+        t, y = fitted["time"], fitted["omega_measured"]
+        what = f"{data_word(fitted)}: mean of {runs} run-ups"
     else:
-        ax.plot(
-            curve["time_s"],
-            curve["omega_rad_s"],
-            color=COLORS["data"],
-            lw=0.6,
-            label=f"{data_word(fitted)} (prototype curve)",
-        )
+        t, y, what = curve["time_s"], curve["omega_rad_s"], f"{data_word(fitted)} (prototype curve)"
+    ax.plot(t, y, color=COLORS["data"], lw=0.6, label=what)
     if fitted is not None:
         _fig5_fitted(ax, axr, fitted)
     elif simulated is not None:
@@ -88,14 +78,14 @@ def _fig5_fitted(ax, axr, fitted: xr.Dataset) -> None:
     t = fitted["time"].values
     mean = fitted["omega_fitted"].values
     if "omega_fitted_low" in fitted:
-        ax.fill_between(
+        band(
+            ax,
             t,
             fitted["omega_fitted_low"].values,
             fitted["omega_fitted_high"].values,
-            color=COLORS["fit"],
+            COLORS["fit"],
+            "fitted model: 95% interval of the ensemble mean",
             alpha=0.35,
-            lw=0,
-            label="fitted model: 95% interval of the ensemble mean",
         )
     ax.plot(t, mean, color=COLORS["fit"], lw=0.9, label="fitted model: ensemble mean")
     for name, style, label in (
@@ -113,14 +103,14 @@ def _fig5_fitted(ax, axr, fitted: xr.Dataset) -> None:
             )
     resid = fitted["omega_measured"].values - mean
     if "residual_band_low" in fitted:
-        axr.fill_between(
+        band(
+            axr,
             t,
             fitted["residual_band_low"].values,
             fitted["residual_band_high"].values,
-            color=COLORS["fit"],
+            COLORS["fit"],
+            "95% of the members + noise",
             alpha=0.3,
-            lw=0,
-            label="95% of the members + noise",
         )
         # said in the title, not a legend over the residuals
         title = "band: 95% of the members + noise"

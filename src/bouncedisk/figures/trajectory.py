@@ -11,11 +11,6 @@ from .joint_fit import fig_fit_identifiability, fig_fit_load  # noqa: F401  (thr
 from .load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
 
 
-def _band(ax, t, low, high, color, label, alpha=0.25) -> None:
-    """A shaded band between ``low`` and ``high``."""
-    ax.fill_between(t, low, high, color=color, alpha=alpha, lw=0, label=label)
-
-
 def _zero_width(low: np.ndarray, high: np.ndarray) -> bool:
     """Is a band too narrow to see (below a thousandth of its values' range) everywhere?"""
     span = float(np.nanmax(high) - np.nanmin(low)) or 1.0
@@ -60,7 +55,7 @@ def fig_trajectory(ds: xr.Dataset, band: xr.Dataset | None = None, window: float
             zero = _zero_width(band["omega_p025"].values, band["omega_p975"].values)
             note = " (zero width: the members coincide)" if zero else ""
             note += _band_end(bt, t, band.attrs.get("stop"))
-            _band(
+            band(
                 axes[2],
                 bt,
                 band["omega_p025"],
@@ -69,7 +64,7 @@ def fig_trajectory(ds: xr.Dataset, band: xr.Dataset | None = None, window: float
                 f"central 95% of {k} members{note}",
                 alpha=0.3,
             )
-            _band(
+            band(
                 axes[2],
                 bt,
                 band["omega_ci_low"],
