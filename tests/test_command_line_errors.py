@@ -388,10 +388,14 @@ def test_the_settle_tolerance_has_one_bound(capsys, settle):
     """`--settle` in (0, 1) on the command line, > 0 in the library (whose error named the
     option): one bound, the option named on the command line and the parameter in the library."""
     from bouncedisk.model.limits import SETTLE_RANGE
-    from bouncedisk.studies.basins import group
+    from bouncedisk.model.scene import load_scene
+    from bouncedisk.studies.basins import group, run_starts, start_grid
 
     with pytest.raises(InputError) as ex:
         group(None, settle=settle)
+    assert ex.value.field == "settle" and SETTLE_RANGE.text() in ex.value.message
+    with pytest.raises(InputError) as ex:  # before any run
+        run_starts(load_scene(FIG3), start_grid(4, [0.0]), settle=settle)
     assert ex.value.field == "settle" and SETTLE_RANGE.text() in ex.value.message
     argv = ["basins", FIG3, "--phases", "4", "--settle", str(settle)]
     assert main(argv) == 2

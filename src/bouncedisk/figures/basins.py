@@ -8,7 +8,7 @@ import xarray as xr
 from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure
 
-from .common import band
+from .common import shade
 
 #: Colour of the starts that have not settled within the window (label -1).
 UNSETTLED = "0.75"
@@ -94,7 +94,7 @@ def fig_startup(ds: xr.Dataset) -> Figure:
         ("unsettled_fraction", "0.5", "not settled within the longest window"),
     ]
     for name, color, label in (c for c in curves if c[0] in ds):
-        band(ax, load, ds[f"{name}_ci95_low"], ds[f"{name}_ci95_high"], color)
+        shade(ax, load, ds[f"{name}_ci95_low"], ds[f"{name}_ci95_high"], color)
         ax.plot(load, ds[name], "o-", ms=3, lw=1.0, color=color, label=label)
     ax.set_ylim(-0.02, 1.02)
     ax.set_xlabel(r"load torque $\tau_L$")

@@ -9,14 +9,12 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from ..io.atomic import atomic_path
-from .joint_fit import fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
-from .load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
 
 TWO_PI = 2 * math.pi
 COLORS = {"rotor": "#1f77b4", "stator": "#7f7f7f", "fit": "#d62728", "data": "#2ca02c"}
 
 
-def band(ax, x, low, high, color, label: str | None = None, alpha: float = 0.25) -> None:
+def shade(ax, x, low, high, color, label: str | None = None, alpha: float = 0.25) -> None:
     """A shaded band between ``low`` and ``high`` over ``x`` (an interval, no edge line)."""
     ax.fill_between(x, low, high, color=color, alpha=alpha, lw=0, label=label)
 

@@ -8,8 +8,6 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter
 
 from .common import COLORS
-from .joint_fit import fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
-from .load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
 
 #: Where an error of 0 (identical to the reference) is drawn on the log axis.
 ZERO_ERROR = 1e-17

@@ -27,8 +27,8 @@ from .dynamics import (
     fig_regime_map,  # noqa: F401 (looked up by name)
     fig_speed_vs_psi,  # noqa: F401 (looked up by name)
 )
-from .joint_fit import fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
-from .load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
+from .joint_fit import fig_fit_identifiability, fig_fit_load  # noqa: F401 (looked up by name)
+from .load import fig_torque_speed  # noqa: F401 (looked up by name)
 from .motor import (
     fig5_motor,
     fig_fit_profiles,  # noqa: F401 (looked up by name)

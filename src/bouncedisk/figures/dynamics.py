@@ -11,9 +11,7 @@ import xarray as xr
 from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure
 
-from .common import COLORS, TWO_PI, _param, band
-from .joint_fit import fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
-from .load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
+from .common import COLORS, TWO_PI, _param, shade
 
 
 def fig_poincare(datasets: dict[str, xr.Dataset]) -> Figure:
@@ -104,7 +102,9 @@ def fig_bifurcation(up: xr.Dataset, down: xr.Dataset) -> Figure:
             label="complete chatter (reset)" if key == "up" else None,
         )
         lam = ds["lyapunov"].values
-        band(ax2, e, ds["lyapunov_ci_low"].values, ds["lyapunov_ci_high"].values, color, alpha=0.25)
+        shade(
+            ax2, e, ds["lyapunov_ci_low"].values, ds["lyapunov_ci_high"].values, color, alpha=0.25
+        )
         ax2.plot(e, lam, "-", color=color, lw=0.8, label=f"{label}, mean and 95% interval")
         reset = ds["lyapunov_reset_fraction"].values > 0.5
         down_label = f"{label}: −∞ (most members reset every cycle)"
@@ -223,7 +223,7 @@ def fig_speed_vs_psi(ds: xr.Dataset) -> Figure:
         line = ax.plot(
             psi, r * sel["mean_omega"].values, ".-", lw=1, ms=3, label=f"$R_\\phi$ = {r:g}"
         )[0]
-        band(
+        shade(
             ax,
             psi,
             r * sel["mean_omega_ci_low"].values,
@@ -256,7 +256,7 @@ def fig_clipped_vs_bouncing(ds: xr.Dataset) -> Figure:
     for ax, p in zip(axes, psis, strict=True):
         if "omega_bouncing_ci_low" in ds:
             b = ds.sel(psi=p)
-            band(
+            shade(
                 ax,
                 t,
                 b["omega_bouncing_p025"],
@@ -265,7 +265,7 @@ def fig_clipped_vs_bouncing(ds: xr.Dataset) -> Figure:
                 "bouncing: central 95% of members",
                 alpha=0.3,
             )
-            band(
+            shade(
                 ax,
                 t,
                 b["omega_bouncing_ci_low"],

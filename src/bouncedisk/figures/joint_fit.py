@@ -10,7 +10,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from .common import band
+from .common import shade
 
 #: Colours and labels of the data sets in the identifiability figure (file's ``data_set`` order).
 DATA_SET_STYLE = {"run-ups": "C0", "load curve": "C1", "both": "k"}
@@ -55,7 +55,7 @@ def fig_fit_load(fit: xr.Dataset) -> Figure:
         return fit[name].values[order]
 
     mean = v("load_speed_fitted")
-    band(
+    shade(
         ax,
         t,
         v("load_speed_band_low"),
@@ -64,7 +64,7 @@ def fig_fit_load(fit: xr.Dataset) -> Figure:
         "fitted model: members' 95% range",
         alpha=0.15,
     )
-    band(
+    shade(
         ax,
         t,
         v("load_speed_fitted_low"),
@@ -94,7 +94,7 @@ def fig_fit_load(fit: xr.Dataset) -> Figure:
         f"{a.get('n_load_readings', len(t))} readings (joint fit)",
         fontsize=9,
     )
-    band(
+    shade(
         rax, t, v("load_speed_band_low") - mean, v("load_speed_band_high") - mean, "C0", alpha=0.15
     )
     rax.errorbar(

@@ -7,7 +7,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from .common import band
+from .common import shade
 
 #: Colours of the continuation branches.
 BRANCH_STYLE = {"up": ("C0", "loads increasing"), "down": ("C3", "loads decreasing")}
@@ -82,7 +82,7 @@ def fig_torque_speed(ds: xr.Dataset) -> Figure:
             )
             low = np.where(keep, sel[f"{name}_ci95_low"].values, np.nan) * k
             high = np.where(keep, sel[f"{name}_ci95_high"].values, np.nan) * k
-            band(ax, load, low, high, color, alpha=0.25)
+            shade(ax, load, low, high, color, alpha=0.25)
             ax.plot(
                 load,
                 np.where(keep, sel[name].values, np.nan) * k,

@@ -8,9 +8,8 @@ import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.ticker import FixedLocator, FormatStrFormatter, NullLocator
 
-from .common import COLORS, band
-from .joint_fit import data_word, fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
-from .load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
+from .common import COLORS, shade
+from .joint_fit import data_word
 
 
 def fig5_motor(
@@ -78,7 +77,7 @@ def _fig5_fitted(ax, axr, fitted: xr.Dataset) -> None:
     t = fitted["time"].values
     mean = fitted["omega_fitted"].values
     if "omega_fitted_low" in fitted:
-        band(
+        shade(
             ax,
             t,
             fitted["omega_fitted_low"].values,
@@ -103,7 +102,7 @@ def _fig5_fitted(ax, axr, fitted: xr.Dataset) -> None:
             )
     resid = fitted["omega_measured"].values - mean
     if "residual_band_low" in fitted:
-        band(
+        shade(
             axr,
             t,
             fitted["residual_band_low"].values,

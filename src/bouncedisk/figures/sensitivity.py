@@ -10,12 +10,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
 from .dynamics import REGIME_COLORS
-from .joint_fit import (  # the fit's figures: drawn through FIGURES
-    COORDINATES,
-    fig_fit_identifiability,  # noqa: F401
-    fig_fit_load,  # noqa: F401
-)
-from .load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
+from .joint_fit import COORDINATES
 
 #: The outputs as the figures write them (one convention: speeds and powers times R_phi).
 LABELS = {

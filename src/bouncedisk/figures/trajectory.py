@@ -6,9 +6,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from .common import COLORS, _title
-from .joint_fit import fig_fit_identifiability, fig_fit_load  # noqa: F401  (through FIGURES)
-from .load import fig_torque_speed  # noqa: F401  (drawn through FIGURES)
+from .common import COLORS, _title, shade
 
 
 def _zero_width(low: np.ndarray, high: np.ndarray) -> bool:
@@ -55,7 +53,7 @@ def fig_trajectory(ds: xr.Dataset, band: xr.Dataset | None = None, window: float
             zero = _zero_width(band["omega_p025"].values, band["omega_p975"].values)
             note = " (zero width: the members coincide)" if zero else ""
             note += _band_end(bt, t, band.attrs.get("stop"))
-            band(
+            shade(
                 axes[2],
                 bt,
                 band["omega_p025"],
@@ -64,7 +62,7 @@ def fig_trajectory(ds: xr.Dataset, band: xr.Dataset | None = None, window: float
                 f"central 95% of {k} members{note}",
                 alpha=0.3,
             )
-            band(
+            shade(
                 axes[2],
                 bt,
                 band["omega_ci_low"],

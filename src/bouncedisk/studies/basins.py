@@ -436,6 +436,7 @@ def run_starts(
     continued, up to ``extend`` doublings (rule 2, ``settle`` its tolerance), each start on its
     own: its numbers do not depend on the shard."""
     start = time.perf_counter()
+    limits.SETTLE_RANGE.check("<arguments>", "settle", settle)  # before any run
     check_scene(scene)
     if (
         isinstance(extend, bool)
