@@ -193,21 +193,12 @@ class _Grid:
         for k, what in (("period_p", "impacts"), ("period_q", "stator periods")):
             data[k] = (dims, self.ints[k], {"long_name": f"{what} per cycle (0: not periodic)"})
         ev_dims = dims + ("impact",)
-        data["phase"] = (
-            ev_dims,
-            self.phase,
-            {"long_name": "stator phase at the event, member 0 tail", "units": "rad"},
-        )
-        data["v_rel"] = (
-            ev_dims,
-            self.v_rel,
-            {"long_name": "relative impact velocity, member 0 tail", "units": "1"},
-        )
-        data["is_chatter"] = (
-            ev_dims,
-            self.chatter,
-            {"long_name": "the event is a complete chatter (a reset)", "units": "1"},
-        )
+        for name, values, long_name, units in (
+            ("phase", self.phase, "stator phase at the event, member 0 tail", "rad"),
+            ("v_rel", self.v_rel, "relative impact velocity, member 0 tail", "1"),
+            ("is_chatter", self.chatter, "the event is a complete chatter (a reset)", "1"),
+        ):
+            data[name] = (ev_dims, values, {"long_name": long_name, "units": units})
         # per point, so that any join of shards (open_mfdataset too) sums to the sweep's total
         data["n_events"] = (
             dims,

@@ -54,14 +54,25 @@ def check_units(src: str, units: object, quantities: tuple[str, ...]) -> None:
             raise InputError(src, f"units.{key}", f"must be {unit!r}, got {u!r}; {_HINTS[key]}")
 
 
+def group_keys(src: str, name: str, group: object, fields: dict, absent: str) -> None:
+    """Check that a sidecar's group ``name`` (``motor``, ``rotor``) is a mapping of known keys.
+
+    Raises
+    ------
+    InputError
+        ``name`` not a mapping (message ``absent``), or a key not among ``fields``.
+    """
+    if not isinstance(group, dict):
+        raise InputError(src, name, absent)
+    for k in group:
+        if k not in fields:
+            raise InputError(src, f"{name}.{k}", f"unknown key (known: {', '.join(fields)})")
+
+
 def read_motor(src: str, motor: object, required: tuple[str, ...]) -> dict[str, float]:
     """A sidecar's ``motor``: the constants of :data:`MOTOR_FIELDS` it states, each within its
     bound, ``required`` among them; returned as floats."""
-    if not isinstance(motor, dict):
-        raise InputError(src, "motor", f"is required, with {', '.join(required)}")
-    for k in motor:
-        if k not in MOTOR_FIELDS:
-            raise InputError(src, f"motor.{k}", f"unknown key (known: {', '.join(MOTOR_FIELDS)})")
+    group_keys(src, "motor", motor, MOTOR_FIELDS, f"is required, with {', '.join(required)}")
     out = {}
     for k, bound in MOTOR_FIELDS.items():
         if motor.get(k) is None:

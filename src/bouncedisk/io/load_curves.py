@@ -31,7 +31,7 @@ from ..model import limits
 from ..model.errors import InputError, plain
 from ..model.params import number, whole_number
 from ..model.scene import read_yaml
-from .curve_files import check_units, column, read_motor, read_table
+from .curve_files import check_units, column, group_keys, read_motor, read_table
 from .output_checks import sidecar_of
 
 COLUMNS = ("torque_Nm", "speed_rad_s")
@@ -110,11 +110,7 @@ def _sidecar(path: Path) -> dict:
 
 def _rotor(src: str, rotor: object) -> dict[str, float]:
     """The sidecar's ``rotor``: every field of :data:`ROTOR_FIELDS`, each within its bound."""
-    if not isinstance(rotor, dict):
-        raise InputError(src, "rotor", f"is required: {{{', '.join(ROTOR_KEYS)}}}")
-    for k in rotor:
-        if k not in ROTOR_FIELDS:
-            raise InputError(src, f"rotor.{k}", f"unknown key (known: {', '.join(ROTOR_KEYS)})")
+    group_keys(src, "rotor", rotor, ROTOR_FIELDS, f"is required: {{{', '.join(ROTOR_KEYS)}}}")
     out = {}
     for k, bound in ROTOR_FIELDS.items():
         if k not in rotor:
