@@ -1,11 +1,11 @@
 """Coverage of the fit's 95 % interval of ``R_phi``: many noise seeds of one motor.
 
-The test ``tests/test_fitting.py::test_coverage_of_r_phi`` fits a few seeds of the periodic case
-(its regression check); this benchmark fits as many as asked, with the same curves and settings
-(0.03 s run-ups, a 96-point scan with 8 zoom points per centre, the profile of ``R_phi``
-only), and reports how many intervals hold the generating ``R_phi``, with the Wilson 95 %
-interval of that coverage, the intervals' widths (the ratio of their ends) and the wall time
-of a fit. Seed ``k`` is the test's seed ``k``, so the test's seeds are the first of these.
+It fits as many noise seeds of the periodic case of ``tests/test_fitting.py`` as asked, with that
+module's curves (0.03 s run-ups, a 96-point scan with 8 zoom points per centre, the profile of
+``R_phi`` only), and reports how many intervals hold the generating ``R_phi``, with the Wilson
+95 % interval of that coverage, the intervals' widths (the ratio of their ends) and the wall time
+of a fit. A check of the intervals' coverage over seeds costs minutes a seed: it is this
+benchmark and its record, not a test.
 
 Run:  nice -n 5 python benchmarks/fit_coverage.py [--first 0] [--count 20] [--json OUT.jsonl]
       [--record]

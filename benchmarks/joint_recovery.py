@@ -12,9 +12,8 @@ case takes minutes on one core (the defaults are scan 256, zoom 8). Near the per
 joint valley (a thin tube in (e, psi, omega_s)) lies between the scan's and the joint zoom's
 points and is reached by the joint refinement (``search.joint_refine``); in the chaotic case the
 intervals hold the truth through the widening to every consistent candidate, not the profiles.
-A smaller scan can leave the periodic case in a wrong valley. ``tests/test_joint_fit.py`` checks
-the chaotic case at these settings (every joint interval holds the generating value); the
-measured rows are in ``benchmarks/out/fit.json``.
+A smaller scan can leave the periodic case in a wrong valley. The measured rows are in
+``benchmarks/out/fit.json``.
 """
 
 from __future__ import annotations

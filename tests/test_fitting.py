@@ -1,9 +1,7 @@
 """Fitting the model to a velocity–time curve: options, bounded work, the file, recovery."""
 
-import importlib.util
 import math
 import os
-import sys
 import time
 from pathlib import Path
 
@@ -469,42 +467,53 @@ def model_trend(curve: MotorCurve, true: dict, members: int = 128):
     return first_order_trend(uniform_grid(curve), np.mean(runs, axis=0))
 
 
-#: CPU seconds of each case's recovery test (measured; the longest tests run first, conftest.py)
-RECOVERY_COST = {"periodic": 80, "chaotic_reinjection": 90, "near_boundary": 75}
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("case", [pytest.param(c, marks=pytest.mark.cost(RECOVERY_COST[c]))
-                                  for c in CASES])  # fmt: skip
-def test_recovery(tmp_path, case):
+def recover(tmp_path: Path, case: str):
+    """Fit the recovery ``case`` (its curves made in ``tmp_path``) and return the fit's file and the
+    generating model's trend. The test fits the periodic case; ``benchmarks/fit_recovery.py`` all
+    three (the chaotic one from 64 run-ups, minutes of CPU: a benchmark, not a test)."""
     true = CASES[case]
     if RUNS[case] == 1:  # 0.03 s: 25 time constants of the periodic case, half the fit's cost
         curves = [read_curve(make_curve(tmp_path / f"{case}.csv", true, 3, member=0, span=0.03))]
     else:  # run-ups of one motor: independent realizations (members) and measurement noise
-        curves = [read_curve(make_curve(tmp_path / f"{case}_{i}.csv", true, 300 + i, member=i))
-                  for i in range(RUNS[case])]  # fmt: skip
-    curve = curves[0]
+        curves = [
+            read_curve(make_curve(tmp_path / f"{case}_{i}.csv", true, 300 + i, member=i))
+            for i in range(RUNS[case])
+        ]
     # one run-up: the default search; the 64 run-ups of the chaotic case (4 members at every scan
     # point) a scan of 128 with 8 zoom points around each centre, which recovers it with the same
-    # margins at half the cost (the default search is tested on the other two cases)
+    # margins at half the cost
     search = {} if RUNS[case] == 1 else {"scan": 128, "zoom": 8}
-    fit = fit_curve(curves, FitSettings(seed=1, cores=2, **search))
-    ds = fit_dataset(fit)
-    truth = model_trend(curve, true)
-    print(f"\nRECOVERY {case}: chi2 {ds.attrs['chi2']:.4g} adequate {ds.attrs['fit_adequate']} "
-          f"wall {ds.attrs['wall_time_s']:.1f} s; trend fitted {ds.attrs['model_steady_speed_rad_s']:.4g}"
-          f" rad/s {ds.attrs['model_time_constant_s']:.4g} s, generating {truth.steady:.4g} rad/s "
-          f"{truth.tau:.4g} s")  # fmt: skip
+    ds = fit_dataset(fit_curve(curves, FitSettings(seed=1, cores=2, **search)))
+    return ds, model_trend(curves[0], true)
+
+
+def recovery_failures(ds: xr.Dataset, truth, case: str) -> list[str]:
+    """What a recovery misses: the fitted trend's steady speed (3 %) and time constant (10 %)
+    against the generating model's, and every identified interval against the generating value."""
+    true = CASES[case]
+    out = []
+    if abs(ds.attrs["model_steady_speed_rad_s"] / truth.steady - 1) > 0.03:
+        out.append(f"steady speed {ds.attrs['model_steady_speed_rad_s']:.4g} vs {truth.steady:.4g}")
+    if abs(ds.attrs["model_time_constant_s"] / truth.tau - 1) > 0.10:
+        out.append(f"time constant {ds.attrs['model_time_constant_s']:.4g} vs {truth.tau:.4g}")
     for name in ("e", "r_phi", "psi", "omega_s"):
         a = ds[name].attrs
-        print(f"  {name}: true {true[name]:.4g} fitted {float(ds[name]):.4g} "
-              f"[{a['ci_low']:.4g}, {a['ci_high']:.4g}] identified {a['identified']}")  # fmt: skip
-    assert ds.attrs["model_steady_speed_rad_s"] == pytest.approx(truth.steady, rel=0.03)
-    assert ds.attrs["model_time_constant_s"] == pytest.approx(truth.tau, rel=0.10)
-    for name in ("e", "r_phi", "psi", "omega_s"):
-        a = ds[name].attrs
-        if a["identified"]:
-            assert a["ci_low"] <= true[name] <= a["ci_high"], (name, a)
+        if a["identified"] and not a["ci_low"] <= true[name] <= a["ci_high"]:
+            out.append(f"{name}: {true[name]:.4g} outside [{a['ci_low']:.4g}, {a['ci_high']:.4g}]")
+    return out
+
+
+@pytest.mark.slow
+@pytest.mark.cost(80)
+def test_recovery_of_the_periodic_case(tmp_path):
+    """The default search on one 0.03 s run-up of the periodic case: the fitted trend is the
+    generating model's, and every identified interval holds the generating value. The other two
+    cases (near the period doubling; chaotic, from 64 run-ups) are ``benchmarks/fit_recovery.py``."""
+    ds, truth = recover(tmp_path, "periodic")
+    print(f"\nRECOVERY periodic: chi2 {ds.attrs['chi2']:.4g} adequate {ds.attrs['fit_adequate']}")
+    assert ds.attrs["fit_adequate"] == 1
+    assert sum(ds[n].attrs["identified"] for n in ("e", "r_phi", "psi", "omega_s")) >= 1
+    assert recovery_failures(ds, truth, "periodic") == []
 
 
 def test_simulate_curve_reproduces_the_shipped_generator(tmp_path):
@@ -646,36 +655,6 @@ def test_shipped_curve_fit_is_adequate_and_fig5_residual_in_band():
     assert ds.attrs["residual_within_band"] == 1
     assert ds.attrs["model_steady_speed_rad_s"] == pytest.approx(ds.attrs["steady_speed_rad_s"],
                                                                  rel=0.03)  # fmt: skip
-
-
-def _benchmark(name: str):
-    """The module ``benchmarks/<name>.py`` (its settings are the one copy the test shares)."""
-    spec = importlib.util.spec_from_file_location(name, Path("benchmarks") / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-@pytest.mark.slow
-@pytest.mark.cost(185)
-def test_coverage_of_r_phi():
-    """Over 5 noise seeds (and realizations) of one case, the 95% interval of r_phi covers.
-
-    The regression check of the interval (profile and widening): 0.03 s records (25 time
-    constants of this case) and a 96-point scan with 8 zoom points per centre, the same fits as
-    the coverage benchmark (``benchmarks/fit_coverage.py``, which measures the coverage on 20
-    seeds with its Wilson interval; its first five seeds are these). Every interval must be
-    identified, and at least 4 of the 5 two-sided (closed at both ends, inside the search range)
-    and holding the generating value: an interval open to a search bound covers vacuously (the
-    benchmark's 20 are two-sided, 19 hold the truth, their ends a median factor 1.20 apart). The default search is tested by the recovery and
-    shipped-curve tests.
-    """
-    bench = _benchmark("fit_coverage")
-    rows = [bench.fit_seed(seed, cases=sys.modules[__name__]) for seed in range(5)]
-    for r in rows:
-        print(f"\nCOVERAGE {r}")
-    assert all(r["identified"] for r in rows), rows
-    assert sum(r["holds"] and r["two_sided"] for r in rows) >= 4, rows
 
 
 def test_the_search_sizes_have_one_default():

@@ -384,31 +384,6 @@ def test_the_joint_stage_finds_the_valley_near_the_period_doubling(tmp_path):
     assert np.all(np.abs(best - gen) / obj.span <= [0.05, 0.02, 0.03, 0.01]), best
 
 
-# ------------------------------------------------------------------ recovery, whole
-
-
-@pytest.mark.slow
-@pytest.mark.cost(100)
-def test_joint_recovery_of_the_chaotic_case_holds_the_truth_in_every_interval(tmp_path):
-    """The whole joint fit of model-generated data (the chaotic case with chatter
-    reinjection, the shortest of ``benchmarks/joint_recovery.py``'s three, at its settings):
-    adequate, every joint 95 % interval two-sided inside the search range and holding the
-    generating value, and narrower with the load curve than from the run-up alone in every
-    coordinate (the widths of the docs' recovery table)."""
-    true, top = CASES["chaotic_reinjection"]
-    run, load = make_data(tmp_path, true, top, loads=10, seed=3)
-    settings = FitSettings(seed=1, scan=256, zoom=8, zoom_centres=4, cores=2)
-    ds = fit_dataset(fit_curve(read_curve(run), settings, load=[read_load_curve(load)]))
-    assert ds.attrs["fit_adequate"] == 1, ds.attrs["chi2"]
-    names = [str(n) for n in ds["parameter"].values]
-    lo, hi = ds["interval_low"].values, ds["interval_high"].values  # (data set, parameter)
-    for j, name in enumerate(names):
-        t = math.log10(true["r_phi"]) if name == "log10_r_phi" else true[name]
-        low, high = BOUNDS[name]
-        assert low < lo[2, j] <= t <= hi[2, j] < high, (name, lo[2, j], hi[2, j], t)
-        assert hi[2, j] - lo[2, j] < hi[0, j] - lo[0, j], name  # both narrower than run-ups alone
-
-
 @pytest.mark.xdist_group("tiny_joint_fit")  # one worker fits, not both
 def test_an_inadequate_fit_reports_no_interval(tiny_fit, tmp_path):
     """The same fit with a ``χ²`` the data reject (p < 0.001): every interval of the file is NaN,
