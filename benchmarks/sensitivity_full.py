@@ -21,7 +21,7 @@ from pathlib import Path
 
 from bouncedisk.studies.sensitivity_settings import PARAMETERS
 
-#: The half-width every index of the resolved study is asked to reach (issue "studies and figures").
+#: The half-width every index of the resolved study is to reach (the sensitivity guide).
 TARGET = 0.03
 LABELS = {"e": "$e$", "omega_s": r"$\omega_s$", "log10_r_phi": r"$\log_{10} R_\varphi$",
           "psi": r"$\psi$"}  # fmt: skip
