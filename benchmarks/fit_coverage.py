@@ -4,8 +4,8 @@ It fits as many noise seeds of the periodic case of ``tests/test_fitting.py`` as
 module's curves (0.03 s run-ups, a 96-point scan with 8 zoom points per centre, the profile of
 ``R_phi`` only), and reports how many intervals hold the generating ``R_phi``, with the Wilson
 95 % interval of that coverage, the intervals' widths (the ratio of their ends) and the wall time
-of a fit. A check of the intervals' coverage over seeds costs minutes a seed: it is this
-benchmark and its record, not a test.
+of a fit. A check of the intervals' coverage needs many seeds (tens of seconds a fit): it is
+this benchmark and its record, not a test.
 
 Run:  nice -n 5 python benchmarks/fit_coverage.py [--first 0] [--count 20] [--json OUT.jsonl]
       [--record]
@@ -32,7 +32,7 @@ from bouncedisk.studies.basins import wilson
 
 ROOT = Path(__file__).resolve().parents[1]
 CASE = "periodic"
-#: The test's settings (16 band members: the band is not what is measured).
+#: The fits' settings (16 band members: the band is not what is measured).
 SETTINGS = dict(seed=1, cores=2, scan=96, zoom=8, band_members=16, profile=("log10_r_phi",))
 SPAN_S = 0.03
 

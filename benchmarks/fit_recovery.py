@@ -4,8 +4,8 @@ For each case (periodic; near the period doubling; chaotic with chatter reinject
 run-ups) the curves the test makes, the fit at the test's settings, and what it misses: the fitted
 trend against the generating model's (steady speed within 3 %, time constant within 10 %) and every
 identified 95 % interval against the generating value. ``tests/test_fitting.py`` fits the periodic
-case (the smallest one that fails on a planted search-range error); the other two cost minutes of
-CPU each and are measured here.
+case alone (one run-up, the default search; it fails on a planted search range that leaves out the
+generating point); the three together cost minutes of CPU, and the chaotic case alone 64 run-ups.
 
 Run:  nice -n 5 python benchmarks/fit_recovery.py [CASE ...] [--record]
 

@@ -9,7 +9,8 @@ Prints the Markdown table of every Sobol' index with its 95 % half-width (the se
 table of the resolved study), the largest half-width, and the cost: the CPU seconds summed over
 the study's jobs (Snakemake's benchmark files), in core-hours, the largest job's memory and the
 wall time on two dedicated cores that this CPU makes (CPU / 2: the shard jobs are independent and
-equal in size). ``--record`` writes ``benchmarks/out/sensitivity_full.json`` (the performance page).
+equal in size). ``--record`` writes its record, ``sensitivity_full.json``, in ``benchmarks/out/``
+(the performance page).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import math
 from pathlib import Path
 
 from bouncedisk.studies.sensitivity_settings import PARAMETERS
@@ -27,9 +29,14 @@ LABELS = {"e": "$e$", "omega_s": r"$\omega_s$", "log10_r_phi": r"$\log_{10} R_\v
           "psi": r"$\psi$"}  # fmt: skip
 
 
+def number(x) -> float:
+    """A summary's number (JSON ``null`` for an undefined one) as a float, NaN for null."""
+    return math.nan if x is None else float(x)
+
+
 def half_width(entry: dict) -> float:
-    """Half the width of an index's 95 % interval."""
-    lo, hi = entry["ci95"]
+    """Half the width of an index's 95 % interval (NaN when undefined)."""
+    lo, hi = (number(v) for v in entry["ci95"])
     return (hi - lo) / 2.0
 
 
@@ -42,19 +49,19 @@ def table(summary: dict) -> list[str]:
     for name, out in summary["outputs"].items():
         cells = [
             " / ".join(
-                f"{round(out[k][p]['index'], 2) + 0.0:.2f} ± {half_width(out[k][p]):.2f}"
+                f"{round(number(out[k][p]['index']), 2) + 0.0:.2f} ± {half_width(out[k][p]):.2f}"
                 for k in ("S1", "ST")
             )
             for p in PARAMETERS
         ]
-        rows.append(f"| `{name}` ({out['noise_share']:.1%}) | " + " | ".join(cells) + " |")
+        rows.append(f"| `{name}` ({number(out['noise_share']):.1%}) | " + " | ".join(cells) + " |")
     return rows
 
 
 def job_costs(results: Path) -> dict:
     """CPU seconds and peak memory of the study's jobs (its Snakemake benchmark files)."""
     cpu, rss, shards = 0.0, 0.0, 0
-    for tsv in sorted((results / "benchmarks" / "sensitivity").glob("*.tsv")):
+    for tsv in sorted((results / "benchmarks" / "sensitivity").glob("*.tsv")):  # this study's jobs
         with tsv.open(encoding="utf-8") as f:
             row = next(csv.DictReader(f, delimiter="\t"))
         cpu += float(row["cpu_time"])
@@ -81,7 +88,7 @@ def main() -> None:
     cost = job_costs(args.results)
     print("\n".join(table(summary)))
     print(
-        f"\n{summary['n_points']} points; largest half-width {max(widths):.3f} "
+        f"\n{summary['n_points']} points; largest half-width {max((w for w in widths if w == w), default=math.nan):.3f} "
         f"({sum(w <= TARGET for w in widths)} of {len(widths)} within ±{TARGET}); "
         f"{cost['shards']} shards; CPU {cost['cpu_s']:.0f} s = {cost['cpu_s'] / 3600:.2f} "
         f"core-hours (two dedicated cores: {cost['cpu_s'] / 2 / 60:.0f} min); "
@@ -98,7 +105,7 @@ def main() -> None:
                 (
                     f"indices within ±{TARGET} (95 % half-width)",
                     f"{sum(w <= TARGET for w in widths)} of {len(widths)}; "
-                    f"largest half-width {max(widths):.3f}",
+                    f"largest half-width {max((w for w in widths if w == w), default=math.nan):.3f}",
                 ),
                 (
                     "CPU summed over the study's jobs",

@@ -22,7 +22,7 @@ from bouncedisk.io.runup_curves import MotorCurve
 F_HZ, PHI0, DT = 15000.0, 3.0e-4, 2.5e-5
 KICKS, STEADY, LOG_TAU = (STATS.index(n) for n in ("log_increment_var", "steady_mean",
                                                    "log_time_constant"))  # fmt: skip
-#: a chaotic point with chatter reinjection (the recovery test's chaotic case)
+#: a chaotic point with chatter reinjection (the chaotic case of ``benchmarks/fit_recovery.py``)
 CHAOTIC = {"e": 0.62, "psi": -0.35, "omega_s": 1.48}
 
 
