@@ -71,6 +71,34 @@ def test_rbd_fast_first_order_intervals_are_narrower_than_saltellis_at_the_same_
     assert np.all(np.abs(ours["S1"].values - s1) <= ours["S1_conf"].values)
 
 
+def test_an_output_undefined_at_a_few_points_is_analysed_without_their_base_samples():
+    """A point where the output is undefined takes its base sample's D + 2 points out of the
+    analysis: the indices are SALib's on the remaining Saltelli design, and still hold the closed
+    form; undefined at more than UNDEFINED_MAX_SHARE of the base samples, there are none."""
+    from SALib.analyze import sobol
+
+    st = settings(ranges=ISHIGAMI_RANGES, base_samples=1024, shards=1, resamples=100)
+    points = run_sharded(st, sens.IshigamiModel(list(ISHIGAMI_RANGES)))
+    block = len(ISHIGAMI_RANGES) + 2
+    y = points["ishigami"].values.copy()
+    y[[3, 7 * block + 1]] = np.nan  # base samples 0 and 7
+    gappy = points.assign(ishigami=("point", y))
+    ind = sens.analyse(gappy, st.ranges, st.resamples, st.seed).sel(output="ishigami")
+    assert int(ind["n_undefined"]) == 2
+    keep = np.ones(len(y), bool)
+    keep[:block] = keep[7 * block : 8 * block] = False
+    salib = sobol.analyze(sens.problem(st.ranges), y[keep], calc_second_order=False,
+                          num_resamples=100, seed=st.seed)  # fmt: skip
+    np.testing.assert_allclose(ind["ST"].values, salib["ST"])
+    s1, st_ = ishigami_indices()
+    assert np.all(np.abs(ind["ST"].values - st_) <= ind["ST_conf"].values)
+    assert np.all(np.abs(ind["S1"].values - s1) <= ind["S1_conf"].values)
+    # undefined in 11 of 1024 base samples (> 1 %): no indices
+    y[block * np.arange(11)] = np.nan
+    none = sens.analyse(points.assign(ishigami=("point", y)), st.ranges, 20, st.seed)
+    assert np.isnan(none["ST"].values).all() and np.isnan(none["S1"].values).all()
+
+
 def test_a_smoke_sized_study_falls_back_to_saltellis_first_order_estimator():
     st = settings(ranges=ISHIGAMI_RANGES, base_samples=8, shards=1, resamples=20)
     points = run_sharded(st, sens.IshigamiModel(list(ISHIGAMI_RANGES)))

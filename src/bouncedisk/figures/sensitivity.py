@@ -78,11 +78,14 @@ def fig_sensitivity_indices(ds: xr.Dataset) -> Figure:
             ]
         share = float(row["noise_share"])
         undefined = int(row["n_undefined"])
-        note = (
-            f"undefined at {undefined} points: no indices"
-            if undefined
-            else f"ensemble noise: {100 * share:.1f} % of the variance"
-        )
+        note = f"ensemble noise: {100 * share:.1f} % of the variance"
+        if undefined:
+            analysed = np.isfinite(row["ST"].values).any()
+            note = (
+                f"undefined at {undefined} points (their base samples left out)\n{note}"
+                if analysed
+                else f"undefined at {undefined} points: no indices"
+            )
         ax.set_title(f"{_short(o)}\n{note}", fontsize=9)
         ax.set_xticks(pos, [_parameter(n) for n in names], fontsize=8)
         ax.axhline(0, color="k", lw=0.5)

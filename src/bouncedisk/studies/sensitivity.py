@@ -44,6 +44,9 @@ LEVEL = 0.95
 RESOLVED = 0.10
 #: Fewest points for RBD-FAST's first-order indices (10 harmonics; below, Saltelli's estimator).
 RBD_FAST_MIN_POINTS = 200
+#: Largest share of an output's base samples that may be left out because the output is undefined
+#: at one of their ``D + 2`` points (:func:`defined_blocks`); above it the output has no indices.
+UNDEFINED_MAX_SHARE = 0.01
 #: Figures of merit: name -> (long name, units, needs the ``load`` effect). Speeds and powers are
 #: scaled by ``R_φ``: ``R_φ Ω`` is the rotor speed in units of ``Φ0/t_c`` (docs/model.md "Variables and
 #: scales"), so they compare motors of the same stator at different ``R_φ``.
@@ -559,6 +562,17 @@ def noise_share(y: np.ndarray, se: np.ndarray) -> float:
     return noise / var if var > 0 else math.nan
 
 
+def defined_blocks(y: np.ndarray, d: int) -> np.ndarray | None:
+    """The points of the base samples whose ``D + 2`` points (Saltelli's ``A``, ``AB_1 … AB_D``,
+    ``B``, consecutive rows without second order) all define the output ``y``, as a boolean mask;
+    ``None`` when more than :data:`UNDEFINED_MAX_SHARE` of the base samples would be left out
+    (every point is kept when ``y`` is defined everywhere)."""
+    defined = np.isfinite(np.asarray(y, float)).reshape(-1, d + 2).all(axis=1)
+    if np.count_nonzero(~defined) > UNDEFINED_MAX_SHARE * defined.size:
+        return None
+    return np.repeat(defined, d + 2)
+
+
 def analyse(points: xr.Dataset, ranges: Mapping, resamples: int, seed: int) -> xr.Dataset:
     """First-order and total Sobol' indices of every output with 95 % bootstrap intervals.
 
@@ -574,8 +588,11 @@ def analyse(points: xr.Dataset, ranges: Mapping, resamples: int, seed: int) -> x
     Variables (output, parameter): ``S1``, ``S1_conf``, ``ST``, ``ST_conf`` (``conf``: half-width
     of the 95 % bootstrap interval), ``resolved`` (both half-widths at most :data:`RESOLVED`);
     per output: ``noise_share`` (:func:`noise_share`), ``variance``, ``mean``, ``n_undefined``
-    (points where the output is undefined, e.g. no stall within the loads asked for: then no
-    indices, NaN).
+    (points where the output is undefined, e.g. no efficiency where no member's torsional input
+    is positive). An output undefined at a few points is analysed on the base samples whose
+    ``D + 2`` points all define it (:func:`defined_blocks`, a Saltelli design of fewer base
+    samples); where more than :data:`UNDEFINED_MAX_SHARE` of the base samples would go, it has no
+    indices (NaN).
     """
     from SALib.analyze import rbd_fast, sobol
 
@@ -587,10 +604,11 @@ def analyse(points: xr.Dataset, ranges: Mapping, resamples: int, seed: int) -> x
     per = {k: np.full(len(outputs), np.nan) for k in ("noise_share", "variance", "mean")}
     undefined = np.zeros(len(outputs), np.int64)
     for i, o in enumerate(outputs):
-        y = points[o].values
-        undefined[i] = int(np.count_nonzero(~np.isfinite(y)))
-        if undefined[i]:
+        keep = defined_blocks(points[o].values, d)
+        undefined[i] = int(np.count_nonzero(~np.isfinite(points[o].values)))
+        if keep is None:
             continue
+        y, xk = points[o].values[keep], x[keep]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             total = sobol.analyze(
@@ -604,13 +622,13 @@ def analyse(points: xr.Dataset, ranges: Mapping, resamples: int, seed: int) -> x
             first = total
             if len(y) >= RBD_FAST_MIN_POINTS:
                 first = rbd_fast.analyze(
-                    prob, x, y, num_resamples=resamples, conf_level=LEVEL, seed=seed
+                    prob, xk, y, num_resamples=resamples, conf_level=LEVEL, seed=seed
                 )
         for k in ("S1", "S1_conf"):
             res[k][i] = first[k]
         for k in ("ST", "ST_conf"):
             res[k][i] = total[k]
-        per["noise_share"][i] = noise_share(y, points[f"{o}_se"].values)
+        per["noise_share"][i] = noise_share(y, points[f"{o}_se"].values[keep])
         per["variance"][i], per["mean"][i] = float(np.var(y, ddof=1)), float(np.mean(y))
     data = _index_variables(res, per, undefined)
     coords = {
