@@ -54,7 +54,9 @@ def table(summary: dict) -> list[str]:
             )
             for p in PARAMETERS
         ]
-        rows.append(f"| `{name}` ({number(out['noise_share']):.1%}) | " + " | ".join(cells) + " |")
+        rows.append(
+            f"| `{name}` ({100 * number(out['noise_share']):.1f} %) | " + " | ".join(cells) + " |"
+        )
     return rows
 
 
@@ -79,12 +81,14 @@ def main() -> None:
     if not summary_path.is_file():
         ap.error(f"{summary_path}: no summary; run the study first (see this script's docstring)")
     summary = json.loads(summary_path.read_text(encoding="utf-8"))
-    widths = [
-        half_width(out[k][p])
-        for out in summary["outputs"].values()
+    named = {
+        f"{k}({p}) of {name}": half_width(out[k][p])
+        for name, out in summary["outputs"].items()
         for k in ("S1", "ST")
         for p in PARAMETERS
-    ]
+    }
+    widths = list(named.values())
+    wide = ", ".join(f"{n} ±{w:.3f}" for n, w in named.items() if not w <= TARGET) or "none"
     cost = job_costs(args.results)
     print("\n".join(table(summary)))
     print(
@@ -92,7 +96,7 @@ def main() -> None:
         f"({sum(w <= TARGET for w in widths)} of {len(widths)} within ±{TARGET}); "
         f"{cost['shards']} shards; CPU {cost['cpu_s']:.0f} s = {cost['cpu_s'] / 3600:.2f} "
         f"core-hours (two dedicated cores: {cost['cpu_s'] / 2 / 60:.0f} min); "
-        f"largest job {cost['max_rss_mb']:.0f} MB"
+        f"largest job {cost['max_rss_mb']:.0f} MB\nwider than ±{TARGET}: {wide}"
     )
     if args.record:
         from record import write_record
@@ -107,6 +111,7 @@ def main() -> None:
                     f"{sum(w <= TARGET for w in widths)} of {len(widths)}; "
                     f"largest half-width {max((w for w in widths if w == w), default=math.nan):.3f}",
                 ),
+                (f"indices wider than ±{TARGET}", wide),
                 (
                     "CPU summed over the study's jobs",
                     f"{cost['cpu_s']:.0f} s = {cost['cpu_s'] / 3600:.2f} core-hours "
