@@ -25,8 +25,12 @@ from bouncedisk.studies.sensitivity_settings import PARAMETERS
 
 #: The half-width every index of the resolved study is to reach (the sensitivity guide).
 TARGET = 0.03
-LABELS = {"e": "$e$", "omega_s": r"$\omega_s$", "log10_r_phi": r"$\log_{10} R_\varphi$",
-          "psi": r"$\psi$"}  # fmt: skip
+LABELS = {
+    "e": "$e$",
+    "omega_s": r"$\omega_s$",
+    "log10_r_phi": r"$\log_{10} R_\varphi$",
+    "psi": r"$\psi$",
+}
 
 
 def number(x) -> float:
@@ -88,12 +92,14 @@ def main() -> None:
         for p in PARAMETERS
     }
     widths = list(named.values())
+    within = f"{sum(w <= TARGET for w in widths)} of {len(widths)}"
+    largest = max((w for w in widths if w == w), default=math.nan)  # NaN: undefined indices
     wide = ", ".join(f"{n} ±{w:.3f}" for n, w in named.items() if not w <= TARGET) or "none"
     cost = job_costs(args.results)
     print("\n".join(table(summary)))
     print(
-        f"\n{summary['n_points']} points; largest half-width {max((w for w in widths if w == w), default=math.nan):.3f} "
-        f"({sum(w <= TARGET for w in widths)} of {len(widths)} within ±{TARGET}); "
+        f"\n{summary['n_points']} points; largest half-width {largest:.3f} "
+        f"({within} within ±{TARGET}); "
         f"{cost['shards']} shards; CPU {cost['cpu_s']:.0f} s = {cost['cpu_s'] / 3600:.2f} "
         f"core-hours (two dedicated cores: {cost['cpu_s'] / 2 / 60:.0f} min); "
         f"largest job {cost['max_rss_mb']:.0f} MB\nwider than ±{TARGET}: {wide}"
@@ -108,8 +114,7 @@ def main() -> None:
                 ("points of the Saltelli sample", str(summary["n_points"])),
                 (
                     f"indices within ±{TARGET} (95 % half-width)",
-                    f"{sum(w <= TARGET for w in widths)} of {len(widths)}; "
-                    f"largest half-width {max((w for w in widths if w == w), default=math.nan):.3f}",
+                    f"{within}; largest half-width {largest:.3f}",
                 ),
                 (f"indices wider than ±{TARGET}", wide),
                 (

@@ -604,11 +604,12 @@ def analyse(points: xr.Dataset, ranges: Mapping, resamples: int, seed: int) -> x
     per = {k: np.full(len(outputs), np.nan) for k in ("noise_share", "variance", "mean")}
     undefined = np.zeros(len(outputs), np.int64)
     for i, o in enumerate(outputs):
-        keep = defined_blocks(points[o].values, d)
-        undefined[i] = int(np.count_nonzero(~np.isfinite(points[o].values)))
+        y_all = points[o].values
+        undefined[i] = int(np.count_nonzero(~np.isfinite(y_all)))
+        keep = defined_blocks(y_all, d)
         if keep is None:
             continue
-        y, xk = points[o].values[keep], x[keep]
+        y, xk = y_all[keep], x[keep]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             total = sobol.analyze(
