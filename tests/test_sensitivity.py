@@ -112,9 +112,9 @@ class _Curve:
     """A load curve's up branch from given (member, load) matrices (the attributes
     :func:`bouncedisk.studies.sensitivity.load_figures` reads)."""
 
-    def __init__(self, loads, speed, efficiency):
+    def __init__(self, loads, speed, torsion):
         self.loads = np.asarray(loads, float)
-        self._m = {"mean_omega": speed, "efficiency_torsion": efficiency,
+        self._m = {"mean_omega": speed, "power_torsion_in": torsion,
                    "power_out": self.loads * speed}  # fmt: skip
 
     def matrix(self, branch, name):
@@ -131,23 +131,30 @@ def test_load_figures_are_the_mean_curves_with_bootstrap_errors():
     loads = np.array([0.0, 0.25, 0.5, 0.75, 1.0, 2.0])
     c = np.array([0.55, 0.61, 0.58, 0.66])
     speed = c[:, None] - loads[None, :]
-    eff = np.tile(np.linspace(0.0, 0.5, len(loads)), (len(c), 1))
-    got = sens.load_figures(_Curve(loads, speed, eff), r=0.1)
+    torsion = np.tile(np.linspace(1.0, 2.0, len(loads)), (len(c), 1))
+    got = sens.load_figures(_Curve(loads, speed, torsion), r=0.1)
     value, low, high, se = got["stall_torque"]
     assert value == pytest.approx(c.mean(), abs=1e-12)
     assert se == pytest.approx(np.std(c, ddof=1) / 2.0, rel=0.05)
     assert low < value < high
     # the power tau (cbar - tau) is largest on the grid at tau = 0.25: R_phi times it
-    assert got["max_power"][0] == pytest.approx(0.1 * 0.25 * (c.mean() - 0.25), rel=1e-12)
-    assert got["efficiency_at_max_power"][0] == pytest.approx(0.1)  # eff at the second load
-    # a member without torsional input at that load (W_t <= 0: its efficiency undefined) is
-    # left out of the efficiency, not the whole point
-    gap = eff.copy()
+    power = 0.25 * (c.mean() - 0.25)
+    assert got["max_power"][0] == pytest.approx(0.1 * power, rel=1e-12)
+    assert got["efficiency_at_max_power"][0] == pytest.approx(power / 1.2, rel=1e-12)
+    # the efficiency is W_L / W_t of the members' summed works: a member whose torsional input
+    # is nearly 0 there does not make it diverge (its own ratio is ~1e8), and one without a
+    # reading is left out of the efficiency, not the whole point
+    tiny = torsion.copy()
+    tiny[0, 1] = 1e-9
+    eta = sens.load_figures(_Curve(loads, speed, tiny), r=0.1)["efficiency_at_max_power"]
+    assert eta[0] == pytest.approx(power / ((1e-9 + 3 * 1.2) / 4), rel=1e-12)
+    assert eta[0] < 1.0 and np.isfinite(eta[3])
+    gap = torsion.copy()
     gap[0, 1] = np.nan
     eta = sens.load_figures(_Curve(loads, speed, gap), r=0.1)["efficiency_at_max_power"]
-    assert eta[0] == pytest.approx(0.1) and np.isfinite(eta[3])
+    assert eta[0] == pytest.approx(power / 1.2, rel=1e-12) and np.isfinite(eta[3])
     # runs backwards at no load: stall torque 0, no power, no efficiency
-    back = sens.load_figures(_Curve(loads, speed - 1.0, eff), r=0.1)
+    back = sens.load_figures(_Curve(loads, speed - 1.0, torsion), r=0.1)
     assert back["stall_torque"][0] == 0.0 and back["max_power"][0] == 0.0
     assert back["efficiency_at_max_power"][0] == 0.0
 

@@ -258,17 +258,20 @@ def _interval(samples: np.ndarray, bracket: tuple[float, float] | None = None) -
     return [_num(lo), _num(hi)]
 
 
-def _figures(loads, speed, power, eff, settled, bound) -> dict[str, np.ndarray]:
+def _figures(loads, speed, power, torsion, settled, bound) -> dict[str, np.ndarray]:
     """Stall torque, maximum power, its load and the efficiency there, of each row of the
-    members' mean curves (``speed``, ``power``, ``eff``: ``(rows, loads)``), with the states
-    and brackets (:func:`_stall_rows`, :func:`_peak_rows`). The efficiency is the mean over
-    the members with a finite ``η_t`` at the maximum's load (``0`` where that power is not
-    positive, docs/model.md "Power and energy audit")."""
+    members' mean curves (``speed``, ``power``, ``torsion``: ``(rows, loads)``), with the states
+    and brackets (:func:`_stall_rows`, :func:`_peak_rows`). The efficiency is the ratio of the
+    mean output power to the mean torsional input at the maximum's load, ``η_t = W_L / W_t``
+    of the members' summed works (docs/model.md "Power and energy audit"): ``0`` where that
+    power is not positive, undefined where that input is not."""
     root, state, a, b = _stall_rows(loads, speed, settled, bound)
     p, k, pstate = _peak_rows(loads, power, settled)
     rows = np.arange(len(p))
     at = np.where(np.isfinite(p), loads[k], np.nan)
-    eta = np.where(p > 0.0, eff[rows, k], np.where(np.isfinite(p), 0.0, np.nan))
+    w_t = torsion[rows, k]
+    ratio = np.where(w_t > 0.0, p / np.where(w_t > 0.0, w_t, 1.0), np.nan)
+    eta = np.where(p > 0.0, ratio, np.where(np.isfinite(p), 0.0, np.nan))
     lo = loads[np.maximum(k - 1, 0)]
     hi = loads[np.minimum(k + 1, len(loads) - 1)]
     if bound is not None:  # no power is stationary past the bound
@@ -292,7 +295,7 @@ def derived(
     speed: np.ndarray,
     power: np.ndarray,
     bound: float | None = None,
-    efficiency: np.ndarray | None = None,
+    torsion: np.ndarray | None = None,
     drift: np.ndarray | None = None,
     resamples: int = BOOTSTRAP_RESAMPLES,
 ) -> dict:
@@ -300,7 +303,8 @@ def derived(
     efficiency there, with 95 % intervals, standard errors and states (the one place they are
     computed: the torque–speed curves, the command, the design maps and the study).
 
-    ``speed``, ``power``, ``efficiency`` and ``drift`` are ``(members, loads)`` at distinct
+    ``speed``, ``power`` (output), ``torsion`` (torsional input power) and ``drift`` are
+    ``(members, loads)`` at distinct
     increasing ``loads``. The estimates are those of the members' mean curve over the loads up
     to the momentum ``bound``; their intervals the central 95 % of ``resamples`` bootstrap
     resamples of the members (fixed seed) widened to the bracket (module docstring), their
@@ -319,7 +323,7 @@ def derived(
     """
     loads = np.asarray(loads, float)
     speed, power = np.atleast_2d(np.asarray(speed, float)), np.atleast_2d(np.asarray(power, float))
-    eff = np.full(speed.shape, np.nan) if efficiency is None else np.atleast_2d(efficiency)
+    tor = np.full(speed.shape, np.nan) if torsion is None else np.atleast_2d(torsion)
     settled = settled_loads(loads, speed, drift, bound)
     below = settled_loads(loads, speed, None, bound)  # the estimates' loads: up to the bound
     out: dict = {"no_load_speed": None, "no_load_speed_ci95": [None, None]}
@@ -330,7 +334,7 @@ def derived(
         x = speed[np.isfinite(speed[:, 0]), 0]
         se["no_load_speed"] = float(np.std(x, ddof=1) / math.sqrt(x.size)) if x.size > 1 else None
     f = _figures(
-        loads, _mean(speed)[None, :], _mean(power)[None, :], _mean(eff)[None, :], below, bound
+        loads, _mean(speed)[None, :], _mean(power)[None, :], _mean(tor)[None, :], below, bound
     )
     state, pstate = _STALL_CODES[int(f["stall_state"][0])], _PEAK_CODES[int(f["peak_state"][0])]
     found, peaked = state == "found", pstate == "found"
@@ -344,19 +348,19 @@ def derived(
     pbr = (float(f["peak_a"][0]), float(f["peak_b"][0])) if peaked else None
     out["max_power_bracket"] = list(pbr) if pbr else [None, None]
     out["unsettled_loads"] = [float(x) for x in loads[~settled]]
-    boot = _boot_figures(loads, speed, power, eff, below, bound, resamples)
+    boot = _boot_figures(loads, speed, power, tor, below, bound, resamples)
     out.update(_derived_intervals(out, boot, sbr, pbr, se, speed.shape[0]))
     return out
 
 
-def _boot_figures(loads, speed, power, eff, settled, bound, resamples) -> dict | None:
+def _boot_figures(loads, speed, power, torsion, settled, bound, resamples) -> dict | None:
     """:func:`_figures` of ``resamples`` bootstrap resamples of the members (one array each);
     ``None`` from fewer than two members."""
     if speed.shape[0] < 2:
         return None
     idx = _bootstrap(speed.shape[0], resamples)
-    ms, mp, me = (_mean(x[idx], axis=1) for x in (speed, power, eff))
-    return _figures(loads, ms, mp, me, settled, bound)
+    ms, mp, mt = (_mean(x[idx], axis=1) for x in (speed, power, torsion))
+    return _figures(loads, ms, mp, mt, settled, bound)
 
 
 def _derived_intervals(est: dict, boot: dict | None, sbr, pbr, se: dict, k: int) -> dict:
@@ -481,7 +485,7 @@ def _groups(loads: np.ndarray, new: np.ndarray) -> list[np.ndarray]:
 
 def summary_of(curve) -> dict:
     """:func:`derived` of a curve's up branch (loads in the friction torque's units: the
-    momentum bound is 1), with its efficiency and its runs' drift where the curve has them;
+    momentum bound is 1), with its torsional input and its runs' drift where the curve has them;
     without the standard errors (the study's, not the summary's)."""
     drift = getattr(curve, "drift", None)
     out = derived(
@@ -489,16 +493,16 @@ def summary_of(curve) -> dict:
         curve.matrix("up", "mean_omega"),
         curve.power("up"),
         MOMENTUM_BOUND,
-        efficiency=_efficiency(curve),
+        torsion=_torsion(curve),
         drift=None if drift is None else drift.get("up"),
     )
     out.pop("standard_errors", None)
     return out
 
 
-def _efficiency(curve) -> np.ndarray | None:
+def _torsion(curve) -> np.ndarray | None:
     try:
-        return curve.matrix("up", "efficiency_torsion")
+        return curve.matrix("up", "power_torsion_in")
     except (AttributeError, KeyError):
         return None
 

@@ -351,7 +351,7 @@ def load_figures(curve, r: float) -> dict[str, tuple[float, float, float, float]
         curve.matrix("up", "mean_omega")[:, order],
         curve.power("up")[:, order],
         MOMENTUM_BOUND,
-        curve.matrix("up", "efficiency_torsion")[:, order],
+        curve.matrix("up", "power_torsion_in")[:, order],
         drift,
     )
     zero = (0.0, 0.0, 0.0, 0.0)
