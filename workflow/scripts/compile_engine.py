@@ -1,16 +1,51 @@
-"""Compile (or load from the numba cache) the engine kernel with a tiny run."""
+"""Compile (or load from the numba cache) every compiled function the pipeline's jobs call, with
+tiny runs: the engine kernel (axial and with torsion), the load-curve rows (``engine.loads``:
+the fit, the studies under load) and the ensemble reduction with its regime classification
+(``analysis.ensembles``, ``analysis.observables``). Compiled here once, the later jobs load them
+from the cache rather than several compiling the same function side by side."""
 
 from pathlib import Path
 
+import numpy as np
+
+from bouncedisk.analysis.observables import chatter_cycle
+from bouncedisk.analysis.statistics import run_stats
 from bouncedisk.engine import EngineConfig, simulate_arrays
+from bouncedisk.engine.loads import omega_integrals
 from bouncedisk.io.job_log import log_to
+from bouncedisk.model.scene import scene_from_mapping
+
+#: A tiny loaded ensemble with restitution noise: its run reaches every compiled reduction.
+WARM_SCENE = {
+    "name": "compile",
+    "parameters": {
+        "e": 0.3,
+        "omega_s": 1.5,
+        "r_phi": 0.1,
+        "psi": 0.0,
+        "e_sigma": 1e-3,
+        "load_torque": 0.1,
+    },
+    "effects": ["impacts", "contact", "torsion", "restitution_noise", "load"],
+    "stop": {"time": 20.0},
+    "ensemble": {"members": 1, "seed": 1},
+    "stats": {"discard": 5.0},
+    "outputs": {"events": False},
+}
 
 with log_to(snakemake.log[0]) as log:
+    events = snakemake.params.events
     for torsion in (False, True):
-        res = simulate_arrays(
-            EngineConfig(
-                e=0.3, omega_s=1.5, torsion=torsion, max_events=snakemake.params.events, traj_dt=0.1
-            )
-        )
+        cfg = EngineConfig(e=0.3, omega_s=1.5, torsion=torsion, max_events=events, traj_dt=0.1)
+        res = simulate_arrays(cfg)
         log.info("engine ready (torsion=%s): %s", torsion, res.status)
+    ev = res.events
+    cycle = chatter_cycle(ev["t"], ev["phase"], ev["v_rel"], ev["kind"], cfg.omega_s)
+    log.info("regime tests ready: chatter cycle %s", cycle)
+    cfg = EngineConfig(
+        e=0.3, omega_s=1.5, torsion=True, t_end=5.0, stats_from=1.0, max_events=events
+    )
+    log.info("load rows ready: %s", omega_integrals(cfg, np.array([0.0, 0.1])))
+    stats = run_stats(scene_from_mapping(WARM_SCENE, source="compile_engine"))
+    log.info("ensemble reduction ready: regime %s", stats.regime[0])
     Path(snakemake.output[0]).touch()
