@@ -189,6 +189,19 @@ def test_speeds_may_be_negative_heights_may_not():
         B.start_grid(2, [0.0], [-1.0])
 
 
+@pytest.mark.parametrize("value", ["-50,0", "-50:0:3", "-.5", "-50"])
+def test_a_negative_value_may_follow_its_option_with_a_space(value):
+    from bouncedisk.cli.command import attach_negative_values, build_parser
+
+    parser = build_parser()
+    argv = attach_negative_values(parser, ["basins", "s.yaml", "--phases", "2", "--speeds", value])
+    args = parser.parse_args(argv)
+    assert args.speeds == value and args.phases == 2
+    # a flag is never joined to what follows, and an option's own value is left alone
+    argv = ["basins", "s.yaml", "--json", "--phases", "2", "--heights", "0,1"]
+    assert attach_negative_values(parser, argv) == argv
+
+
 @pytest.mark.parametrize(
     ("args", "field"),
     [

@@ -12,6 +12,7 @@ import contextlib
 import errno
 import io
 import os
+import re
 import signal
 import sys
 
@@ -66,6 +67,47 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: A token that starts like a negative number, a list or a range of them: ``-50``, ``-50,0``,
+#: ``-.5:1:3``.
+_NEGATIVE = re.compile(r"-\.?\d")
+
+
+def attach_negative_values(parser: argparse.ArgumentParser, argv: list[str]) -> list[str]:
+    """``argv`` with every long option that takes a value and is followed by a negative value, list
+    or range (``--speeds -50,0``) written as one token (``--speeds=-50,0``): argparse reads a
+    token that starts with ``-`` and is not a plain number as an option, and would refuse it."""
+    takes_value = {
+        opt
+        for sub in _subparsers(parser)
+        for action in sub._actions
+        if action.option_strings and action.nargs != 0
+        for opt in action.option_strings
+        if opt.startswith("--")
+    }
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        tok = argv[i]
+        if tok in takes_value and i + 1 < len(argv) and _NEGATIVE.match(argv[i + 1]):
+            out.append(f"{tok}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(tok)
+        i += 1
+    return out
+
+
+def _subparsers(parser: argparse.ArgumentParser) -> list[argparse.ArgumentParser]:
+    """``parser`` and its subcommands' parsers."""
+    subs = [
+        choice
+        for action in parser._actions
+        if isinstance(action, argparse._SubParsersAction)
+        for choice in action.choices.values()
+    ]
+    return [parser, *subs]
+
+
 def _interrupt(signum, frame):
     raise KeyboardInterrupt
 
@@ -89,7 +131,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     console = argv is None  # the console script: this process ends with the command
     argv = sys.argv[1:] if argv is None else list(argv)
-    args, extra = parser.parse_known_args(argv)
+    args, extra = parser.parse_known_args(attach_negative_values(parser, argv))
     args.argv = argv
     if extra and args.command == "runs":  # run ids after options: `runs diff A --json B`
         bad = [x for x in extra if x.startswith("-")]
