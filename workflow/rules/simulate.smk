@@ -2,7 +2,8 @@
 
 
 rule compile_engine:
-    """Compile the numba kernel once (cache) so parallel jobs do not all compile it."""
+    """Compile the engine and the compiled functions several jobs call once (numba's cache), so
+    that parallel jobs do not all compile them."""
     input:
         code=CODE,
     output:

@@ -1,14 +1,15 @@
-"""Compile (or load from the numba cache) every compiled function the pipeline's jobs call, with
-tiny runs: the engine kernel (axial and with torsion), the load-curve rows (``engine.loads``:
-the fit, the studies under load) and the ensemble reduction with its regime classification
-(``analysis.ensembles``, ``analysis.observables``). Compiled here once, the later jobs load them
-from the cache rather than several compiling the same function side by side."""
+"""Compile (or load from the numba cache), with tiny runs, the engine kernel (axial and with
+torsion), the load rows (``engine.loads``, the fit's), the ensemble reduction
+(``analysis.ensembles``) and the regime tests (``analysis.observables``), which most jobs call:
+compiled here once, the later jobs load them from the cache rather than several compiling the
+same function side by side (a function only one other job calls, such as the work-precision
+comparator, compiles there)."""
 
 from pathlib import Path
 
 import numpy as np
 
-from bouncedisk.analysis.observables import chatter_cycle
+from bouncedisk.analysis.observables import chatter_cycle, find_period
 from bouncedisk.analysis.statistics import run_stats
 from bouncedisk.engine import EngineConfig, simulate_arrays
 from bouncedisk.engine.loads import omega_integrals
@@ -40,8 +41,9 @@ with log_to(snakemake.log[0]) as log:
         res = simulate_arrays(cfg)
         log.info("engine ready (torsion=%s): %s", torsion, res.status)
     ev = res.events
-    cycle = chatter_cycle(ev["t"], ev["phase"], ev["v_rel"], ev["kind"], cfg.omega_s)
-    log.info("regime tests ready: chatter cycle %s", cycle)
+    tail = (ev["t"], ev["phase"], ev["v_rel"], ev["kind"], cfg.omega_s)
+    cycle, period = chatter_cycle(*tail), find_period(*tail)
+    log.info("regime tests ready: chatter cycle %s, period %s", cycle, period)
     cfg = EngineConfig(
         e=0.3, omega_s=1.5, torsion=True, t_end=5.0, stats_from=1.0, max_events=events
     )

@@ -258,19 +258,20 @@ def _interval(samples: np.ndarray, bracket: tuple[float, float] | None = None) -
     return [_num(lo), _num(hi)]
 
 
-def _figures(loads, speed, power, torsion, settled, bound) -> dict[str, np.ndarray]:
+def _figures(loads, speed, power, works, settled, bound) -> dict[str, np.ndarray]:
     """Stall torque, maximum power, its load and the efficiency there, of each row of the
-    members' mean curves (``speed``, ``power``, ``torsion``: ``(rows, loads)``), with the states
-    and brackets (:func:`_stall_rows`, :func:`_peak_rows`). The efficiency is the ratio of the
-    mean output power to the mean torsional input at the maximum's load, ``η_t = W_L / W_t``
-    of the members' summed works (docs/model.md "Power and energy audit"): ``0`` where that
-    power is not positive, undefined where that input is not."""
+    members' mean curves (``speed``, ``power``: ``(rows, loads)``), with the states and
+    brackets (:func:`_stall_rows`, :func:`_peak_rows`). The efficiency is the ratio of the mean
+    output power to the mean torsional input at the maximum's load, both over the members that
+    have both (``works``: that pair of ``(rows, loads)`` means, :func:`_paired`), ``η_t = W_L /
+    W_t`` of the members' summed works (docs/model.md "Power and energy audit"): ``0`` where the
+    maximum power is not positive, undefined where that input is not."""
     root, state, a, b = _stall_rows(loads, speed, settled, bound)
     p, k, pstate = _peak_rows(loads, power, settled)
     rows = np.arange(len(p))
     at = np.where(np.isfinite(p), loads[k], np.nan)
-    w_t = torsion[rows, k]
-    ratio = np.where(w_t > 0.0, p / np.where(w_t > 0.0, w_t, 1.0), np.nan)
+    w_l, w_t = works[0][rows, k], works[1][rows, k]
+    ratio = np.where(w_t > 0.0, w_l / np.where(w_t > 0.0, w_t, 1.0), np.nan)
     eta = np.where(p > 0.0, ratio, np.where(np.isfinite(p), 0.0, np.nan))
     lo = loads[np.maximum(k - 1, 0)]
     hi = loads[np.minimum(k + 1, len(loads) - 1)]
@@ -334,7 +335,12 @@ def derived(
         x = speed[np.isfinite(speed[:, 0]), 0]
         se["no_load_speed"] = float(np.std(x, ddof=1) / math.sqrt(x.size)) if x.size > 1 else None
     f = _figures(
-        loads, _mean(speed)[None, :], _mean(power)[None, :], _mean(tor)[None, :], below, bound
+        loads,
+        _mean(speed)[None, :],
+        _mean(power)[None, :],
+        tuple(_mean(x)[None, :] for x in _paired(power, tor)),
+        below,
+        bound,
     )
     state, pstate = _STALL_CODES[int(f["stall_state"][0])], _PEAK_CODES[int(f["peak_state"][0])]
     found, peaked = state == "found", pstate == "found"
@@ -359,8 +365,16 @@ def _boot_figures(loads, speed, power, torsion, settled, bound, resamples) -> di
     if speed.shape[0] < 2:
         return None
     idx = _bootstrap(speed.shape[0], resamples)
-    ms, mp, mt = (_mean(x[idx], axis=1) for x in (speed, power, torsion))
-    return _figures(loads, ms, mp, mt, settled, bound)
+    ms, mp = (_mean(x[idx], axis=1) for x in (speed, power))
+    works = tuple(_mean(x[idx], axis=1) for x in _paired(power, torsion))
+    return _figures(loads, ms, mp, works, settled, bound)
+
+
+def _paired(power: np.ndarray, torsion: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Output power and torsional input ``(members, loads)``, each ``nan`` where the other
+    is: the efficiency's two means are over the same members."""
+    both = np.isfinite(power) & np.isfinite(torsion)
+    return np.where(both, power, np.nan), np.where(both, torsion, np.nan)
 
 
 def _derived_intervals(est: dict, boot: dict | None, sbr, pbr, se: dict, k: int) -> dict:
