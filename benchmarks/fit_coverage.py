@@ -33,7 +33,9 @@ from bouncedisk.studies.basins import wilson
 ROOT = Path(__file__).resolve().parents[1]
 CASE = "periodic"
 #: The fits' settings (16 band members: the band is not what is measured).
-SETTINGS = dict(seed=1, cores=2, scan=96, zoom=8, band_members=16, profile=("log10_r_phi",))
+SETTINGS = dict(
+    seed=1, cores=2, e_sigma=0.03, scan=96, zoom=8, band_members=16, profile=("log10_r_phi",)
+)
 SPAN_S = 0.03
 
 

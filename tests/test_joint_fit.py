@@ -15,7 +15,7 @@ from bouncedisk.cli import main
 from bouncedisk.engine import EngineConfig, InitialState
 from bouncedisk.fitting import FitSettings, fit_curve, fit_dataset, summary_text, synthesize_curve
 from bouncedisk.fitting import loadpart as lp
-from bouncedisk.fitting.members import BOUNDS
+from bouncedisk.fitting.members import BOUNDS, MODEL_E_SIGMA
 from bouncedisk.fitting.synthetic import synthetic_load_curve
 from bouncedisk.io.load_curves import read_load_curve
 from bouncedisk.io.runup_curves import read_curve, write_curve
@@ -212,7 +212,8 @@ def test_run_ups_without_phi0_cannot_take_a_load_curve(data_dir, tmp_path, capsy
 # ------------------------------------------------------------------ a small joint fit, whole
 
 TINY = FitSettings(seed=5, scan=16, zoom=4, zoom_centres=2, members=4, pilot_members=8,
-                   band_members=8, local_nfev=4, bootstrap=40, cores=2, joint_zoom=8)  # fmt: skip
+                   band_members=8, local_nfev=4, bootstrap=40, cores=2, joint_zoom=8,
+                   e_sigma=MODEL_E_SIGMA)  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -361,7 +362,8 @@ def test_the_joint_stage_finds_the_valley_near_the_period_doubling(tmp_path):
 
     true, top = CASES["near_boundary"]
     run, load = make_data(tmp_path, true, top, loads=10, seed=3)
-    s = FitSettings(seed=1, scan=256, zoom=8, zoom_centres=4, cores=1).for_runs(1)
+    s = FitSettings(seed=1, scan=256, zoom=8, zoom_centres=4, cores=1, e_sigma=MODEL_E_SIGMA)
+    s = s.for_runs(1)
     runs, fitted, _ = core.prepare_runs(read_curve(run))
     layout, records, target = core.data_layout(runs)
     boot = core.bootstrap_stats(layout, records, s.bootstrap, s.seed)

@@ -24,7 +24,7 @@ F_HZ, PHI0, DT, SIGMA = 15000.0, 3.0e-4, 2.5e-5, 0.05
 TRUE = {"e": 0.31, "r_phi": 0.0041, "psi": 0.25, "omega_s": 1.37}
 #: A fit small enough for a test: every stage runs (scan, zoom, re-ranking, local search, one profile).
 SMALL = FitSettings(seed=4, scan=8, zoom=2, zoom_centres=1, members=4, pilot_members=6,
-                    band_members=4, local_nfev=2, bootstrap=40, profile=("e",))  # fmt: skip
+                    band_members=4, local_nfev=2, bootstrap=40, profile=("e",), e_sigma=0.03)  # fmt: skip
 #: BLAS set-ups: this CPU's default kernels on two threads, and the AVX2 kernels another machine
 #: would pick on one thread.
 KERNELS = (

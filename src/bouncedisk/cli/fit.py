@@ -144,8 +144,8 @@ def _add_fit(sub) -> None:
     p.add_argument(
         "--e-sigma",
         default=None,
-        help=f"restitution noise of the model's members: a number {E_SIGMA.text()} states it "
-        "(default: 0.03; 0: the deterministic limit), 'fit' fits it over [0, 0.1] "
+        help="restitution noise of the model's members: 'fit' fits it over [0, 0.1] (default), "
+        f"a number {E_SIGMA.text()} states it (0: the deterministic limit) "
         "(docs/user_guide/fitting.md)",
     )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress or summary")

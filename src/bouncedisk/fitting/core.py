@@ -90,10 +90,10 @@ class FitSettings:
     zoom_centres: int = SearchSettings.zoom_centres
     local_nfev: int = SearchSettings.local_nfev
     joint_zoom: int = SearchSettings.joint_zoom  # points around each joint candidate (search)
-    # restitution noise of the members (docs/model.md): a number states it; None fits it (search
-    # coordinate ``e_sigma`` over [0, 0.1], the scan at MODEL_E_SIGMA; ``bouncedisk fit --e-sigma
-    # fit``)
-    e_sigma: float | None = MODEL_E_SIGMA
+    # restitution noise of the members (docs/model.md): None (the default) fits it (search
+    # coordinate ``e_sigma`` over [0, 0.1], the scan at MODEL_E_SIGMA); a number states it
+    # (``bouncedisk fit --e-sigma S``)
+    e_sigma: float | None = None
     cores: int = 1
     profile: tuple[str, ...] | None = None  # coordinates to profile (None: all)
 

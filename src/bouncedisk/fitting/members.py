@@ -44,8 +44,9 @@ BOUNDS: dict[str, tuple[float, float]] = {
 #: Noise stream offset of the measurement noise added to members (independent of the engine's).
 _NOISE_STREAM = 0x5EED
 
-#: The model's restitution noise ``σ_e`` (docs/model.md "Long-run statistics of chaotic motion"): a
-#: stated property of the fitted model, not a fitted parameter. Real impacts scatter their
+#: The model's restitution noise ``σ_e`` (docs/model.md "Long-run statistics of chaotic motion")
+#: where the fit does not read it from the point: the search's scan (the noise is fitted from
+#: there on), a synthetic curve's and a fit that states it. Real impacts scatter their
 #: restitution by percent; at 3 % the members of a chaotic ensemble mix within a few
 #: milliseconds of a motor's run-up, so one measured curve is a typical member and the
 #: ensemble statistics are smooth in the parameters (at ``σ_e = 1e-9`` a 0.12 s run stays on
