@@ -119,3 +119,19 @@ def test_the_ripple_spectrum_is_welchs_estimate(length):
     np.testing.assert_allclose(f, f0, rtol=1e-14)
     np.testing.assert_allclose(p, p0, rtol=1e-10, atol=1e-13 * p0.max())
     assert ripple_psd(r[1], DT)[1].tobytes() == p[1].tobytes()
+
+
+def test_one_birge_factor_scales_every_threshold_of_the_intervals():
+    """The Δχ² threshold and the goodness-of-fit limit are scaled by the same factor, χ²/dof with
+    dof = n − p when that exceeds 1 (docs/fitting_method.md "The intervals")."""
+    from scipy.stats import chi2
+
+    from bouncedisk.fitting.uncertainty import THRESHOLD, birge, birge_scale, fit_limit
+
+    assert THRESHOLD == pytest.approx(3.841458820694124)
+    assert birge_scale(20.0, 27, 5) == 1.0  # 20 below 22 degrees of freedom: no scaling
+    assert birge_scale(44.0, 27, 5) == pytest.approx(2.0)  # 44 / (27 - 5)
+    assert birge(44.0, 27, 5) == pytest.approx(2.0 * THRESHOLD)
+    assert fit_limit(44.0, 27, 5) == pytest.approx(2.0 * chi2.ppf(0.95, 27))
+    assert fit_limit(20.0, 27, 5) == pytest.approx(chi2.ppf(0.95, 27))
+    assert birge_scale(10.0, 3, 5) == 10.0  # fewer statistics than coordinates: dof at least 1

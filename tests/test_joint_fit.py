@@ -370,7 +370,8 @@ def test_the_joint_stage_finds_the_valley_near_the_period_doubling(tmp_path):
     spec = EnsembleSpec(e_sigma=s.e_sigma, seed=s.seed, cores=1)
     part = load_part([read_load_curve(load)], fitted, spec)
     obj = Objective(fitted, param_names(fitted), layout, target, spec, s.members,
-                    cov=core.provisional_cov(target, boot), load=part, parts="both")  # fmt: skip
+                    initial_cov=core.provisional_cov(target, boot), load=part,
+                    parts="both")  # fmt: skip
     # the scan, as the search leaves it: the run-ups' chi2 of its points, on one member
     scan = [np.array(x) for x in NEAR_SCAN]
     for x in scan:
@@ -463,6 +464,30 @@ def test_the_figures_say_synthetic_and_zoom_on_the_intervals(tiny_fit):
                 c0, c1, s0, s1 = a["ci_low"], a["ci_high"], a["search_low"], a["search_high"]
             pad = 0.5 * (c1 - c0)
             assert lo == pytest.approx(max(s0, c0 - pad)) and hi == pytest.approx(min(s1, c1 + pad))
+            # the dashed line is the threshold the file's interval used, not a fixed 3.84
+            (line,) = [ln for ln in ax.get_lines() if ln.get_linestyle() == "--"]
+            assert line.get_ydata()[0] == pytest.approx(a["delta_chi2"])
+            assert ("widened: several basins" in ax.get_title()) == bool(a["multimodal"])
+
+
+@pytest.mark.parametrize("threshold, multimodal", [(3.841, 0), (5.06, 1)])
+def test_the_profile_figure_draws_the_threshold_its_interval_used(threshold, multimodal):
+    """The dashed line of a profile panel is the parameter's ``delta_chi2`` (Birge-scaled when
+    the fit is poor), and an interval widened to other basins says so in the panel's title."""
+    from bouncedisk.figures.motor import fig_fit_profiles
+
+    values = np.linspace(0.4, 0.6, 9)
+    attrs = {"ci_low": 0.45, "ci_high": 0.55, "search_low": 0.0, "search_high": 0.9, "units": "1",
+             "identified": 1, "multimodal": multimodal, "delta_chi2": threshold}  # fmt: skip
+    ds = xr.Dataset(
+        {"e": ((), 0.5, attrs), "profile_chi2_e": ("profile_e", 400.0 * (values - 0.5) ** 2)},
+        coords={"profile_e": values},
+    )
+    (ax,) = fig_fit_profiles(ds).axes
+    (line,) = [ln for ln in ax.get_lines() if ln.get_linestyle() == "--"]
+    assert line.get_ydata()[0] == pytest.approx(threshold)
+    assert f"Δχ² = {threshold:.3g}" in line.get_label()
+    assert ("widened: several basins" in ax.get_title()) == bool(multimodal)
 
 
 def test_a_window_the_run_did_not_reach_is_an_error_never_a_number(tmp_path, capsys, monkeypatch):
@@ -642,17 +667,22 @@ def test_an_uninformative_load_curve_does_not_narrow_the_intervals(data_dir, tmp
 
 def test_a_view_of_one_part_shares_the_evaluations(tmp_path):
     """:meth:`Objective.seeing`: the view's ``parts`` is its own (the objective's is unchanged),
-    its evaluations land in the shared log and cache, and an unknown part is refused."""
+    its evaluations land in the shared log and cache, a covariance set on either is the other's
+    too, and an unknown part is refused."""
     from bouncedisk.fitting.objective import Objective
 
     curve = read_curve_like()
     obj = Objective(curve, ["e", "log10_r_phi", "psi", "omega_s"], None, np.zeros(3),
-                    None, 4, cov=np.eye(3), parts="both")  # fmt: skip
+                    None, 4, initial_cov=np.eye(3), parts="both")  # fmt: skip
     view = obj.seeing("runup")
     assert view.parts == "runup" and obj.parts == "both"
     assert view.log is obj.log and view.cache is obj.cache and view.load is obj.load
     view.log.append("x")
     assert obj.log == ["x"]
+    obj.set_cov(np.diag([4.0, 1.0, 1.0]))  # a view made before sees the new metric
+    assert view.covariance[0, 0] == 4.0 and view._metric.white[0, 0] == pytest.approx(0.5)
+    view.set_cov(np.diag([9.0, 1.0, 1.0]))  # and the objective sees the view's
+    assert obj.covariance[0, 0] == 9.0 and obj._metric.white[0, 0] == pytest.approx(1 / 3)
     with pytest.raises(ValueError, match="parts must be one of"):
         obj.seeing("all")
 

@@ -156,8 +156,12 @@ PARAM_LABELS = {
 def fig_fit_profiles(fitted: xr.Dataset) -> Figure:
     """Profile likelihoods of the fitted parameters: ``Δχ²`` against each parameter.
 
-    The dashed line is the 95 % threshold ``χ²₁(0.95) = 3.84``; the shaded span is the reported
-    interval, the star the estimate. A profile that stays under the line over the whole search
+    The dashed line is the 95 % threshold the file's intervals use, each parameter's
+    ``delta_chi2``: ``χ²₁(0.95) = 3.84``, scaled by ``χ²/dof`` when the fit's ``χ²`` exceeds its
+    degrees of freedom (docs/fitting_method.md "The intervals"); the shaded span is the reported
+    interval, the star the estimate. An interval widened to other acceptable points (the
+    parameter's ``multimodal = 1``: several basins) reaches beyond where its profile crosses the
+    line, and the panel's title says so. A profile that stays under the line over the whole search
     range is "not identified". Each panel is zoomed on its interval (half its width beyond either
     end, within the search range) so that the profile's curvature shows; an inadequate fit (the
     file's ``identified = "no"``) has no interval: the panel shows the profiled range and says so.
@@ -193,7 +197,8 @@ def _profile_panel(ax, fitted: xr.Dataset, n: str) -> None:
             a["ci_low"], a["ci_high"], color=COLORS["fit"], alpha=0.2, lw=0, label="95% interval"
         )
     ax.plot(x, y, "o-", color=COLORS["fit"], ms=3, lw=1, label="profile")
-    ax.axhline(3.841, ls="--", color="k", lw=0.8, label=r"95% threshold $\chi^2_1$ = 3.84")
+    thr = float(a["delta_chi2"])
+    ax.axhline(thr, ls="--", color="k", lw=0.8, label=f"95% threshold Δχ² = {thr:.3g}")
     ax.plot([float(fitted[n])], [0.0], "k*", ms=8, label="estimate")
     lo, hi = (a["ci_low"], a["ci_high"]) if has_ci else (np.nanmin(x), np.nanmax(x))
     ax.set_xlim(*_zoom(lo, hi, a["search_low"], a["search_high"], log))
@@ -213,6 +218,8 @@ def _profile_panel(ax, fitted: xr.Dataset, n: str) -> None:
     label = PARAM_LABELS.get(n, n)
     ax.set_xlabel(f"{label} [{a['units']}]")
     tag = "" if a.get("identified", 1) else " (not identified)"
+    if has_ci and a.get("multimodal", 0):
+        tag += "\nwidened: several basins"
     ci = f"95% [{a['ci_low']:.3g}, {a['ci_high']:.3g}]" if has_ci else "no interval: inadequate fit"
     ax.set_title(f"{label}: {ci}{tag}", fontsize=8)
 

@@ -21,7 +21,7 @@ from ..io.runup_curves import MotorCurve
 from ..model import limits
 from ..model.errors import InputError
 from .joint import LoadFit, joint_consistent, load_part, load_result
-from .likelihood_basins import Basin, choose, list_basins
+from .likelihood_basins import Basin, list_basins
 from .members import (
     MODEL_E_SIGMA,
     EnsembleSpec,
@@ -307,14 +307,11 @@ def prepare_runs(
 
 def fit_basins(obj: Objective, members: int, thr: float) -> list[Basin]:
     """Every basin of evaluated points (``members`` members, current metric) within ``thr`` of
-    the best ``χ²`` (:func:`.likelihood_basins.list_basins`), ordered so the chosen one
-    (:func:`.likelihood_basins.choose`) is first."""
+    the best ``χ²`` (:func:`.likelihood_basins.list_basins`), the reported one first."""
     pts = {tuple(ev.x): ev.x for ev in obj.log if ev.members == members}
     xs = np.array(list(pts.values()))
     chis = np.array([obj.chi2_now(x, members) for x in xs])
-    basins = list_basins(xs, chis, obj.span, thr)
-    k = choose(basins)
-    return [basins[k], *basins[:k], *basins[k + 1 :]]
+    return list_basins(xs, chis, obj.span, thr)
 
 
 @dataclass(frozen=True)
@@ -365,7 +362,7 @@ def pose_fit(
         target,
         spec,
         s.members,
-        cov=provisional_cov(target, boot),
+        initial_cov=provisional_cov(target, boot),
         runs=len(runs),
         load=part,
         parts="both" if part is not None else "runup",
@@ -421,7 +418,7 @@ def fit_curve(
     level = chi2_level(obj, best.x, s.members)
     # polished within three thresholds of the level (held metric) or three times the 95 % point
     # of chi2(n) (own covariance): a polish of four steps moves chi2 that far, not further
-    gof = fit_limit(best.chi2, obj.n_stats)
+    gof = fit_limit(best.chi2, obj.n_stats, len(obj.names))
     reread = confirm_points(obj, extra, s.members, near=level + 3.0 * thr, near_own=3.0 * gof)
     consistent = consistent_points(obj, reread, s.members, best.chi2)
     if progress is not None:
@@ -438,7 +435,7 @@ def fit_curve(
     if progress is not None and len(basins) > 1:
         progress(
             f"{len(basins)} basins within delta chi2 {thr:.3g} of the best: the data do not "
-            "single one out; the estimate is the lowest chi2 (likelihood_basins.choose)"
+            "single one out; the estimate is the lowest chi2 (likelihood_basins.list_basins)"
         )
     if not adequate(final.chi2, obj.n_stats):
         # the best point found does not reproduce the data: nothing is identified by it

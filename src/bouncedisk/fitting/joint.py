@@ -112,11 +112,11 @@ def joint_consistent(obj: Objective, members: int, best_chi2: float) -> np.ndarr
     """The joint candidates (:func:`.search.joint_candidates`: scan points that reproduce the
     run-ups, as they are, with ``R_φ`` moved to the load curve's torque scale, and the joint
     zoom around the best) that reproduce both data sets on ``members`` members: ``χ²`` below the
-    95 % point of ``χ²(n)``, scaled by the best fit's ``χ²/n`` when that exceeds 1 (Birge). The
+    95 % point of ``χ²(n)``, scaled as the intervals are (:func:`.uncertainty.birge_scale`). The
     residuals are already whitened for ``members`` members (the run-ups' by
     ``sqrt(1/M + 1/k)``, the load curves' by ``D + C_L/k``), so no further factor for the few
     members is due. Every basin among them widens the joint intervals."""
-    limit = fit_limit(best_chi2, obj.n_stats)
+    limit = fit_limit(best_chi2, obj.n_stats, len(obj.names))
     pts = {
         tuple(ev.x): ev.x
         for ev in obj.log

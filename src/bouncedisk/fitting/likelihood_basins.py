@@ -9,9 +9,9 @@ must not hang on the last bits of a sum (README, "Reproducible"):
   does not depend on the order points were evaluated in (threads) or on last-bit differences;
 * :func:`list_basins` groups every evaluated point within the interval threshold of the best into
   basins (points within :data:`SEPARATION` of a basin's best point, as a fraction of every
-  coordinate's range, belong to it), best first by :func:`rank_key`;
-* :func:`choose` is the rule: the first basin in that order. With more than one basin the data do
-  not single one out, and the fit file lists each (parameters, ``χ²``) and says so.
+  coordinate's range, belong to it), best first by :func:`rank_key`. The rule: the fit reports
+  the first. With more than one basin the data do not single one out, and the fit file lists each
+  (parameters, ``χ²``) and says so.
 
 Reusable by any likelihood over the same search coordinates (a joint fit of several data kinds):
 it needs the evaluated points, their ``χ²`` under one metric, the ranges and the threshold.
@@ -77,9 +77,3 @@ def list_basins(
             best.append(int(i))
             count.append(1)
     return [Basin(xs[j].copy(), float(chi2[j]), n) for j, n in zip(best, count, strict=True)]
-
-
-def choose(basins: list[Basin]) -> int:
-    """Index of the reported basin: the first by :func:`rank_key` (lowest ``χ²``, then the
-    coordinates)."""
-    return min(range(len(basins)), key=lambda b: rank_key(basins[b].chi2, basins[b].x))

@@ -30,13 +30,14 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from .objective import Evaluation, Objective
+from .uncertainty import THRESHOLD
 
 #: The least lowering of ``χ²`` for which the search moves to the walk's best point and measures
 #: the model's covariance there (the plain threshold ``χ²₁(0.95)``): a gain within the noise of
 #: ``χ²`` is no reason to move the metric. The covariance itself is measured at
 #: ``σ_e ≥ 10⁻⁸`` (:func:`.search.metric_point`): at ``σ_e = 0`` a chaotic motor's members
 #: coincide and would hold the reading noise only.
-WALK_GAIN = 3.84
+WALK_GAIN = THRESHOLD
 #: The walk runs where the deterministic limit's ``χ²`` is at most this many times the best's.
 WORTH = 2.0
 #: The walk's first step in ``e`` (and its longest), as a fraction of the range of ``e``.

@@ -30,7 +30,7 @@ from __future__ import annotations
 import copy
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import InitVar, dataclass, field, replace
 
 import numpy as np
 
@@ -62,6 +62,15 @@ def _sum_of_squares(r: np.ndarray) -> float:
     """``rᵀr`` (BLAS-free, :mod:`.detlinalg`); 1e300 for a reading the run did not reach."""
     value = detlinalg.dot(r, r)
     return value if math.isfinite(value) else 1e300
+
+
+@dataclass
+class _Metric:
+    """The across-member covariance ``C`` in use and its whitening: one object shared by an
+    objective and its views (:meth:`Objective.seeing`), so a change reaches all of them."""
+
+    cov: np.ndarray | None = None
+    white: np.ndarray | None = None
 
 
 @dataclass
@@ -98,6 +107,9 @@ class Objective:
         The load curves' part of the likelihood (:mod:`.loadpart`); ``None``: run-ups only.
     parts : str
         The data the objective sees: ``"runup"``, ``"load"`` or ``"both"``.
+    initial_cov : ndarray or None
+        The covariance ``C`` to start with (identity when ``None``); :meth:`set_cov` changes it,
+        :attr:`covariance` reads it.
     """
 
     curve: MotorCurve
@@ -106,7 +118,7 @@ class Objective:
     target: np.ndarray
     spec: EnsembleSpec
     members: int
-    cov: np.ndarray | None = None
+    initial_cov: InitVar[np.ndarray | None] = None
     cache: dict = field(default_factory=dict)
     #: The points (with their member counts) whose statistics were read: the fit's evaluations
     #: (a point :meth:`prefetch` ran ahead and nobody read is not one).
@@ -118,17 +130,17 @@ class Objective:
     load: LoadPart | None = None
     parts: str = "runup"
 
-    def __post_init__(self):
+    def __post_init__(self, initial_cov: np.ndarray | None):
         b = np.array([BOUNDS[n] for n in self.names])
         self.lo, self.hi = b[:, 0], b[:, 1]
-        if self.cov is None:
-            self.cov = np.eye(len(self.target))
-        self.set_cov(self.cov)
+        self._metric = _Metric()
+        self.set_cov(np.eye(len(self.target)) if initial_cov is None else initial_cov)
 
     def seeing(self, parts: str) -> Objective:
         """The same objective seeing only ``parts`` (``"runup"``, ``"load"`` or ``"both"``): a
-        view sharing the cache, the log, the covariance and the load part, its own ``parts`` fixed
-        (the mode is an argument, never a string saved and restored)."""
+        view sharing the cache, the log, the covariance (a :meth:`set_cov` on either reaches
+        both) and the load part, its own ``parts`` fixed (the mode is an argument, never a
+        string saved and restored)."""
         if parts not in PARTS:
             raise ValueError(f"parts must be one of {PARTS}, got {parts!r}")
         view = copy.copy(self)
@@ -154,10 +166,17 @@ class Objective:
         y[free] = self.lo[free] + u * self.span[free]
         return y
 
+    @property
+    def covariance(self) -> np.ndarray:
+        """The across-member covariance ``C`` in use."""
+        return self._metric.cov
+
     def set_cov(self, cov: np.ndarray) -> None:
-        """Use the across-member covariance ``cov`` (already regularized) from now on."""
-        self.cov = np.asarray(cov, float)
-        self._white = detlinalg.lower_inverse(detlinalg.cholesky(self.cov))
+        """Use the across-member covariance ``cov`` (already regularized) from now on, here and
+        in every view (:meth:`seeing`)."""
+        cov = np.asarray(cov, float)
+        self._metric.white = detlinalg.lower_inverse(detlinalg.cholesky(cov))
+        self._metric.cov = cov
 
     def theta(self, x: np.ndarray) -> dict[str, float]:
         """Parameter dictionary of search coordinates ``x`` (ψ wrapped into ``[−π, π)``)."""
@@ -229,7 +248,7 @@ class Objective:
         k = members or self.members
         x = snap(x)
         return self._joined(
-            lambda: self._whitened(self.ensemble(x, k).mean, self._white, k),
+            lambda: self._whitened(self.ensemble(x, k).mean, self._metric.white, k),
             lambda: self.load.residuals(self.theta(x), x, members_for(k), self.points_parallel),
         )
 
@@ -277,7 +296,7 @@ class Objective:
                 th, self.curve, range(block * members, (block + 1) * members), self.spec
             )
             mean = EnsembleStats.from_values(records_stats(np.array(recs), self.layout)).mean
-            return self._whitened(mean, self._white, members)
+            return self._whitened(mean, self._metric.white, members)
 
         k = members_for(members)
         return _sum_of_squares(

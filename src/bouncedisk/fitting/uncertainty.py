@@ -269,10 +269,18 @@ def chi2_level(obj: Objective, x: np.ndarray, members: int, blocks: int = LEVEL_
     return max(float(np.mean(fresh)), obj.chi2_now(x, members))
 
 
-def fit_limit(best_chi2: float, n_stats: int) -> float:
+def birge_scale(chi2_min: float, n_stats: int, n_params: int) -> float:
+    """The scale factor of the data's variances when the best fit is poor: ``χ²/dof`` with
+    ``dof = n_stats − n_params`` when that exceeds 1, else 1 (the Particle Data Group's scale
+    factor; Birge). Every threshold of the intervals is scaled by it: :func:`birge`,
+    :func:`fit_limit`. The fit file says so (``fit_adequate = 0``, ``interval_scale``)."""
+    return max(1.0, chi2_min / max(1, n_stats - n_params))
+
+
+def fit_limit(best_chi2: float, n_stats: int, n_params: int) -> float:
     """``χ²`` below which a point reproduces ``n_stats`` statistics: the 95 % point of
-    ``χ²(n)``, scaled by the best fit's ``χ²/n`` when that exceeds 1 (Birge)."""
-    return max(1.0, best_chi2 / n_stats) * float(chi2_dist.ppf(0.95, n_stats))
+    ``χ²(n)``, scaled by :func:`birge_scale`."""
+    return birge_scale(best_chi2, n_stats, n_params) * float(chi2_dist.ppf(0.95, n_stats))
 
 
 def consistent_points(
@@ -285,7 +293,7 @@ def consistent_points(
     21 statistics under it), so the intervals are widened to these points too."""
     if len(points) == 0:
         return np.empty((0, len(obj.names)))
-    limit = fit_limit(best_chi2, obj.n_stats)
+    limit = fit_limit(best_chi2, obj.n_stats, len(obj.names))
     keep = [x for x in points if obj.own_chi2(x, members) <= limit]
     return np.array(keep).reshape(-1, len(obj.names))
 
@@ -329,15 +337,13 @@ def widen(
 
 
 def birge(chi2_min: float, n_stats: int, n_params: int) -> float:
-    """Δχ² threshold of a 95 % interval, scaled by ``χ²/dof`` when that exceeds 1.
+    """Δχ² threshold of a 95 % interval, :data:`THRESHOLD` scaled by :func:`birge_scale`.
 
     A best ``χ²`` far above its degrees of freedom means the model's point does not reproduce
-    the data within the stated variances; the usual remedy (the Particle Data Group's scale
-    factor) is to scale the variances by ``χ²/dof``, i.e. the threshold by the same factor.
-    The fit file says so (``fit_adequate = 0``, ``interval_scale``).
+    the data within the stated variances; the usual remedy is to scale the variances by
+    ``χ²/dof``, i.e. the threshold by the same factor.
     """
-    dof = max(1, n_stats - n_params)
-    return THRESHOLD * max(1.0, chi2_min / dof)
+    return THRESHOLD * birge_scale(chi2_min, n_stats, n_params)
 
 
 def realization_limit(n: int) -> float:
