@@ -89,6 +89,35 @@ def test_torque_scale_is_the_closed_form():
     )
 
 
+def test_a_curve_at_another_drive_frequency_is_read_at_its_condition():
+    """A load curve at twice the run-ups' drive frequency is read at ``ω_s`` twice the point's
+    (``ω_s = 2π f t_c`` with ``t_c`` held; the other parameters shared), and its stated
+    generating ``ω_s`` is brought back to the run-ups' drive frequency."""
+    import dataclasses
+
+    from bouncedisk.fitting.joint import stated_truth
+    from bouncedisk.fitting.loadpart import Setup
+
+    theta = {"e": 0.55, "log10_r_phi": math.log10(0.002), "psi": 0.4, "omega_s": 1.7}
+    base = _fake_load_data((0.01, 0.02))
+    fast = dataclasses.replace(base, drive_frequency_hz=2 * F_HZ, window_s=(0.005, 0.01))
+    part = lp.LoadPart([base, fast], 0.03, 5, drive_hz=F_HZ)
+    got = part.values(part.condition(theta, base), np.zeros(4), 2)  # members 0 and 1
+    n = len(base.torque)
+    at = part.condition(theta, fast)
+    assert at["omega_s"] == pytest.approx(3.4, rel=1e-12)
+    assert at["log10_r_phi"] == pytest.approx(theta["log10_r_phi"], abs=1e-12)
+    for m in range(2):
+        np.testing.assert_array_equal(got[m, :n], lp.curve_readings(theta, base, m, 0.03, 5))
+        np.testing.assert_array_equal(got[m, n:], lp.curve_readings(at, fast, m, 0.03, 5))
+    assert not np.array_equal(got[0, n:], lp.curve_readings(theta, fast, 0, 0.03, 5))
+    side = {"generating_parameters": {**theta, "r_phi": 0.002, "omega_s": 3.4}}
+    stated = dataclasses.replace(fast, sidecar=side)
+    truth = stated_truth([stated], Setup(F_HZ, PHI0, ROTOR, PRELOAD))
+    assert truth["omega_s"] == pytest.approx(1.7) and truth["r_phi"] == pytest.approx(0.002)
+    assert stated_truth([stated])["omega_s"] == pytest.approx(3.4)
+
+
 def test_a_reading_is_the_members_window_mean():
     """:func:`loadpart.curve_readings` is, at every load, the ensemble reducer's mean speed over
     the window of the same member run under that load alone, in rad/s (two routes through the
@@ -152,11 +181,11 @@ def _copy_load(src: Path, dst: Path, edit=None) -> Path:
     return dst
 
 
+# another drive frequency or Phi0 is no disagreement: it is another condition of the motor
+# (test_a_second_drive_frequency_is_a_condition_of_the_same_motor)
 @pytest.mark.parametrize(
     "edit,field",
     [
-        (lambda s: s["motor"].update(drive_frequency_hz=20000.0), "motor.drive_frequency_hz"),
-        (lambda s: s["motor"].update(Phi0_rad=1e-4), "motor.Phi0_rad"),
         (lambda s: s.update(repeats=0), "repeats"),
         (lambda s: s.update(repeats="five"), "repeats"),
         (lambda s: s["rotor"].pop("r_g_m"), "rotor.r_g_m"),
@@ -221,6 +250,37 @@ def tiny_fit(data_dir):
     curve = read_curve(data_dir / "run.csv")
     load = read_load_curve(data_dir / "load.csv")
     return fit_curve(curve, TINY, load=[load])
+
+
+@pytest.mark.slow
+@pytest.mark.cost(30)
+def test_a_second_drive_frequency_is_a_condition_of_the_same_motor(data_dir, tmp_path):
+    """The run-up and load curve of the test motor, and a load curve of the same motor at twice
+    the drive frequency (its model made at ``ω_s`` doubled), fitted together: the file records
+    each reading's drive frequency, the generating point is the run-ups' (``ω_s`` not doubled)
+    and reads the second curve's readings as well as the first's, and the load figure draws one
+    series per drive frequency."""
+    from bouncedisk.figures.drawing import FIGURES
+
+    true, top = CASES["chaotic_reinjection"]
+    spec = {
+        "parameters": {**true, "omega_s": 2 * true["omega_s"]}, "e_sigma": 0.03,
+        "drive_frequency_hz": 2 * F_HZ, "Phi0_rad": PHI0, "rotor": ROTOR, "preload_N": PRELOAD,
+        "load_curve": {"loads_Nm": list(np.linspace(0.0, 0.8, 5) * torque_scale(true)),
+                       "repeats": 5, "window_s": [0.03, 0.06], "seed": 71},
+    }  # fmt: skip
+    ldf, side = synthetic_load_curve(spec)
+    write_curve(ldf, tmp_path / "fast.csv", side)
+    loads = [read_load_curve(data_dir / "load.csv"), read_load_curve(tmp_path / "fast.csv")]
+    ds = fit_dataset(fit_curve(read_curve(data_dir / "run.csv"), TINY, load=loads))
+    drive = ds["load_drive_frequency_hz"].values
+    assert sorted(set(drive)) == [F_HZ, 2 * F_HZ] and int((drive == 2 * F_HZ).sum()) == 5
+    assert ds.attrs["generating_omega_s"] == pytest.approx(true["omega_s"])
+    # at the generating point each curve's readings are within their own spread: chi2 of the
+    # 11 readings near their count, far from what a wrong condition (omega_s not doubled) gives
+    assert ds.attrs["chi2_generating_load"] < 40.0, ds.attrs["chi2_generating_load"]
+    labels = FIGURES["fit_load"].draw(ds).axes[0].get_legend_handles_labels()[1]
+    assert any("at 15 kHz" in lab for lab in labels) and any("at 30 kHz" in lab for lab in labels)
 
 
 @pytest.mark.xdist_group("tiny_joint_fit")  # one worker fits, not both

@@ -479,16 +479,39 @@ def test_bad_load_curve_names_file_row_and_column(csv, yaml_text, field, tmp_pat
     assert field in line and "load." in line and "\n" not in line
 
 
-def test_load_curve_and_run_ups_must_share_the_drive(tmp_path):
-    from bouncedisk.io.load_curves import check_same_setup
-    from bouncedisk.model.errors import InputError
+def test_a_condition_converts_the_point_by_the_physical_scales():
+    """:func:`loadpart.convert` (docs/model.md "Physical conversion", U0, mu, e, psi held):
+    omega_s = 2 pi f t_c with t_c = sqrt(U0 / g_eff), g_eff = g + F / m_r, and
+    R_phi = mu U0 r_eff / (r_g^2 Phi0) with r_eff = 2 r_c / 3; there and back is the identity."""
+    import math
 
-    (tmp_path / "load.csv").write_text(LOAD_CSV)
-    (tmp_path / "load.yaml").write_text(LOAD_YAML)
-    data = read_load_curve(tmp_path / "load.csv")
-    check_same_setup(data, 20000.0, 2e-4)
-    with pytest.raises(InputError, match="motor.drive_frequency_hz"):
-        check_same_setup(data, 15000.0, 2e-4)
+    from bouncedisk.fitting.loadpart import Setup, convert
+
+    rotor = {"m_r_kg": 0.01, "r_g_m": 0.004, "r_c_m": 0.002}
+    a = Setup(20000.0, 2e-4, rotor, 0.77)
+    theta = {"e": 0.55, "log10_r_phi": math.log10(0.002), "psi": 0.4, "omega_s": 1.7}
+
+    def moved(**change):
+        b = a._replace(**{k: v for k, v in change.items() if k != "rotor"})
+        b = b._replace(rotor={**rotor, **change.get("rotor", {})})
+        out = convert(theta, a, b)
+        back = convert(out, b, a)
+        assert back["omega_s"] == pytest.approx(1.7, rel=1e-12)
+        assert back["log10_r_phi"] == pytest.approx(theta["log10_r_phi"], abs=1e-12)
+        assert (out["e"], out["psi"]) == (0.55, 0.4)
+        return out["omega_s"] / 1.7, 10 ** (out["log10_r_phi"] - theta["log10_r_phi"])
+
+    assert convert(theta, a, a) is theta
+    assert moved(f=30000.0) == pytest.approx((1.5, 1.0))
+    assert moved(phi0=4e-4) == pytest.approx((1.0, 0.5))
+    assert moved(rotor={"r_g_m": 0.008}) == pytest.approx((1.0, 0.25))
+    assert moved(rotor={"r_c_m": 0.003}) == pytest.approx((1.0, 1.5))
+    g = 9.81
+    ratio = math.sqrt((g + 0.77 / 0.01) / (g + 2.0 / 0.01))  # t_c shrinks as g_eff grows
+    assert moved(preload=2.0) == pytest.approx((ratio, 1.0))
+    assert moved(rotor={"m_r_kg": 0.02}) == pytest.approx(
+        (math.sqrt((g + 0.77 / 0.01) / (g + 0.77 / 0.02)), 1.0)
+    )
 
 
 def test_simulation_files_carry_the_energy_audit(scene_file, tmp_path):

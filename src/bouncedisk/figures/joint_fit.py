@@ -37,79 +37,76 @@ def _need_load(fit: xr.Dataset, what: str) -> None:
 
 
 def fig_fit_load(fit: xr.Dataset) -> Figure:
-    """The measured load curve and the jointly fitted model (companion of Fig. 5).
+    """The measured load curves and the jointly fitted model (companion of Fig. 5).
 
     Top: every reading (mean speed over the window after a start from rest) with the error bar
     the likelihood gave it, the fitted model's ensemble mean with the 95 % interval of that mean
     (band) and its members' 2.5–97.5 % range (light band). Bottom: the residuals (measured minus
-    fitted mean) with the members' band about zero.
+    fitted mean) with the members' band about zero. Each load curve is its own series, named by
+    its drive frequency when the curves are conditions at several (docs/user_guide/fitting.md
+    "Conditions").
     """
     _need_load(fit, "fit_load")
     fig = Figure(figsize=(6.4, 6.0), layout="constrained")
     ax, rax = fig.subplots(2, 1, sharex=True, height_ratios=[2.2, 1.0])
-    t = fit["load_torque"].values * 1e3  # mN·m
-    order = np.argsort(t, kind="stable")
-    t = t[order]
-
-    def v(name):
-        return fit[name].values[order]
-
-    mean = v("load_speed_fitted")
-    shade(
-        ax,
-        t,
-        v("load_speed_band_low"),
-        v("load_speed_band_high"),
-        "C0",
-        "fitted model: members' 95% range",
-        alpha=0.15,
-    )
-    shade(
-        ax,
-        t,
-        v("load_speed_fitted_low"),
-        v("load_speed_fitted_high"),
-        "C0",
-        "fitted model: 95% interval of the mean",
-        alpha=0.45,
-    )
-    ax.plot(t, mean, color="C0", lw=1.2)
     word = data_word(fit, "load_curve_synthetic")
-    ax.errorbar(
-        t,
-        v("load_speed_measured"),
-        yerr=v("load_speed_sigma"),
-        fmt="o",
-        ms=4,
-        color="k",
-        capsize=2,
-        label=f"{word} (±1 sd in the likelihood)",
-    )
+    which = fit["load_curve_index"].values
+    drive = fit["load_drive_frequency_hz"].values if "load_drive_frequency_hz" in fit else None
+    several = drive is not None and len(np.unique(drive)) > 1
+    for n, k in enumerate(np.unique(which)):
+        rows = np.flatnonzero(which == k)
+        tag = f" at {drive[rows[0]] / 1e3:.4g} kHz" if several else ""
+        _load_series(ax, rax, fit, rows, (f"C{n}", "k" if n == 0 else f"C{n}"), word, tag)
     ax.axhline(0.0, color="0.6", lw=0.6)
     ax.set_ylabel("mean speed [rad/s]")
     ax.legend(fontsize=8, loc="upper right")
     a = fit.attrs
     ax.set_title(
         f"load curve: χ² {a.get('chi2_load', math.nan):.3g} on "
-        f"{a.get('n_load_readings', len(t))} readings (joint fit)",
+        f"{a.get('n_load_readings', len(which))} readings (joint fit)",
         fontsize=9,
     )
-    shade(
-        rax, t, v("load_speed_band_low") - mean, v("load_speed_band_high") - mean, "C0", alpha=0.15
-    )
-    rax.errorbar(
-        t,
-        v("load_speed_measured") - mean,
-        yerr=v("load_speed_sigma"),
-        fmt="o",
-        ms=4,
-        color="k",
-        capsize=2,
-    )
-    rax.axhline(0.0, color="C0", lw=1.0)
+    rax.axhline(0.0, color="0.6", lw=1.0)
     rax.set_xlabel("load torque [mN·m]")
     rax.set_ylabel(f"{word} − fitted [rad/s]")
     return fig
+
+
+def _load_series(ax, rax, fit: xr.Dataset, rows: np.ndarray, colors, word: str, tag: str) -> None:
+    """One load curve's readings (``rows`` of the file's ``reading``) in :func:`fig_fit_load`:
+    model colour ``colors[0]``, data colour ``colors[1]``, labels ending in ``tag``."""
+    t = fit["load_torque"].values[rows] * 1e3  # mN·m
+    order = np.argsort(t, kind="stable")
+    t = t[order]
+
+    def v(name):
+        return fit[name].values[rows][order]
+
+    model, data = colors
+    mean = v("load_speed_fitted")
+    band = (v("load_speed_band_low"), v("load_speed_band_high"))
+    shade(ax, t, *band, model, f"fitted model: members' 95% range{tag}", alpha=0.15)
+    shade(
+        ax,
+        t,
+        v("load_speed_fitted_low"),
+        v("load_speed_fitted_high"),
+        model,
+        f"fitted model: 95% interval of the mean{tag}",
+        alpha=0.45,
+    )
+    ax.plot(t, mean, color=model, lw=1.2)
+    bars = dict(fmt="o", ms=4, color=data, capsize=2)
+    sigma = v("load_speed_sigma")
+    ax.errorbar(
+        t,
+        v("load_speed_measured"),
+        yerr=sigma,
+        label=f"{word}{tag} (±1 sd in the likelihood)",
+        **bars,
+    )
+    shade(rax, t, band[0] - mean, band[1] - mean, model, alpha=0.15)
+    rax.errorbar(t, v("load_speed_measured") - mean, yerr=sigma, **bars)
 
 
 def fig_fit_identifiability(fit: xr.Dataset) -> Figure:

@@ -12,10 +12,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..io.load_curves import LoadCurveData, check_same_setup
+from ..io.load_curves import LoadCurveData
 from ..io.runup_curves import MotorCurve
 from ..model.errors import InputError
-from .loadpart import LoadPart, check_window
+from .loadpart import LoadPart, Setup, check_window, convert, setup
 from .loadpart import band as load_band
 from .members import EnsembleSpec
 from .objective import Objective, snap
@@ -40,13 +40,20 @@ class LoadFit:
 TRUTH_KEYS = ("e", "r_phi", "psi", "omega_s")
 
 
-def stated_truth(curves: list[LoadCurveData]) -> dict[str, float]:
-    """Generating parameters stated by a synthetic load curve's sidecar (empty otherwise)."""
+def stated_truth(curves: list[LoadCurveData], reference: Setup | None = None) -> dict[str, float]:
+    """Generating parameters stated by a synthetic load curve's sidecar (empty otherwise), at
+    the ``reference`` condition (the load part's, :attr:`.loadpart.LoadPart.reference`): a curve
+    of another condition states its own ``ω_s`` and ``R_φ`` (:func:`.loadpart.convert`)."""
     for d in curves:
         gen = d.sidecar.get("generating_parameters") if d.synthetic else None
         if isinstance(gen, dict) and all(k in gen for k in TRUTH_KEYS):
             # the restitution noise too, when stated (a fitted coordinate)
-            return {k: float(gen[k]) for k in (*TRUTH_KEYS, "e_sigma") if k in gen}
+            out = {k: float(gen[k]) for k in (*TRUTH_KEYS, "e_sigma") if k in gen}
+            if reference is not None:
+                theta = {**out, "log10_r_phi": math.log10(out["r_phi"])}
+                theta = convert(theta, setup(d), reference)
+                out["omega_s"], out["r_phi"] = theta["omega_s"], 10.0 ** theta["log10_r_phi"]
+            return out
     return {}
 
 
@@ -69,7 +76,8 @@ def chi2_at_truth(obj: Objective, members: int) -> dict[str, float] | None:
     it says the search missed a better basin; far above it, that the model or its likelihood
     does not describe the data.
     """
-    gen = {f"generating_{k}": v for k, v in stated_truth(obj.load.curves).items()}
+    truth = stated_truth(obj.load.curves, obj.load.reference)
+    gen = {f"generating_{k}": v for k, v in truth.items()}
     x = [truth_coordinate(gen, n) for n in obj.names]
     if any(v is None for v in x):
         return None
@@ -92,11 +100,12 @@ def load_part(
     progress: Callable[[str], None] | None = None,
 ) -> LoadPart | None:
     """The load curves' part of the likelihood (``None`` without load curves), after checking
-    that they share the run-ups' drive and state ``Φ0`` (the torque scale needs it)."""
+    that the run-ups state ``Φ0`` (the torque scale needs it). Each curve is read at its own
+    condition (:meth:`.loadpart.LoadPart.condition`); the reference is the run-ups' drive and
+    ``Φ0`` with the first curve's rotor and preload."""
     if not curves:
         return None
     for d in curves:
-        check_same_setup(d, fitted.drive_frequency_hz, fitted.phi0_rad)
         check_window(d)
         if fitted.phi0_rad is None:
             raise InputError(
@@ -105,7 +114,15 @@ def load_part(
                 "the run-ups' sidecar must state Phi0_rad "
                 "for a joint fit with a load curve (its torque scale needs it)",
             )
-    return LoadPart(curves, spec.e_sigma, spec.seed, cores=spec.cores, progress=progress)
+    return LoadPart(
+        curves,
+        spec.e_sigma,
+        spec.seed,
+        cores=spec.cores,
+        progress=progress,
+        drive_hz=fitted.drive_frequency_hz,
+        phi0_rad=fitted.phi0_rad,
+    )
 
 
 def joint_consistent(obj: Objective, members: int, best_chi2: float) -> np.ndarray:

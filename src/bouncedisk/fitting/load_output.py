@@ -21,7 +21,7 @@ import xarray as xr
 from ..io.provenance import sha256_file
 from .core import FitResult
 from .joint import stated_truth, truth_coordinate
-from .loadpart import LOAD_BAND, LOAD_MEMBERS
+from .loadpart import LOAD_BAND, LOAD_MEMBERS, reference_setup
 from .members import BOUNDS
 from .uncertainty import identified
 
@@ -51,6 +51,11 @@ def _readings(fit: FitResult) -> dict:
             "reading",
             which.astype(np.int32),
             {"units": "1", "long_name": "which load curve the reading is from (order of --load)"},
+        ),
+        "load_drive_frequency_hz": (
+            "reading",
+            np.concatenate([np.full(len(d.torque), d.drive_frequency_hz) for d in lf.curves]),
+            {"units": "Hz", "long_name": "drive frequency of the reading's curve (its condition)"},
         ),
         "load_speed_measured": var(
             np.concatenate([d.speed for d in lf.curves]),
@@ -135,8 +140,12 @@ def _intervals(fit: FitResult) -> dict:
 
 
 def truth(fit: FitResult) -> dict[str, float]:
-    """Generating parameters stated by a synthetic load curve's sidecar (empty otherwise)."""
-    return stated_truth(fit.load.curves)
+    """Generating parameters stated by a synthetic load curve's sidecar (empty otherwise), at
+    the reference condition: the run-ups' drive and ``Φ0``, the first curve's rotor and preload."""
+    c = fit.curve
+    return stated_truth(
+        fit.load.curves, reference_setup(fit.load.curves, c.drive_frequency_hz, c.phi0_rad)
+    )
 
 
 def load_dataset(fit: FitResult) -> xr.Dataset:

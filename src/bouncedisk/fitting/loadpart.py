@@ -24,14 +24,25 @@ repeated readings (``speed_sd_rad_s``) and ``n_rep`` the readings averaged per l
 the run-ups' ``C`` (:mod:`.objective`); the readings of different loads are independent runs in
 the lab, so ``D`` is diagonal. The joint ``χ²`` is the run-ups' plus this part's (independent
 experiments: block-diagonal covariance).
+
+**Conditions.** The load curves of one motor may differ in drive frequency ``f``, torsional
+amplitude ``Φ0``, rotor and preload: each is a condition of the same motor. Its axial amplitude
+``U0``, friction ``μ``, restitution (``e``, ``σ_e``) and phase ``ψ`` are shared, and the point's
+nondimensional ``ω_s = 2π f t_c`` (``t_c = √(U0/g_eff)``, ``g_eff = g + F/m_r``) and ``R_φ = μ U0
+r_eff / (r_g² Φ0)`` are those of the reference condition, the run-ups' drive and ``Φ0`` with the
+first load curve's rotor and preload (docs/model.md "Physical conversion";
+:meth:`LoadPart.condition`).
 """
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -64,23 +75,73 @@ PROGRESS_S = 10.0
 MAX_EVENTS = 50_000_000
 
 
+def _physical(
+    theta: dict[str, float], f: float, phi0: float, rotor: dict, preload: float
+) -> PhysicalParameters:
+    """The motor of parameter point ``θ`` driven at ``(f, Φ0)`` with ``rotor`` and ``preload``,
+    in SI units (:meth:`~bouncedisk.model.params.PhysicalParameters.from_nondimensional`)."""
+    p = Parameters(
+        e=theta["e"], omega_s=theta["omega_s"], r_phi=10.0 ** theta["log10_r_phi"], psi=theta["psi"]
+    )
+    r = rotor
+    return PhysicalParameters.from_nondimensional(
+        p, f, phi0, r["m_r_kg"], r["r_g_m"], r["r_c_m"], F_preload=preload
+    )
+
+
+class Setup(NamedTuple):
+    """What a curve states of how the motor ran: drive ``f`` (Hz), ``Φ0`` (rad), the rotor
+    (``m_r_kg``, ``r_g_m``, ``r_c_m``) and the preload (N)."""
+
+    f: float
+    phi0: float
+    rotor: dict
+    preload: float
+
+
+def setup(d: LoadCurveData) -> Setup:
+    """The condition load curve ``d`` states."""
+    return Setup(d.drive_frequency_hz, d.phi0_rad, d.rotor, d.preload_n)
+
+
+def reference_setup(
+    curves: list[LoadCurveData], drive_hz: float | None, phi0_rad: float | None
+) -> Setup:
+    """The condition a fit's parameter point is stated at (module docstring, "Conditions"): the
+    run-ups' drive ``drive_hz`` and ``phi0_rad`` (the first curve's where ``None``) with the
+    first curve's rotor and preload."""
+    first = setup(curves[0])
+    return first._replace(
+        f=first.f if drive_hz is None else drive_hz,
+        phi0=first.phi0 if phi0_rad is None else phi0_rad,
+    )
+
+
+def convert(theta: dict[str, float], src: Setup, dst: Setup) -> dict[str, float]:
+    """Parameter point ``θ`` of the motor run as ``src`` states, for the same motor run as
+    ``dst`` states (module docstring, "Conditions"): the motor in SI units
+    (:meth:`~bouncedisk.model.params.PhysicalParameters.from_nondimensional`), driven and loaded
+    as ``dst`` says, made nondimensional again; ``U0``, ``μ``, ``e`` and ``ψ`` are kept."""
+    if src == dst:
+        return theta
+    r = dst.rotor
+    p = dataclasses.replace(
+        _physical(theta, *src),
+        f=dst.f,
+        Phi0=dst.phi0,
+        m_r=r["m_r_kg"],
+        r_g=r["r_g_m"],
+        r_c=r["r_c_m"],
+        F_preload=dst.preload,
+    ).to_nondimensional()
+    return {**theta, "omega_s": p.omega_s, "log10_r_phi": math.log10(p.r_phi)}
+
+
 def motor_scales(theta: dict[str, float], data: LoadCurveData) -> tuple[float, float, float]:
     """``(t_c [s], speed scale [rad/s], torque scale [N·m])`` of a parameter point for a motor
     (docs/model.md "Physical conversion"; the torque scale ``μ m_r g_eff r_eff`` of "The motor under
     load"), by :meth:`~bouncedisk.model.params.PhysicalParameters.from_nondimensional`."""
-    p = Parameters(
-        e=theta["e"], omega_s=theta["omega_s"], r_phi=10.0 ** theta["log10_r_phi"], psi=theta["psi"]
-    )
-    r = data.rotor
-    phys = PhysicalParameters.from_nondimensional(
-        p,
-        data.drive_frequency_hz,
-        data.phi0_rad,
-        r["m_r_kg"],
-        r["r_g_m"],
-        r["r_c_m"],
-        F_preload=data.preload_n,
-    )
+    phys = _physical(theta, data.drive_frequency_hz, data.phi0_rad, data.rotor, data.preload_n)
     sc = phys.scales()
     return sc.t_c, sc.omega_scale, sc.torque
 
@@ -149,6 +210,10 @@ class LoadPart:
         Threads running the readings of one evaluation.
     progress : callable or None
         Receives a line every :data:`PROGRESS_S` seconds of a long evaluation.
+    drive_hz, phi0_rad : float or None
+        The drive frequency and ``Φ0`` of the reference condition (the run-ups'); with the first
+        curve's rotor and preload they make the condition ``θ`` is stated at. A curve of another
+        condition is read at its own (:meth:`condition`). ``None``: the first curve's.
     """
 
     curves: list[LoadCurveData]
@@ -157,6 +222,8 @@ class LoadPart:
     members: int = LOAD_MEMBERS
     cores: int = 1
     progress: Callable[[str], None] | None = None  # long evaluations report through it
+    drive_hz: float | None = None
+    phi0_rad: float | None = None
     cache: dict = field(default_factory=dict)
     cov_model: np.ndarray | None = None
     _white: dict = field(default_factory=dict)
@@ -170,6 +237,15 @@ class LoadPart:
         self.sd = np.concatenate(sd)
         self.repeats = np.concatenate([np.full(len(d.torque), _repeats(d)) for d in self.curves])
         self.floor = LOAD_FLOOR * max(float(np.max(np.abs(self.y))), 1e-12)
+
+    @property
+    def reference(self) -> Setup:
+        """The reference condition (:func:`reference_setup`)."""
+        return reference_setup(self.curves, self.drive_hz, self.phi0_rad)
+
+    def condition(self, theta: dict[str, float], d: LoadCurveData) -> dict[str, float]:
+        """``θ`` (stated at the reference condition) at curve ``d``'s (:func:`convert`)."""
+        return convert(theta, self.reference, setup(d))
 
     def slices(self) -> list[tuple[np.ndarray, slice]]:
         """Every curve's torques (N·m) and where its readings sit in the flattened vectors."""
@@ -199,7 +275,8 @@ class LoadPart:
             tasks = [(m, d) for m in range(start, start + 1 if same else k) for d in self.curves]
 
             def one(task):
-                return curve_readings(theta, task[1], task[0], self.e_sigma, self.seed)
+                d = task[1]
+                return curve_readings(self.condition(theta, d), d, task[0], self.e_sigma, self.seed)
 
             started = time.perf_counter()
             last = [started]

@@ -225,22 +225,3 @@ def read_load_curve(path: str | Path) -> LoadCurveData:
         path=src,
         sidecar=meta,
     )
-
-
-def check_same_setup(
-    load: LoadCurveData, drive_frequency_hz: float, phi0_rad: float | None
-) -> None:
-    """A load curve and the run-ups fitted with it must share the drive (one line otherwise)."""
-    side = str(Path(load.path).with_suffix(".yaml"))
-    if not np.isclose(load.drive_frequency_hz, drive_frequency_hz, rtol=1e-9):
-        raise InputError(
-            side,
-            "motor.drive_frequency_hz",
-            f"{load.drive_frequency_hz:.6g} Hz differs from the run-ups' {drive_frequency_hz:.6g} Hz",
-        )
-    if phi0_rad is not None and not np.isclose(load.phi0_rad, phi0_rad, rtol=1e-9):
-        raise InputError(
-            side,
-            "motor.Phi0_rad",
-            f"{load.phi0_rad:.6g} rad differs from the run-ups' {phi0_rad:.6g}",
-        )
