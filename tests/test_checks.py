@@ -69,11 +69,12 @@ def test_the_stall_check_fails_unless_the_momentum_bound_holds_on_a_sweep_that_r
 
 
 #: The synthetic motor's generating values in search coordinates (data/prototype sidecars).
-GENERATING = (0.55, math.log10(0.002), 0.4, 1.7)
+GENERATING = (0.55, math.log10(0.002), 0.4, 1.7, 0.03)
 
 
 def _fit(lo, hi, gen=GENERATING, identified=1):
-    names = ["e", "log10_r_phi", "psi", "omega_s"]
+    names = ["e", "log10_r_phi", "psi", "omega_s", "e_sigma"][: len(lo)]
+    gen = gen[: len(lo)]
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
     sets = ["runup", "load", "both"]
     rows = lambda v: np.vstack([v, v, v])  # noqa: E731
@@ -85,9 +86,9 @@ def _fit(lo, hi, gen=GENERATING, identified=1):
             "load_speed_band_high": ("reading", np.array([21.0, 11.0, 1.0])),
             "interval_low": (("data_set", "parameter"), rows(lo)),
             "interval_high": (("data_set", "parameter"), rows(hi)),
-            "interval_identified": (("data_set", "parameter"), np.full((3, 4), identified)),
-            "search_low": ("parameter", np.array([0.05, -4.0, -math.pi, 1.05])),
-            "search_high": ("parameter", np.array([0.95, -1.0, math.pi, 4.0])),
+            "interval_identified": (("data_set", "parameter"), np.full((3, len(lo)), identified)),
+            "search_low": ("parameter", np.array([0.05, -4.0, -math.pi, 1.05, 0.0])[: len(lo)]),
+            "search_high": ("parameter", np.array([0.95, -1.0, math.pi, 4.0, 0.1])[: len(lo)]),
             "generating_value": ("parameter", gen),
         },
         coords={"data_set": sets, "parameter": names},
@@ -125,6 +126,25 @@ def test_identifiability_needs_every_interval_to_hold_the_generating_value():
     unstated.attrs["load_curve_synthetic"] = 1
     r = checks._identifiability_check(unstated, 2, "f")
     assert not r.passed and "state no generating value" in r.measured
+
+
+def test_the_fitted_noise_is_reported_against_its_generating_value_not_required():
+    """With the noise fitted (a fifth parameter), a noise interval that misses its generating
+    value is named in the check's line but does not fail it; the motor parameters still must
+    hold theirs, and the noise's interval must still be identified inside the search range."""
+    lo, hi = [0.45, -2.71, 0.14, 1.67, 0.0082], [0.575, -2.49, 0.66, 2.12, 0.02999]
+    r = checks._identifiability_check(_fit(lo, hi), 2, "f")
+    assert r.passed and "e_sigma excludes its generating value 0.03: reported, not required" in (
+        r.measured
+    )
+    assert (
+        checks._identifiability_check(_fit(lo, [*hi[:4], 0.04]), 2, "f").measured.count("excludes")
+        == 0
+    )
+    r = checks._identifiability_check(_fit([*lo[:3], 1.72, lo[4]], hi), 2, "f")
+    assert not r.passed and "omega_s excludes" in r.measured
+    r = checks._identifiability_check(_fit([*lo[:4], 0.0], hi), 2, "f")
+    assert not r.passed and "e_sigma reaches the search range's end" in r.measured
 
 
 def test_the_checks_adequacy_is_the_fits():

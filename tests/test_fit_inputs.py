@@ -285,3 +285,21 @@ def test_the_config_schema_states_the_bounds_of_the_command_line():
         BOOTSTRAP_RANGE.high,
     )
     assert (proto["e_sigma"]["minimum"], proto["e_sigma"]["maximum"]) == (E_SIGMA.low, E_SIGMA.high)
+
+
+def test_a_synthetic_curve_has_every_sample_its_span_asks_for():
+    """``synthesize_curve`` at a step whose median over the stamps rounds the grid one sample
+    short (8484.2 Hz sampled at 0.4 drive periods for 0.37 s): one row per ``k dt`` up to the
+    span, every speed finite."""
+    import math
+
+    import numpy as np
+
+    from bouncedisk.fitting import synthesize_curve
+
+    f, span = 8484.2, 0.37
+    dt = 0.4 / f
+    true = {"e": 0.91, "r_phi": 1.3e-4, "psi": -2.65, "omega_s": 1.07}
+    df = synthesize_curve(true, f, 1.47e-3, span, dt, 0.01, 5007, member=0, e_sigma=0.0)
+    assert len(df) == math.floor(span / dt + 1e-9) + 1 == 7848
+    assert np.isfinite(df["omega_rad_s"]).all()

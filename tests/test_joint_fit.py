@@ -280,7 +280,8 @@ def test_a_second_drive_frequency_is_a_condition_of_the_same_motor(data_dir, tmp
     # 11 readings near their count, far from what a wrong condition (omega_s not doubled) gives
     assert ds.attrs["chi2_generating_load"] < 40.0, ds.attrs["chi2_generating_load"]
     labels = FIGURES["fit_load"].draw(ds).axes[0].get_legend_handles_labels()[1]
-    assert any("at 15 kHz" in lab for lab in labels) and any("at 30 kHz" in lab for lab in labels)
+    assert any("(curve 1, 15 kHz)" in lab for lab in labels)
+    assert any("(curve 2, 30 kHz)" in lab for lab in labels)
 
 
 @pytest.mark.xdist_group("tiny_joint_fit")  # one worker fits, not both

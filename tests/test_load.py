@@ -514,6 +514,30 @@ def test_a_condition_converts_the_point_by_the_physical_scales():
     )
 
 
+def test_the_reference_condition_does_not_hang_on_the_order_of_the_curves(tmp_path):
+    """The reference rotor and preload are those of the load curves at the run-ups' drive and
+    Phi0, whatever the order; two such curves that disagree are one line naming the field."""
+    import dataclasses
+
+    from bouncedisk.fitting.loadpart import reference_setup
+    from bouncedisk.model.errors import InputError
+
+    (tmp_path / "load.csv").write_text(LOAD_CSV)
+    (tmp_path / "load.yaml").write_text(LOAD_YAML)
+    base = read_load_curve(tmp_path / "load.csv")
+    heavy = {**base.rotor, "r_g_m": 0.006}
+    other = dataclasses.replace(base, drive_frequency_hz=14000.0, rotor=heavy, preload_n=2.0)
+    for curves in ([base, other], [other, base]):
+        ref = reference_setup(curves, 20000.0, 2e-4)
+        assert ref == (20000.0, 2e-4, base.rotor, base.preload_n)
+    # no curve at the run-ups' drive: every curve's, which must agree
+    assert reference_setup([other], 20000.0, 2e-4).rotor == heavy
+    clash = dataclasses.replace(base, rotor=heavy, path=str(tmp_path / "clash.csv"))
+    with pytest.raises(InputError, match="clash.yaml: rotor: differs from") as ex:
+        reference_setup([base, clash], 20000.0, 2e-4)
+    assert "\n" not in ex.value.line()
+
+
 def test_simulation_files_carry_the_energy_audit(scene_file, tmp_path):
     """Every simulated run records its audit (per run, docs/model.md): residuals and terms."""
     f = scene_file(

@@ -42,9 +42,9 @@ def fig_fit_load(fit: xr.Dataset) -> Figure:
     Top: every reading (mean speed over the window after a start from rest) with the error bar
     the likelihood gave it, the fitted model's ensemble mean with the 95 % interval of that mean
     (band) and its members' 2.5–97.5 % range (light band). Bottom: the residuals (measured minus
-    fitted mean) with the members' band about zero. Each load curve is its own series, named by
-    its drive frequency when the curves are conditions at several (docs/user_guide/fitting.md
-    "Conditions").
+    fitted mean) with the members' band about zero. Several load curves are one series each,
+    named by their number (the order of ``--load``) and drive frequency (docs/user_guide/fitting.md
+    "Conditions"; the file's ``load_curve_conditions`` gives each curve's whole condition).
     """
     _need_load(fit, "fit_load")
     fig = Figure(figsize=(6.4, 6.0), layout="constrained")
@@ -52,10 +52,11 @@ def fig_fit_load(fit: xr.Dataset) -> Figure:
     word = data_word(fit, "load_curve_synthetic")
     which = fit["load_curve_index"].values
     drive = fit["load_drive_frequency_hz"].values if "load_drive_frequency_hz" in fit else None
-    several = drive is not None and len(np.unique(drive)) > 1
+    several = len(np.unique(which)) > 1
     for n, k in enumerate(np.unique(which)):
         rows = np.flatnonzero(which == k)
-        tag = f" at {drive[rows[0]] / 1e3:.4g} kHz" if several else ""
+        khz = f", {drive[rows[0]] / 1e3:.4g} kHz" if drive is not None else ""
+        tag = f" (curve {k + 1}{khz})" if several else ""
         _load_series(ax, rax, fit, rows, (f"C{n}", "k" if n == 0 else f"C{n}"), word, tag)
     ax.axhline(0.0, color="0.6", lw=0.6)
     ax.set_ylabel("mean speed [rad/s]")

@@ -102,7 +102,7 @@ def load_part(
     """The load curves' part of the likelihood (``None`` without load curves), after checking
     that the run-ups state ``Φ0`` (the torque scale needs it). Each curve is read at its own
     condition (:meth:`.loadpart.LoadPart.condition`); the reference is the run-ups' drive and
-    ``Φ0`` with the first curve's rotor and preload."""
+    ``Φ0`` with the rotor and preload of the curves run at them (:func:`.loadpart.reference_setup`)."""
     if not curves:
         return None
     for d in curves:

@@ -21,7 +21,7 @@ import xarray as xr
 from ..io.provenance import sha256_file
 from .core import FitResult
 from .joint import stated_truth, truth_coordinate
-from .loadpart import LOAD_BAND, LOAD_MEMBERS, reference_setup
+from .loadpart import LOAD_BAND, LOAD_MEMBERS, reference_setup, setup
 from .members import BOUNDS
 from .uncertainty import identified
 
@@ -141,11 +141,30 @@ def _intervals(fit: FitResult) -> dict:
 
 def truth(fit: FitResult) -> dict[str, float]:
     """Generating parameters stated by a synthetic load curve's sidecar (empty otherwise), at
-    the reference condition: the run-ups' drive and ``Φ0``, the first curve's rotor and preload."""
-    c = fit.curve
-    return stated_truth(
-        fit.load.curves, reference_setup(fit.load.curves, c.drive_frequency_hz, c.phi0_rad)
-    )
+    the reference condition (:func:`.loadpart.reference_setup`)."""
+    return stated_truth(fit.load.curves, _reference(fit))
+
+
+def _reference(fit: FitResult):
+    """The condition the fit's parameters are stated at (:func:`.loadpart.reference_setup`)."""
+    return reference_setup(fit.load.curves, fit.curve.drive_frequency_hz, fit.curve.phi0_rad)
+
+
+def _condition_attrs(fit: FitResult) -> dict:
+    """The reference condition and every curve's, as global attributes (docs/formats.md)."""
+    ref = _reference(fit)
+
+    def words(s) -> str:
+        r = s.rotor
+        return (
+            f"{s.f:g} Hz, Phi0 {s.phi0:g} rad, rotor m_r {r['m_r_kg']:g} kg, r_g "
+            f"{r['r_g_m']:g} m, r_c {r['r_c_m']:g} m, preload {s.preload:g} N"
+        )
+
+    return {
+        "reference_condition": words(ref),
+        "load_curve_conditions": "; ".join(words(setup(d)) for d in fit.load.curves),
+    }
 
 
 def load_dataset(fit: FitResult) -> xr.Dataset:
@@ -166,6 +185,7 @@ def load_dataset(fit: FitResult) -> xr.Dataset:
         chi2_load=lf.chi2,
         n_load_readings=lf.n,
         load_window_s=", ".join(f"[{d.window_s[0]:g}, {d.window_s[1]:g}]" for d in lf.curves),
+        **_condition_attrs(fit),
         load_members=LOAD_MEMBERS,
         load_band_members=LOAD_BAND,
         identifiability="interval_*: 95% profile intervals of every search coordinate from the "

@@ -30,8 +30,10 @@ amplitude ``Φ0``, rotor and preload: each is a condition of the same motor. Its
 ``U0``, friction ``μ``, restitution (``e``, ``σ_e``) and phase ``ψ`` are shared, and the point's
 nondimensional ``ω_s = 2π f t_c`` (``t_c = √(U0/g_eff)``, ``g_eff = g + F/m_r``) and ``R_φ = μ U0
 r_eff / (r_g² Φ0)`` are those of the reference condition, the run-ups' drive and ``Φ0`` with the
-first load curve's rotor and preload (docs/model.md "Physical conversion";
-:meth:`LoadPart.condition`).
+rotor and preload of the load curves run at them (:func:`reference_setup`; docs/model.md
+"Physical conversion"; :meth:`LoadPart.condition`). Holding ``U0`` and ``ψ`` across drive
+frequencies assumes the lab holds the stator's amplitude (a driver with amplitude feedback) and
+that its phase does not move; a curve's stated ``U0_m`` is not read.
 """
 
 from __future__ import annotations
@@ -109,12 +111,21 @@ def reference_setup(
 ) -> Setup:
     """The condition a fit's parameter point is stated at (module docstring, "Conditions"): the
     run-ups' drive ``drive_hz`` and ``phi0_rad`` (the first curve's where ``None``) with the
-    first curve's rotor and preload."""
-    first = setup(curves[0])
-    return first._replace(
-        f=first.f if drive_hz is None else drive_hz,
-        phi0=first.phi0 if phi0_rad is None else phi0_rad,
-    )
+    rotor and preload of the load curves run at that drive and ``Φ0`` (of every curve when none
+    is): the run-ups' sidecars state no rotor. Those curves must agree on it (one line naming
+    the first that does not, otherwise), so the order of the curves changes nothing."""
+    f = curves[0].drive_frequency_hz if drive_hz is None else drive_hz
+    phi0 = curves[0].phi0_rad if phi0_rad is None else phi0_rad
+    same = [d for d in curves if (d.drive_frequency_hz, d.phi0_rad) == (f, phi0)] or curves
+    for d in same[1:]:
+        if (d.rotor, d.preload_n) != (same[0].rotor, same[0].preload_n):
+            raise InputError(
+                str(Path(d.path).with_suffix(".yaml")),
+                "rotor" if d.rotor != same[0].rotor else "preload_N",
+                f"differs from {same[0].path}'s, at the same drive and Phi0: the run-ups' rotor "
+                "and preload are ambiguous (docs/user_guide/fitting.md, Conditions)",
+            )
+    return Setup(f, phi0, same[0].rotor, same[0].preload_n)
 
 
 def convert(theta: dict[str, float], src: Setup, dst: Setup) -> dict[str, float]:
@@ -211,9 +222,12 @@ class LoadPart:
     progress : callable or None
         Receives a line every :data:`PROGRESS_S` seconds of a long evaluation.
     drive_hz, phi0_rad : float or None
-        The drive frequency and ``Φ0`` of the reference condition (the run-ups'); with the first
-        curve's rotor and preload they make the condition ``θ`` is stated at. A curve of another
-        condition is read at its own (:meth:`condition`). ``None``: the first curve's.
+        The drive frequency and ``Φ0`` of the reference condition (the run-ups'), the condition
+        ``θ`` is stated at (:func:`reference_setup`); a curve of another condition is read at its
+        own (:meth:`condition`). ``None``: the first curve's.
+    given_reference : Setup or None
+        The reference condition itself, when known whole (``drive_hz`` and ``phi0_rad`` are then
+        not used).
     """
 
     curves: list[LoadCurveData]
@@ -224,6 +238,7 @@ class LoadPart:
     progress: Callable[[str], None] | None = None  # long evaluations report through it
     drive_hz: float | None = None
     phi0_rad: float | None = None
+    given_reference: Setup | None = None
     cache: dict = field(default_factory=dict)
     cov_model: np.ndarray | None = None
     _white: dict = field(default_factory=dict)
@@ -237,11 +252,10 @@ class LoadPart:
         self.sd = np.concatenate(sd)
         self.repeats = np.concatenate([np.full(len(d.torque), _repeats(d)) for d in self.curves])
         self.floor = LOAD_FLOOR * max(float(np.max(np.abs(self.y))), 1e-12)
-
-    @property
-    def reference(self) -> Setup:
-        """The reference condition (:func:`reference_setup`)."""
-        return reference_setup(self.curves, self.drive_hz, self.phi0_rad)
+        #: The reference condition (``given_reference``, else :func:`reference_setup`).
+        self.reference = self.given_reference or reference_setup(
+            self.curves, self.drive_hz, self.phi0_rad
+        )
 
     def condition(self, theta: dict[str, float], d: LoadCurveData) -> dict[str, float]:
         """``θ`` (stated at the reference condition) at curve ``d``'s (:func:`convert`)."""

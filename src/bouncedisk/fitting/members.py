@@ -325,10 +325,13 @@ def synthesize_curve(
         "psi": true["psi"],
         "omega_s": true["omega_s"],
     }
+    # the curve's uniform grid, unless its step (the median of t's) rounds a sample in or out
+    grid = uniform_grid(dummy)
+    grid = grid if len(grid) == n else t
     if member is None:
-        om = simulate_curve(theta, dummy)
+        om = _simulated([theta], dummy, 0, 0.0, 0, grid)[0]
     else:
-        om = simulate_curve(theta, dummy, member, e_sigma, RESTITUTION_SEED_OFFSET + seed)
+        om = _simulated([theta], dummy, member, e_sigma, RESTITUTION_SEED_OFFSET + seed, grid)[0]
     rng = np.random.default_rng(seed)
     om_noisy = om + rng.normal(0.0, sigma, n)
     return pd.DataFrame({"time_s": t, "omega_rad_s": om_noisy, "sigma_rad_s": np.full(n, sigma)})
