@@ -128,7 +128,7 @@ def main() -> None:
             chi = {k: chi2_second(second, ref, x, seed=1) for k, x in pts.items()}
             n = len(df)
             line = (f"chi2 of its {n} readings: {chi['generating']:.3g} at the generating point, "
-                    f"{chi['fit']:.3g} at the fit's basin")  # fmt: skip
+                    f"{chi['fit']:.3g} at the basin the fit found")  # fmt: skip
             print(f"{name}: {line}", flush=True)
             rows.append((f"second load curve, {name}", line))
     if args.record:

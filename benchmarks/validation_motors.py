@@ -7,9 +7,9 @@ kHz and ``Phi0`` 0.1-2 mrad (log-uniform), a rotor of 0.5-20 g with its radius o
 mm, a run-up of 0.05-1 s sampled at 0.4 drive periods, and a load curve of 12 loads from none to
 1.25 times the stall torque (its last loads on the slow branch past stall) read over a window of
 30-3000 drive periods after as long a settling. The fit is the default joint fit
-(``bouncedisk fit RUN.csv --load LOAD.csv``: ``e_sigma`` fitted, the default search). One drive
-frequency per motor: the fit does not yet take a motor's curves at several drive frequencies as
-one motor's conditions. Nothing in the package names or reads these motors.
+(``bouncedisk fit RUN.csv --load LOAD.csv``: ``e_sigma`` fitted, the default search). One
+condition per motor: the sample holds no motor with a second load curve at another drive
+frequency or preload yet. Nothing in the package names or reads these motors.
 
     python benchmarks/validation_motors.py --motors 32 [--first K --count N] [--cores 2]
         [--json benchmarks/out/validation_motors.jsonl]

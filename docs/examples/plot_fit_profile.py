@@ -9,11 +9,11 @@ statistics with their distribution under the model's ensemble, then profiles eac
 space with an ensemble at every point it reads: more than the few seconds a gallery example may
 take, and a search small enough for them can end in a wrong basin. The stored file
 ``docs/examples/data/prototype_fit_small.nc`` is the fit of the shipped curve with a small
-search, made by::
+search and the restitution noise stated at the curve's 0.03 (the default fits it), made by::
 
     bouncedisk fit data/prototype/synthetic_motor.csv \\
         -o docs/examples/data/prototype_fit_small.nc \\
-        --scan 32 --zoom 4 --seed 20261121 --cores 2
+        --scan 32 --zoom 4 --seed 20261121 --cores 2 --e-sigma 0.03
 
 The pipeline fits the same curve with its own search sizes (``workflow/config/config.yaml``).
 To run a fit from Python::
@@ -22,7 +22,8 @@ To run a fit from Python::
     from bouncedisk.fitting import FitSettings, fit_curve, fit_dataset
 
     fit = fit_dataset(fit_curve(read_curve("data/prototype/synthetic_motor.csv"),
-                                FitSettings(scan=32, zoom=4, seed=20261121, cores=2)))
+                                FitSettings(scan=32, zoom=4, seed=20261121, cores=2,
+                                            e_sigma=0.03)))
 """
 
 from pathlib import Path
