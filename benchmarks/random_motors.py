@@ -207,20 +207,32 @@ def coverage(held: list[int], parameters: int) -> dict:
             "exact_intervals_meet_one_target": round(one, 3)}  # fmt: skip
 
 
-def slice_arguments(ap: argparse.ArgumentParser) -> None:
+def slice_arguments(ap: argparse.ArgumentParser, motors: int = 16) -> None:
     """The options that pick a slice of the sample and where its rows go (shared by the
     benchmarks that run motor by motor)."""
-    ap.add_argument("--motors", type=int, default=16, help="size of the Sobol' sample")
+    ap.add_argument("--motors", type=int, default=motors, help="size of the Sobol' sample")
     ap.add_argument("--first", type=int, default=0, help="first motor of the slice run")
     ap.add_argument("--count", type=int, default=None, help="motors run (default: all)")
     ap.add_argument("--cores", type=int, default=2, help="threads for the members (default: 2)")
     ap.add_argument("--json", help="append each row to this file (JSON lines)")
 
 
-def run_slice(args: argparse.Namespace, one: Callable[[dict, int], dict]) -> list[dict]:
-    """``one(true, k)`` for every motor ``k`` of the slice ``args`` picks, each row printed as a
-    JSON line (and appended to ``--json``) as soon as it is made."""
-    sample = motors(args.motors)
+def read_rows(ap: argparse.ArgumentParser, path: str) -> list[dict]:
+    """The rows of a ``--json`` file (JSON lines); one argparse line when it holds none."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            return [json.loads(line) for line in f if line.strip()]
+    except (OSError, ValueError) as ex:
+        ap.error(f"--rates {path}: not rows of this benchmark ({ex})")
+
+
+def run_slice(
+    args: argparse.Namespace, one: Callable[[dict, int], dict], sample: list[dict] | None = None
+) -> list[dict]:
+    """``one(true, k)`` for every motor ``k`` of the slice ``args`` picks (of ``sample``, by
+    default this benchmark's), each row printed as a JSON line (and appended to ``--json``) as
+    soon as it is made."""
+    sample = motors(args.motors) if sample is None else sample
     stop = len(sample) if args.count is None else min(len(sample), args.first + args.count)
     rows = []
     for k in range(args.first, stop):
@@ -247,11 +259,10 @@ def main() -> None:
                          "--json) instead of fitting")  # fmt: skip
     args = ap.parse_args()
     if args.rates:
+        rows = read_rows(ap, args.rates)
         try:
-            with open(args.rates, encoding="utf-8") as f:
-                rows = [json.loads(line) for line in f if line.strip()]
             print(json.dumps(rates(rows)))
-        except (OSError, ValueError, KeyError, TypeError) as ex:
+        except (KeyError, TypeError) as ex:
             ap.error(f"--rates {args.rates}: not rows of this benchmark ({ex})")
         return
     rows = run_slice(args, lambda true, k: recover(true, k, args))

@@ -33,7 +33,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from random_motors import coverage
+from random_motors import coverage, read_rows, run_slice, slice_arguments
 
 from bouncedisk.fitting import FitSettings, fit_curve, fit_dataset, synthesize_curve
 from bouncedisk.fitting import loadpart as lp
@@ -216,34 +216,20 @@ def write_rates_record(rows: list[dict]) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--motors", type=int, default=32, help="size of the sample")
-    ap.add_argument("--first", type=int, default=0, help="first motor of the slice run")
-    ap.add_argument("--count", type=int, default=None, help="motors run (default: all)")
-    ap.add_argument("--cores", type=int, default=2, help="threads for the members")
-    ap.add_argument("--json", help="append each row to this file (JSON lines)")
+    slice_arguments(ap, motors=32)
     ap.add_argument("--rates", metavar="ROWS.jsonl", help="the rates of these rows, no fit")
     ap.add_argument("--record", action="store_true", help="with --rates: write the record")
     args = ap.parse_args()
     if args.rates:
+        rows = read_rows(ap, args.rates)
         try:
-            with open(args.rates, encoding="utf-8") as f:
-                rows = [json.loads(ln) for ln in f if ln.strip()]
             print(json.dumps(rates(rows)))
-        except (OSError, ValueError, KeyError, TypeError) as ex:
+            if args.record:
+                write_rates_record(rows)
+        except (KeyError, TypeError) as ex:
             ap.error(f"--rates {args.rates}: not rows of this benchmark ({ex})")
-        if args.record:
-            write_rates_record(rows)
         return
-    sample = draw(args.motors)
-    stop = len(sample) if args.count is None else min(len(sample), args.first + args.count)
-    rows = []
-    for k in range(args.first, stop):
-        rows.append(recover(sample[k], k, args.cores))
-        line = json.dumps(rows[-1])
-        print(line, flush=True)
-        if args.json:
-            with open(args.json, "a", encoding="utf-8") as f:
-                f.write(line + "\n")
+    rows = run_slice(args, lambda true, k: recover(true, k, args.cores), draw(args.motors))
     print(json.dumps(rates(rows)))
 
 
