@@ -24,8 +24,8 @@ Run:  nice -n 5 python benchmarks/random_motors.py [--motors 16] [--first 0] [--
 ``--first``/``--count`` run a slice of the sample (the same motors whatever the slice), so a
 table can be made in parts. One JSON line per motor, then the rates of the motors run.
 
-The measured rows and rates are in ``benchmarks/out/fit.json``; docs/user_guide/fitting.md,
-"Random motors", states the rates and the command that produces them (``--motors 16 --cores 2``
+The measured rows and rates are in ``benchmarks/out/fit.json``; docs/fitting_method.md,
+"Random motors and validation motors", states the rates and the command that produces them (``--motors 16 --cores 2``
 at the default sizes). A fit takes minutes a motor.
 
 The last line printed holds the rates and the pooled coverage (:func:`coverage`); ``--rates

@@ -12,8 +12,8 @@ condition per motor: the sample holds no motor with a second load curve at anoth
 frequency or preload yet. Nothing in the package names or reads these motors.
 
     python benchmarks/validation_motors.py --motors 32 [--first K --count N] [--cores 2]
-        [--json benchmarks/out/validation_motors.jsonl]
-    python benchmarks/validation_motors.py --rates benchmarks/out/validation_motors.jsonl [--record]
+        [--json benchmarks/out/fit_validation_rows.jsonl]
+    python benchmarks/validation_motors.py --rates benchmarks/out/fit_validation_rows.jsonl [--record]
 
 Each row: the motor, its data design, ``χ²``, adequacy, which 95 % intervals hold the truth,
 their widths (``R_phi`` as a factor, ``e``, ``psi``, ``omega_s``), the generating point's
@@ -176,6 +176,8 @@ def rates(rows: list[dict]) -> dict:
 
     return {"motors": n, "adequate": sum(r["adequate"] for r in rows) / n if n else math.nan,
             "coverage": coverage([sum(r["holds"].values()) for r in rows], len(names)),
+            "holds_by_parameter": {m: sum(r["holds"][m] for r in rows) for m in names},
+            "generating_point_better": sum(r["chi2_truth"] < r["chi2"] for r in rows),
             "r_phi_factor_below_2": sum((r["r_phi_factor"] or math.inf) < 2 for r in rows) / n
             if n else math.nan,
             "width_quartiles": {m: quartiles(m) for m in ("log10_r_phi", "e", "psi", "omega_s")},
@@ -206,7 +208,8 @@ def write_rates_record(rows: list[dict]) -> None:
     summary = (f"{round(100 * r['adequate'])} % adequate; {c['held']} of {c['intervals']} intervals "
                f"hold the truth ({100 * c.get('rate', math.nan):.0f} %, over motors "
                f"{c.get('ci95_motors')}); R_phi to a factor below 2 on "
-               f"{round(100 * r['r_phi_factor_below_2'])} %; median widths e {q['e'] and q['e'][1]}, "
+               f"{round(100 * r['r_phi_factor_below_2'])} %; the generating point reads below the "
+               f"fit on {r['generating_point_better']}; median widths e {q['e'] and q['e'][1]}, "
                f"psi {q['psi'] and q['psi'][1]}, omega_s {q['omega_s'] and q['omega_s'][1]}; "
                f"longest fit {r['wall_s_max']:g} s")  # fmt: skip
     lines = [(f"the default joint fit on {r['motors']} validation motors", summary)]
