@@ -7,13 +7,17 @@ kHz and ``Phi0`` 0.1-2 mrad (log-uniform), a rotor of 0.5-20 g with its radius o
 mm, a run-up of 0.05-1 s sampled at 0.4 drive periods, and a load curve of 12 loads from none to
 1.25 times the stall torque (its last loads on the slow branch past stall) read over a window of
 30-3000 drive periods after as long a settling. The fit is the default joint fit
-(``bouncedisk fit RUN.csv --load LOAD.csv``: ``e_sigma`` fitted, the default search). One
-condition per motor: the sample holds no motor with a second load curve at another drive
-frequency or preload yet. Nothing in the package names or reads these motors.
+(``bouncedisk fit RUN.csv --load LOAD.csv``: ``e_sigma`` fitted, the default search). With
+``--second-drive 0.7`` each motor also has a second load curve, of the same loads' design, at
+0.7 times its drive frequency (the stator's amplitude, ``Phi0``, rotor and preload held: a
+second condition, docs/user_guide/fitting.md "Conditions"); the fitted parameters are those at
+the run-up's drive. Nothing in the package names or reads these motors.
 
     python benchmarks/validation_motors.py --motors 32 [--first K --count N] [--cores 2]
-        [--json benchmarks/out/fit_validation_rows.jsonl]
+        [--second-drive 0.7] [--json benchmarks/out/fit_validation_rows.jsonl]
     python benchmarks/validation_motors.py --rates benchmarks/out/fit_validation_rows.jsonl [--record]
+    python benchmarks/validation_motors.py --rates benchmarks/out/fit_validation_2drives_rows.jsonl \
+        --record --name fit_validation_2drives
 
 Each row: the motor, its data design, ``χ²``, adequacy, which 95 % intervals hold the truth,
 their widths (``R_phi`` as a factor, ``e``, ``psi``, ``omega_s``), the generating point's
@@ -112,9 +116,42 @@ def stall(m: dict) -> float:
     return float(loads[stop[0]] if len(stop) else loads[-1])
 
 
-def make_data(folder: Path, m: dict, k: int) -> tuple[Path, Path]:
-    """Motor ``k``'s run-up and load curve (module docstring), written to ``folder``."""
-    rng = np.random.default_rng([VALIDATION_SEED, k])
+def at_drive(m: dict, factor: float) -> dict:
+    """Motor ``m`` driven at ``factor`` times its drive frequency, its stator amplitude, rotor,
+    ``Phi0`` and preload held: ``omega_s`` and ``R_phi`` converted
+    (:func:`bouncedisk.fitting.loadpart.convert`)."""
+    if factor == 1.0:
+        return m
+    src = lp.Setup(m["f_hz"], m["phi0"], m["rotor"], PRELOAD)
+    dst = lp.Setup(m["f_hz"] * factor, m["phi0"], m["rotor"], PRELOAD)
+    at = lp.convert(_theta(m), src, dst)
+    return dict(m, f_hz=dst.f, omega_s=at["omega_s"], r_phi=10.0 ** at["log10_r_phi"])
+
+
+def write_load_curve(path: Path, m: dict, seed: int, key: list[int]) -> Path:
+    """Motor ``m``'s 12-load curve to 1.25 times its stall torque, ``REPEATS`` readings a load
+    (members' seed ``seed``) with the reading noise (stream ``key``) added (module docstring),
+    written to ``path``."""
+    rng = np.random.default_rng([VALIDATION_SEED, *key])
+    speed = m["r_phi"] * m["phi0"] / (m["omega_s"] / (2 * math.pi * m["f_hz"]))
+    params = {n: m[n] for n in ("e", "r_phi", "psi", "omega_s")}
+    spec = {"parameters": params, "e_sigma": m["e_sigma"], "drive_frequency_hz": m["f_hz"],
+            "Phi0_rad": m["phi0"], "rotor": m["rotor"], "preload_N": PRELOAD,
+            "load_curve": {"loads_Nm": list(np.linspace(0.0, 1.25 * stall(m), LOADS)),
+                           "repeats": REPEATS if m["e_sigma"] > 0 else 1,
+                           "window_s": m["window_s"], "seed": seed}}  # fmt: skip
+    ldf, side = synthetic_load_curve(spec)
+    side["repeats"] = REPEATS
+    noise = READING_NOISE * speed
+    ldf["speed_sd_rad_s"] = np.sqrt(ldf["speed_sd_rad_s"].fillna(0.0) ** 2 + noise**2)
+    ldf["speed_rad_s"] += rng.normal(0.0, noise / math.sqrt(REPEATS), len(ldf))
+    write_curve(ldf, path, side)
+    return path
+
+
+def make_data(folder: Path, m: dict, k: int, drives: tuple[float, ...]) -> tuple[Path, list]:
+    """Motor ``k``'s run-up, and a load curve at each of ``drives`` times its drive frequency
+    (module docstring), written to ``folder``."""
     t_c = m["omega_s"] / (2 * math.pi * m["f_hz"])
     speed = m["r_phi"] * m["phi0"] / t_c  # rad/s per unit of nondimensional speed
     dt = PER_PERIOD / m["f_hz"]
@@ -125,30 +162,21 @@ def make_data(folder: Path, m: dict, k: int) -> tuple[Path, Path]:
     write_curve(df, run, {"source": "benchmark", "synthetic": True,
                           "units": {"time": "s", "omega": "rad/s"},
                           "motor": {"drive_frequency_hz": m["f_hz"], "Phi0_rad": m["phi0"]}})  # fmt: skip
-    spec = {"parameters": params, "e_sigma": m["e_sigma"], "drive_frequency_hz": m["f_hz"],
-            "Phi0_rad": m["phi0"], "rotor": m["rotor"], "preload_N": PRELOAD,
-            "load_curve": {"loads_Nm": list(np.linspace(0.0, 1.25 * stall(m), LOADS)),
-                           "repeats": REPEATS if m["e_sigma"] > 0 else 1,
-                           "window_s": m["window_s"], "seed": 6000 + k}}  # fmt: skip
-    ldf, side = synthetic_load_curve(spec)
-    side["repeats"] = REPEATS
-    noise = READING_NOISE * speed
-    ldf["speed_sd_rad_s"] = np.sqrt(ldf["speed_sd_rad_s"].fillna(0.0) ** 2 + noise**2)
-    ldf["speed_rad_s"] += rng.normal(0.0, noise / math.sqrt(REPEATS), len(ldf))
-    load = folder / "load.csv"
-    write_curve(ldf, load, side)
-    return run, load
+    loads = [write_load_curve(folder / f"load{j}.csv", at_drive(m, x), 6000 + k + 1000 * j,
+                              [k, j] if j else [k]) for j, x in enumerate(drives)]  # fmt: skip
+    return run, loads
 
 
-def recover(m: dict, k: int, cores: int) -> dict:
-    """Fit motor ``k`` jointly (the default fit) and read its intervals against the truth."""
+def recover(m: dict, k: int, cores: int, drives: tuple[float, ...] = (1.0,)) -> dict:
+    """Fit motor ``k`` jointly (the default fit) on its run-up and its load curves at ``drives``
+    times its drive frequency, and read its intervals against the truth."""
     with tempfile.TemporaryDirectory() as tmp:
-        run, load = make_data(Path(tmp), m, k)
+        run, loads = make_data(Path(tmp), m, k, drives)
         start = time.perf_counter()
         fit = fit_curve(read_curve(run), FitSettings(seed=FIT_SEED, cores=cores),
-                        load=[read_load_curve(load)])  # fmt: skip
+                        load=[read_load_curve(x) for x in loads])  # fmt: skip
         ds = fit_dataset(fit)
-    row = {"motor": k, "true": m, "chi2": round(float(ds.attrs["chi2"]), 3),
+    row = {"motor": k, "true": m, "drives": list(drives), "chi2": round(float(ds.attrs["chi2"]), 3),
            "n": int(ds.attrs["n_statistics"]), "adequate": ds.attrs["identified"] == "yes",
            "wall_s": round(time.perf_counter() - start, 1), "holds": {}, "widths": {},
            "chi2_truth": round(float(ds.attrs.get("chi2_generating_both", math.nan)), 3)}  # fmt: skip
@@ -199,8 +227,8 @@ def motor_line(r: dict) -> tuple[str, str]:
     return design, result
 
 
-def write_rates_record(rows: list[dict]) -> None:
-    """The rates and the motors' lines as ``benchmarks/out/fit_validation.json``."""
+def write_rates_record(rows: list[dict], name: str = "fit_validation") -> None:
+    """The rates and the motors' lines as the record ``benchmarks/out/NAME.json``."""
     from record import write_record
 
     r = rates(rows)
@@ -212,8 +240,14 @@ def write_rates_record(rows: list[dict]) -> None:
                f"fit on {r['generating_point_better']}; median widths e {q['e'] and q['e'][1]}, "
                f"psi {q['psi'] and q['psi'][1]}, omega_s {q['omega_s'] and q['omega_s'][1]}; "
                f"longest fit {r['wall_s_max']:g} s")  # fmt: skip
-    lines = [(f"the default joint fit on {r['motors']} validation motors", summary)]
-    write_record("fit_validation", "The fit on validation motors",
+    drives = sorted({tuple(x.get("drives", [1.0])) for x in rows})
+    design = " and ".join(" + ".join(f"{d:g} x" for d in ds) for ds in drives)
+    lines = [(f"the default joint fit on {r['motors']} validation motors, load curves at "
+              f"{design} the drive frequency", summary)]  # fmt: skip
+    title = "The fit on validation motors" + (
+        ", two drive frequencies" if len(drives[-1]) > 1 else ""
+    )
+    write_record(name, title,
                  lines + [motor_line(x) for x in rows])  # fmt: skip
 
 
@@ -222,17 +256,29 @@ def main() -> None:
     slice_arguments(ap, motors=32)
     ap.add_argument("--rates", metavar="ROWS.jsonl", help="the rates of these rows, no fit")
     ap.add_argument("--record", action="store_true", help="with --rates: write the record")
+    ap.add_argument(
+        "--second-drive",
+        type=float,
+        metavar="FACTOR",
+        help="a second load curve at FACTOR times the drive frequency (e.g. 0.7)",
+    )
+    ap.add_argument(
+        "--name",
+        default="fit_validation",
+        help="with --record: the record's name in benchmarks/out/ (fit_validation)",
+    )
     args = ap.parse_args()
     if args.rates:
         rows = read_rows(ap, args.rates)
         try:
             print(json.dumps(rates(rows)))
             if args.record:
-                write_rates_record(rows)
+                write_rates_record(rows, args.name)
         except (KeyError, TypeError) as ex:
             ap.error(f"--rates {args.rates}: not rows of this benchmark ({ex})")
         return
-    rows = run_slice(args, lambda true, k: recover(true, k, args.cores), draw(args.motors))
+    drives = (1.0,) if args.second_drive is None else (1.0, args.second_drive)
+    rows = run_slice(args, lambda true, k: recover(true, k, args.cores, drives), draw(args.motors))
     print(json.dumps(rates(rows)))
 
 
