@@ -228,7 +228,7 @@ def motor_line(r: dict) -> tuple[str, str]:
 
 
 def write_rates_record(rows: list[dict], name: str = "fit_validation") -> None:
-    """The rates and the motors' lines as the record ``benchmarks/out/NAME.json``."""
+    """The rates and the motors' lines as the performance page's record named ``name``."""
     from record import write_record
 
     r = rates(rows)
