@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import xarray as xr
 from load_scenes import small_load_scene
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 from bouncedisk.figures.load import fig_torque_speed
 from bouncedisk.figures.sensitivity import fig_design_maps, fig_sensitivity_indices
@@ -95,3 +96,17 @@ def test_the_design_maps_legend_names_only_what_is_drawn_and_their_units():
     assert "edge of the swept range" in text  # the best point (R_phi = 0.1) is on its edge
     assert r"R_\phi" in text and "divided by" in text
     assert "black ring" in _texts(fig_design_maps(_maps(np.array([1.0, np.nan, 0.8, 0.7]))))
+
+
+def test_the_design_maps_best_point_note_stays_inside_its_panel_and_the_panels_keep_their_width():
+    """The note on the best point ran past its panel: the layout shrank every panel of its
+    column to a sliver to make room for it, and the saved figure's tight box widened."""
+    fig = fig_design_maps(_maps(np.array([1.0, 0.9, 0.8, 0.7])))
+    FigureCanvasAgg(fig).draw()
+    panels = [ax for ax in fig.axes if ax.get_label() != "<colorbar>"]
+    for ax in panels:
+        box = ax.get_window_extent()
+        for t in ax.texts:
+            inner = t.get_window_extent()
+            assert box.x0 <= inner.x0 and inner.x1 <= box.x1 + 1.0, t.get_text()
+        assert ax.get_position().width > 0.5, ax.get_title()  # one map: most of the figure

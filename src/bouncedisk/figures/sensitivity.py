@@ -213,7 +213,7 @@ def fig_design_maps(ds: xr.Dataset) -> Figure:
             i = best["index"]
             at_edge = xr_[i] in (xr_.min(), xr_.max()) or xp[i] in (xp.min(), xp.max())
             edge |= bool(at_edge)
-            where = " (at the edge of the swept range)" if at_edge else ""
+            where = "\n(at the edge of the swept range)" if at_edge else ""
             axes[0, j].text(
                 0.02,
                 0.02,
@@ -221,6 +221,8 @@ def fig_design_maps(ds: xr.Dataset) -> Figure:
                 transform=axes[0, j].transAxes,
                 fontsize=7,
                 color="w",
+                bbox={"facecolor": "k", "alpha": 0.4, "lw": 0, "pad": 1},
+                in_layout=False,  # inside the axes: the layout must not shrink them for it
             )
     fig.suptitle(
         f"red star: largest {_short(best_by)}"
