@@ -11,10 +11,13 @@ mm, a run-up of 0.05-1 s sampled at 0.4 drive periods, and a load curve of 12 lo
 ``--second-drive 0.7`` each motor also has a second load curve, of the same loads' design, at
 0.7 times its drive frequency (the stator's amplitude, ``Phi0``, rotor and preload held: a
 second condition, docs/user_guide/fitting.md "Conditions"); the fitted parameters are those at
-the run-up's drive. Nothing in the package names or reads these motors.
+the run-up's drive. Nothing in the package names or reads these motors. ``--seed S`` draws
+other motors of the same design (a tuning draw, kept apart from the validation motors; their
+noise streams are keyed by the motor's index as the validation motors' are) and ``--scan N``
+sets the fit's scan points, to compare search settings on tuning motors.
 
     python benchmarks/validation_motors.py --motors 32 [--first K --count N] [--cores 2]
-        [--second-drive 0.7] [--json benchmarks/out/fit_validation_rows.jsonl]
+        [--second-drive 0.7] [--seed S] [--scan N] [--json benchmarks/out/fit_validation_rows.jsonl]
     python benchmarks/validation_motors.py --rates benchmarks/out/fit_validation_rows.jsonl [--record]
     python benchmarks/validation_motors.py --rates benchmarks/out/fit_validation_2drives_rows.jsonl \
         --record --name fit_validation_2drives
@@ -24,12 +27,14 @@ their widths (``R_phi`` as a factor, ``e``, ``psi``, ``omega_s``), the generatin
 ``χ²`` and the wall time; ``--rates`` prints the success rate (adequate), the pooled coverage with its
 interval over motors (resampling whole motors) and the widths' quartiles; with ``--record`` it
 also writes them, and one line per motor, as the performance page's record
-``benchmarks/out/fit_validation.json``.
+``benchmarks/out/fit_validation.json`` (another name with ``--name``, e.g.
+``benchmarks/out/fit_validation_2drives.json``).
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import tempfile
@@ -167,16 +172,22 @@ def make_data(folder: Path, m: dict, k: int, drives: tuple[float, ...]) -> tuple
     return run, loads
 
 
-def recover(m: dict, k: int, cores: int, drives: tuple[float, ...] = (1.0,)) -> dict:
-    """Fit motor ``k`` jointly (the default fit) on its run-up and its load curves at ``drives``
-    times its drive frequency, and read its intervals against the truth."""
+def recover(
+    m: dict, k: int, cores: int, drives: tuple[float, ...] = (1.0,), scan: int | None = None
+) -> dict:
+    """Fit motor ``k`` jointly (the default fit, or ``scan`` scan points) on its run-up and its
+    load curves at ``drives`` times its drive frequency, and read its intervals against the
+    truth."""
     with tempfile.TemporaryDirectory() as tmp:
         run, loads = make_data(Path(tmp), m, k, drives)
         start = time.perf_counter()
-        fit = fit_curve(read_curve(run), FitSettings(seed=FIT_SEED, cores=cores),
+        settings = FitSettings(seed=FIT_SEED, cores=cores)
+        if scan is not None:
+            settings = dataclasses.replace(settings, scan=scan)
+        fit = fit_curve(read_curve(run), settings,
                         load=[read_load_curve(x) for x in loads])  # fmt: skip
         ds = fit_dataset(fit)
-    row = {"motor": k, "true": m, "drives": list(drives), "chi2": round(float(ds.attrs["chi2"]), 3),
+    row = {"motor": k, "true": m, "drives": list(drives), "scan": settings.scan, "chi2": round(float(ds.attrs["chi2"]), 3),
            "n": int(ds.attrs["n_statistics"]), "adequate": ds.attrs["identified"] == "yes",
            "wall_s": round(time.perf_counter() - start, 1), "holds": {}, "widths": {},
            "chi2_truth": round(float(ds.attrs.get("chi2_generating_both", math.nan)), 3)}  # fmt: skip
@@ -263,6 +274,13 @@ def main() -> None:
         help="a second load curve at FACTOR times the drive frequency (e.g. 0.7)",
     )
     ap.add_argument(
+        "--seed",
+        type=int,
+        default=VALIDATION_SEED,
+        help="draw the motors with another seed: a tuning draw of the same design",
+    )
+    ap.add_argument("--scan", type=int, help="scan points of the fit (default: the fit's own)")
+    ap.add_argument(
         "--name",
         default="fit_validation",
         help="with --record: the record's name in benchmarks/out/ (fit_validation)",
@@ -278,7 +296,8 @@ def main() -> None:
             ap.error(f"--rates {args.rates}: not rows of this benchmark ({ex})")
         return
     drives = (1.0,) if args.second_drive is None else (1.0, args.second_drive)
-    rows = run_slice(args, lambda true, k: recover(true, k, args.cores, drives), draw(args.motors))
+    sample = draw(args.motors, args.seed)
+    rows = run_slice(args, lambda true, k: recover(true, k, args.cores, drives, args.scan), sample)
     print(json.dumps(rates(rows)))
 
 
