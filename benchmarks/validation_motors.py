@@ -34,7 +34,6 @@ also writes them, and one line per motor, as the performance page's record
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import math
 import tempfile
@@ -173,21 +172,19 @@ def make_data(folder: Path, m: dict, k: int, drives: tuple[float, ...]) -> tuple
 
 
 def recover(
-    m: dict, k: int, cores: int, drives: tuple[float, ...] = (1.0,), scan: int | None = None
+    m: dict, k: int, cores: int, drives: tuple[float, ...] = (1.0,), scan: int = FitSettings.scan
 ) -> dict:
-    """Fit motor ``k`` jointly (the default fit, or ``scan`` scan points) on its run-up and its
+    """Fit motor ``k`` jointly (the default fit, at ``scan`` scan points) on its run-up and its
     load curves at ``drives`` times its drive frequency, and read its intervals against the
     truth."""
     with tempfile.TemporaryDirectory() as tmp:
         run, loads = make_data(Path(tmp), m, k, drives)
         start = time.perf_counter()
-        settings = FitSettings(seed=FIT_SEED, cores=cores)
-        if scan is not None:
-            settings = dataclasses.replace(settings, scan=scan)
+        settings = FitSettings(seed=FIT_SEED, cores=cores, scan=scan)
         fit = fit_curve(read_curve(run), settings,
                         load=[read_load_curve(x) for x in loads])  # fmt: skip
         ds = fit_dataset(fit)
-    row = {"motor": k, "true": m, "drives": list(drives), "scan": settings.scan, "chi2": round(float(ds.attrs["chi2"]), 3),
+    row = {"motor": k, "true": m, "drives": list(drives), "scan": scan, "chi2": round(float(ds.attrs["chi2"]), 3),
            "n": int(ds.attrs["n_statistics"]), "adequate": ds.attrs["identified"] == "yes",
            "wall_s": round(time.perf_counter() - start, 1), "holds": {}, "widths": {},
            "chi2_truth": round(float(ds.attrs.get("chi2_generating_both", math.nan)), 3)}  # fmt: skip
@@ -279,7 +276,12 @@ def main() -> None:
         default=VALIDATION_SEED,
         help="draw the motors with another seed: a tuning draw of the same design",
     )
-    ap.add_argument("--scan", type=int, help="scan points of the fit (default: the fit's own)")
+    ap.add_argument(
+        "--scan",
+        type=int,
+        default=FitSettings.scan,
+        help="scan points of the fit (the fit's default)",
+    )
     ap.add_argument(
         "--name",
         default="fit_validation",
