@@ -263,6 +263,14 @@ def test_fit_file_has_the_interface(tiny_fit):
         ds.attrs["steady_speed_rad_s"], rel=0.05
     )
     assert {"steady_speed_rad_s", "time_constant_s"} <= set(ds.attrs)
+    # the waterfall: every start's end chi2, best first, none below the fit's best (each end was
+    # evaluated, and the fit returns the best point it evaluated); the count that reach the best
+    falls = ds["start_chi2"].values
+    assert ds.attrs["starts"] == len(falls) >= 1 and np.all(np.diff(falls) >= 0)
+    assert falls[0] >= ds.attrs["chi2"] * (1 - 1e-12)
+    reach = falls <= ds.attrs["chi2"] + ds.attrs["starts_delta_chi2"]
+    assert ds.attrs["starts_at_best"] == int(reach.sum())
+    assert ds.attrs["starts_delta_chi2"] >= 3.84
 
 
 @pytest.mark.slow  # a second fit

@@ -478,8 +478,10 @@ def test_an_inadequate_fit_reports_no_interval(tiny_fit, tmp_path):
     for name in ("fit_profiles", "fit_identifiability", "fit_load"):
         fig = FIGURES[name].draw(ds)
         fig.savefig(tmp_path / f"{name}.png", dpi=40)
-    titles = [ax.get_title() for ax in FIGURES["fit_profiles"].draw(ds).axes]
+    *profiles, falls = FIGURES["fit_profiles"].draw(ds).axes
+    titles = [ax.get_title() for ax in profiles]
     assert all("no interval: inadequate fit" in t for t in titles), titles
+    assert falls.get_title().startswith("waterfall: ")
     assert "NO INTERVALS" in FIGURES["fit_identifiability"].draw(ds).axes[0].get_title()
 
 
@@ -513,7 +515,7 @@ def test_the_figures_say_synthetic_and_zoom_on_the_intervals(tiny_fit):
         from bouncedisk.figures.motor import PARAM_LABELS
 
         names = {label: name for name, label in PARAM_LABELS.items()}
-        for ax in FIGURES["fit_profiles"].draw(ds).axes:
+        for ax in FIGURES["fit_profiles"].draw(ds).axes[:-1]:  # the last: the waterfall
             label = ax.get_xlabel().rsplit(" [", 1)[0]
             name = names.get(label, label)
             a = ds[name].attrs
@@ -549,6 +551,33 @@ def test_the_profile_figure_draws_the_threshold_its_interval_used(threshold, mul
     assert line.get_ydata()[0] == pytest.approx(threshold)
     assert f"Δχ² = {threshold:.3g}" in line.get_label()
     assert ("widened: several basins" in ax.get_title()) == bool(multimodal)
+
+
+def test_the_waterfall_panel_draws_each_start_above_the_best_and_counts_those_that_reach_it():
+    """The last panel of the profile figure: each start's end chi2 above the best, best first,
+    the dashed line at the file's threshold, the title counting the starts under it."""
+    from bouncedisk.figures.motor import fig_fit_profiles
+
+    values = np.linspace(0.4, 0.6, 9)
+    attrs = {"ci_low": 0.45, "ci_high": 0.55, "search_low": 0.0, "search_high": 0.9, "units": "1",
+             "identified": 1, "multimodal": 0, "delta_chi2": 5.0}  # fmt: skip
+    ds = xr.Dataset(
+        {
+            "e": ((), 0.5, attrs),
+            "profile_chi2_e": ("profile_e", 400.0 * (values - 0.5) ** 2),
+            "start_chi2": ("start", [12.0, 14.0, 30.0, 112.0]),
+        },
+        coords={"profile_e": values},
+        attrs={"chi2": 10.0, "starts": 4, "starts_at_best": 2, "starts_delta_chi2": 5.0},
+    )
+    profile, falls = fig_fit_profiles(ds).axes
+    (points,) = [ln for ln in falls.get_lines() if ln.get_marker() == "s"]
+    assert list(points.get_xdata()) == [1, 2, 3, 4]
+    assert list(points.get_ydata()) == [2.0, 4.0, 20.0, 102.0]
+    (line,) = [ln for ln in falls.get_lines() if ln.get_linestyle() == "--"]
+    assert line.get_ydata()[0] == 5.0
+    assert falls.get_title() == "waterfall: 2 of 4 starts reach the best"
+    assert falls.get_ylim()[1] >= 102.0
 
 
 def test_a_window_the_run_did_not_reach_is_an_error_never_a_number(tmp_path, capsys, monkeypatch):

@@ -166,17 +166,23 @@ def fig_fit_profiles(fitted: xr.Dataset) -> Figure:
     end, within the search range) so that the profile's curvature shows; an inadequate fit (the
     file's ``identified = "no"``) has no interval: the panel shows the profiled range and says so.
     The axis is linear up to 10 and logarithmic above, so that it holds every profile point shown
-    and still shows the threshold.
+    and still shows the threshold. A last panel, the waterfall, shows where each start of the
+    local search ended (the file's ``start_chi2``) above the best ``χ²``: starts under the
+    threshold reached the best basin.
     """
     names = [
         n
         for n in ("e", "r_phi", "psi", "omega_s", "speed_scale", "e_sigma")
         if f"profile_chi2_{n}" in fitted
     ]
-    fig = Figure(figsize=(3.0 * max(1, len(names)), 3.6), layout="constrained")
-    axes = np.atleast_1d(fig.subplots(1, max(1, len(names)), squeeze=False)[0])
+    falls = int("start_chi2" in fitted and fitted.sizes.get("start", 0) > 0)
+    panels = max(1, len(names)) + falls
+    fig = Figure(figsize=(3.0 * panels, 3.6), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(1, panels, squeeze=False)[0])
     for ax, n in zip(axes, names, strict=False):
         _profile_panel(ax, fitted, n)
+    if falls:
+        _waterfall_panel(axes[-1], fitted)
     axes[0].set_ylabel("Δχ² (profile)")
     if names:
         fig.legend(
@@ -208,13 +214,7 @@ def _profile_panel(ax, fitted: xr.Dataset, n: str) -> None:
         ax.xaxis.set_major_formatter(FormatStrFormatter("%.3g"))
         ax.xaxis.set_minor_locator(NullLocator())
     shown = (x >= ax.get_xlim()[0]) & (x <= ax.get_xlim()[1]) & np.isfinite(y)
-    top = float(np.max(y[shown])) if shown.any() else 10.0
-    ax.set_yscale("symlog", linthresh=10.0)
-    ax.set_ylim(-0.5, max(10.0, top * 1.3))
-    ticks = [t for t in (0, 2, 4, 6, 8, 10, 20, 50, 100, 200, 500, 1000) if t <= top * 1.3]
-    ax.yaxis.set_major_locator(FixedLocator(ticks))
-    ax.yaxis.set_major_formatter(FormatStrFormatter("%g"))
-    ax.yaxis.set_minor_locator(NullLocator())
+    _delta_axis(ax, float(np.max(y[shown])) if shown.any() else 10.0)
     label = PARAM_LABELS.get(n, n)
     ax.set_xlabel(f"{label} [{a['units']}]")
     tag = "" if a.get("identified", 1) else " (not identified)"
@@ -222,6 +222,37 @@ def _profile_panel(ax, fitted: xr.Dataset, n: str) -> None:
         tag += "\nwidened: several basins"
     ci = f"95% [{a['ci_low']:.3g}, {a['ci_high']:.3g}]" if has_ci else "no interval: inadequate fit"
     ax.set_title(f"{label}: {ci}{tag}", fontsize=8)
+
+
+def _delta_axis(ax, top: float) -> None:
+    """A ``Δχ²`` axis up to ``top``: linear up to 10 (where the thresholds lie), logarithmic
+    above, labelled at round values."""
+    ax.set_yscale("symlog", linthresh=10.0)
+    ax.set_ylim(-0.5, max(10.0, top * 1.3))
+    ticks = [t for t in (0, 2, 4, 6, 8, 10, 20, 50, 100, 200, 500, 1000) if t <= top * 1.3]
+    ax.yaxis.set_major_locator(FixedLocator(ticks))
+    ax.yaxis.set_major_formatter(FormatStrFormatter("%g"))
+    ax.yaxis.set_minor_locator(NullLocator())
+
+
+def _waterfall_panel(ax, fitted: xr.Dataset) -> None:
+    """The local search's starts in :func:`fig_fit_profiles`: each start's end ``χ²`` above the
+    best (the file's ``start_chi2``), best first, against the intervals' threshold (the file's
+    ``starts_delta_chi2``); the title counts the starts that reach the best value
+    (``starts_at_best``)."""
+    above = fitted["start_chi2"].values - float(fitted.attrs["chi2"])
+    rank = np.arange(1, len(above) + 1)
+    ax.plot(rank, np.maximum(above, 0.0), "s-", color=COLORS["fit"], ms=4, lw=1)
+    thr = float(fitted.attrs["starts_delta_chi2"])
+    ax.axhline(thr, ls="--", color="k", lw=0.8)
+    _delta_axis(ax, float(np.max(above)))
+    ax.set_xticks(rank)
+    ax.set_xlabel("local-search start, best first")
+    ax.set_ylabel("χ² at its end − best χ²")
+    a = fitted.attrs
+    ax.set_title(
+        f"waterfall: {a['starts_at_best']} of {a['starts']} starts reach the best", fontsize=8
+    )
 
 
 def _zoom(lo: float, hi: float, low: float, high: float, log: bool) -> tuple[float, float]:

@@ -32,7 +32,7 @@ from .members import (
 )
 from .objective import Objective
 from .runs import check_runs, mean_curve
-from .search import SearchSettings, confirm_points, search
+from .search import SearchSettings, confirm_points, search, waterfall
 from .summary_stats import (
     STATS,
     Layout,
@@ -267,6 +267,8 @@ class FitResult:
     runs: tuple[MotorCurve, ...]  # every run-up, as fitted (one run: the curve)
     load: LoadFit | None = None  # the load curves' part (joint fit), None for run-ups only
     chi2_level: float = math.nan  # chi2 at the search's best on fresh members (chi2_level)
+    #: each local-search start's end chi2 under the final covariance, best first (the waterfall)
+    start_chi2: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
 
     @property
     def n_statistics(self) -> int:
@@ -407,7 +409,8 @@ def fit_curve(
     obj, s, part = posed.obj, posed.settings, posed.obj.load
     runs, fitted, note, layout, spec = posed.runs, obj.curve, posed.note, obj.layout, obj.spec
     records, target, boot = posed.records, obj.target, posed.boot
-    best = search(obj, s.search_settings(), progress)
+    found = search(obj, s.search_settings(), progress)
+    best = found.best
     thr = birge(best.chi2, obj.n_stats, len(obj.names))
     if progress is not None and thr > THRESHOLD:
         progress(
@@ -486,4 +489,5 @@ def fit_curve(
         runs=tuple(runs),
         load=load_fit,
         chi2_level=level,
+        start_chi2=waterfall(obj, found.ends, s.members),
     )

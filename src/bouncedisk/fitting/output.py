@@ -20,7 +20,7 @@ from ..io.provenance import base_attrs, new_run_id, sha256_file
 from .core import FitResult
 from .members import BOUNDS
 from .summary_stats import STAT_LONG_NAMES, STAT_UNITS, STATS, trend_stride
-from .uncertainty import THRESHOLD, adequate, identified
+from .uncertainty import THRESHOLD, adequate, birge, identified
 
 #: Public name: (search coordinate, transform, units, long name).
 PUBLIC = {
@@ -260,6 +260,32 @@ def _basins(fit: FitResult) -> xr.Dataset:
     )
 
 
+def starts_at_best(fit: FitResult) -> int:
+    """How many local-search starts end within the intervals' ``Δχ²`` threshold of the best
+    ``χ²`` (:func:`.uncertainty.birge`): the waterfall's plateau at the best value."""
+    thr = birge(fit.chi2, fit.n_statistics, len(fit.names))
+    return int(np.sum(np.asarray(fit.start_chi2) <= fit.chi2 + thr))
+
+
+def _waterfall(fit: FitResult) -> xr.Dataset:
+    """Every local-search start's end ``χ²`` (the waterfall) and how many reach the best."""
+    n = len(fit.start_chi2)
+    return xr.Dataset(
+        {
+            "start_chi2": (
+                "start",
+                np.asarray(fit.start_chi2, float),
+                {
+                    "units": "1",
+                    "long_name": "chi2 each local-search start ended at, under the final "
+                    "covariance, best first (the waterfall)",
+                },
+            )
+        },
+        coords={"start": ("start", np.arange(n))},
+    )
+
+
 def fit_dataset(fit: FitResult) -> xr.Dataset:
     """The fit file (module docstring)."""
     curve = fit.curve
@@ -293,7 +319,7 @@ def fit_dataset(fit: FitResult) -> xr.Dataset:
             "the search ranges (< 1: identified by the curve)",
         },
     )
-    ds = ds.merge(_basins(fit))
+    ds = ds.merge(_basins(fit)).merge(_waterfall(fit))
     ds["combination_vector"] = (
         ("combination", "parameter"),
         fit.comb_vectors,
@@ -353,6 +379,9 @@ def _global_attrs(fit: FitResult, paths: list[str], not_identified: list[str]) -
         "(95% intervals: block bootstrap); model_*: trend of the fitted model's ensemble mean",
         "not_identified": ",".join(not_identified) or "none",
         "basins": len(fit.basins),
+        "starts": len(fit.start_chi2),
+        "starts_at_best": starts_at_best(fit),
+        "starts_delta_chi2": birge(fit.chi2, n_stats, len(fit.names)),
         "basin_rule": "basins: evaluated points within the interval threshold of the best chi2, "
         "grouped within 5% of every search range; the estimate is the basin with the lowest chi2 "
         "(10 significant digits, ties to the smaller point); more than one basin: the data do not "
@@ -417,6 +446,11 @@ def summary_text(ds: xr.Dataset) -> str:
         f"  trend of the fitted model: {a['model_steady_speed_rad_s']:.5g} rad/s, "
         f"{a['model_time_constant_s']:.4g} s; not identified: {a['not_identified']}"
     )
+    if a.get("starts", 0):
+        lines.append(
+            f"  local search: {a['starts_at_best']} of {a['starts']} starts end within the "
+            "intervals' threshold of the best chi2 (start_chi2: the waterfall)"
+        )
     if not a.get("fit_adequate", 1):
         lines.append(
             f"  WARNING: chi2 {a['chi2']:.4g} on {a['n_statistics']} statistics "

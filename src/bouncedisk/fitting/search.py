@@ -720,11 +720,12 @@ def local_stage(
     members: int,
     nfev: int,
     progress: Callable[[str], None] | None = None,
-) -> Evaluation:
+) -> tuple[Evaluation, list[np.ndarray]]:
     """Least squares on the whitened residuals from every one of ``starts`` (box-scaled).
 
     Multi-start: the landscape in ``(e, omega_s)`` is rugged (periodic windows), so each start is
-    refined on its own and the best logged point with ``members`` members is kept.
+    refined on its own. Returns the best logged point with ``members`` members and each start's
+    end point (in the order of ``starts``: the waterfall's points, :attr:`SearchResult.ends`).
     """
 
     def logged(u):
@@ -732,10 +733,12 @@ def local_stage(
         obj.chi2(x, members)
         return obj.residuals(x, members)
 
+    ends = []
     for k, x0 in enumerate(starts):
-        least_squares(
+        res = least_squares(
             logged, obj.to_unit(x0), bounds=(0.0, 1.0), diff_step=2e-3, max_nfev=nfev, x_scale=1.0
         )
+        ends.append(snap(obj.from_unit(res.x, obj.lo)))
         _say(
             progress,
             f"local search ({members} members): start {k + 1}/{len(starts)}, best "
@@ -743,13 +746,32 @@ def local_stage(
         )
     best = obj.best(members)
     _say(progress, f"local search: chi2 {best.chi2:.4g} ({len(obj.read)} ensembles evaluated)")
-    return best
+    return best, ends
+
+
+@dataclass(frozen=True)
+class SearchResult:
+    """The search's best point and the end point of each of its local searches' starts."""
+
+    #: The best logged point at the fit's members under the final covariance.
+    best: Evaluation
+    #: Where each start of the multi-start stage ended (search coordinates; each was evaluated):
+    #: their ``χ²`` under the final covariance, sorted, is the fit's waterfall
+    #: (:func:`waterfall`).
+    ends: list[np.ndarray]
+
+
+def waterfall(obj: Objective, ends: list[np.ndarray], members: int) -> np.ndarray:
+    """The starts' end ``χ²`` under the objective's covariance now, best first: how many
+    starts reach the best value is the search's own evidence that it found the best basin."""
+    return np.sort([obj.chi2_now(x, members) for x in ends])
 
 
 def search(
     obj: Objective, s: SearchSettings, progress: Callable[[str], None] | None = None
-) -> Evaluation:
-    """The whole search (module docstring); returns the best logged point at ``s.members``."""
+) -> SearchResult:
+    """The whole search (module docstring): the best logged point at ``s.members`` and the ends
+    of the multi-start stage's starts."""
     ranked = global_stage(obj.seeing("runup"), s, progress)  # the scan fits the run-ups
     obj.set_cov(measure_cov(obj, ranked[0].x, s.pilot_members))
     # one member per scan point is noisy where the model is chaotic: re-rank the best distinct
@@ -775,15 +797,15 @@ def search(
     # the starts themselves, then each refined (never worse than the best start)
     # joint: more starts (distinct in (e, omega_s)), each refined half as long, then polished
     nfev = s.local_nfev if obj.load is None else max(4, s.local_nfev // 2)
-    best = local_stage(obj, starts, s.members, nfev, progress)
+    best, ends = local_stage(obj, starts, s.members, nfev, progress)
     best = noise_sweep(obj, best, s.members, progress)
     if obj.load is not None and ("e_sigma" in obj.names or obj.spec.e_sigma == 0.0):
         # a periodic motor's valley at e_sigma = 0 is narrower than the scan sees (limit_walk)
         walked = deterministic_walk(obj, best, s.members, progress)
         best = walked if walked.chi2 < best.chi2 - WALK_GAIN else best
     obj.set_cov(measure_cov(obj, best.x, s.pilot_members))
-    best = local_stage(obj, [best.x], s.members, max(8, s.local_nfev // 3), progress)
-    return best
+    best, _ = local_stage(obj, [best.x], s.members, max(8, s.local_nfev // 3), progress)
+    return SearchResult(best, ends)
 
 
 #: Values of a fitted restitution noise tried at the local search's best point (:func:`noise_sweep`).
