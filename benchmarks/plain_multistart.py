@@ -205,7 +205,7 @@ def main() -> None:
     if args.record:
         from record import write_record
 
-        title = "A plain multi-start search against the fit's staged search (shipped motor)"
+        title = "A plain multi-start search against the staged search of the fit (shipped motor)"
         print(write_record("fit_plain_multistart", title, rows))
 
 
