@@ -72,13 +72,20 @@ def test_an_index_above_one_is_drawn_clipped_with_a_note_and_the_default_study_s
     assert "drawn clipped to" not in full and "full study" not in full
 
 
-def _maps(stall: np.ndarray) -> xr.Dataset:
-    n_psi, n_r = 2, 2
-    psi, lr = np.meshgrid([-1.0, 1.0], [-3.0, -1.0], indexing="ij")
-    x = np.column_stack([np.full(4, 0.3), np.full(4, 1.5), lr.ravel(), psi.ravel()])
+def _maps(stall: np.ndarray, power: tuple = (0.1, 0.3, 0.2, 0.1), n_r: int = 2) -> xr.Dataset:
+    """A map of 2 psi by ``n_r`` R_phi (log10 from -3 to -1); ``stall`` and ``power`` of the
+    2 x 2 corners, spread over the rows (the first row of a psi is its smallest R_phi)."""
+    n_psi = 2
+    psi, lr = np.meshgrid([-1.0, 1.0], np.linspace(-3.0, -1.0, n_r), indexing="ij")
+    x = np.column_stack([np.full(psi.size, 0.3), np.full(psi.size, 1.5), lr.ravel(), psi.ravel()])
     data = {"x": (("point", "parameter"), x)}
-    values = {"no_load_speed": np.array([1.0, 1.2, 1.1, 0.9]), "stall_torque": stall,
-              "max_power": np.array([0.1, 0.3, 0.2, 0.1])}  # fmt: skip
+    rows = np.round(np.linspace(0, 1, n_r)).astype(int)  # each row takes a corner's value
+
+    def spread(v):
+        return np.asarray(v, float).reshape(2, 2)[:, rows].ravel()
+
+    values = {"no_load_speed": spread([1.0, 1.2, 1.1, 0.9]), "stall_torque": spread(stall),
+              "max_power": spread(power) - 1e-3 * (lr.ravel() + 3.0) * (n_r > 2)}  # fmt: skip
     for name, v in values.items():
         data[name] = ("point", v)
         data[f"{name}_ci_low"], data[f"{name}_ci_high"] = ("point", v - 0.01), ("point", v + 0.01)
@@ -86,6 +93,20 @@ def _maps(stall: np.ndarray) -> xr.Dataset:
     ds = xr.concat([ds], dim="map").assign_coords(map_e=("map", [0.3]))
     ds.attrs.update({"map_n_psi": n_psi, "map_n_r_phi": n_r, "map_omega_s": 1.5})
     return ds
+
+
+@pytest.mark.parametrize("power", [(0.3, 0.1, 0.2, 0.1), (0.1, 0.3, 0.2, 0.1)])
+def test_the_design_maps_best_point_note_never_covers_the_star(power):
+    """The note sat over the red star when the best point was at the smallest R_phi (e = 0.3
+    of the pipeline's maps): it goes to the half of the panel away from the star."""
+    fig = fig_design_maps(_maps(np.array([1.0, 0.9, 0.8, 0.7]), power, n_r=8))
+    FigureCanvasAgg(fig).draw()
+    ax = fig.axes[0]
+    (star,) = [ln for ln in ax.get_lines() if ln.get_marker() == "*"]
+    at = ax.transData.transform(np.column_stack([star.get_xdata(), star.get_ydata()]))[0]
+    (note,) = [t for t in ax.texts if t.get_text().startswith("best ")]
+    box = note.get_window_extent()
+    assert not (box.y0 <= at[1] <= box.y1), (box, at)
 
 
 def test_the_design_maps_legend_names_only_what_is_drawn_and_their_units():

@@ -214,11 +214,14 @@ def fig_design_maps(ds: xr.Dataset) -> Figure:
             at_edge = xr_[i] in (xr_.min(), xr_.max()) or xp[i] in (xp.min(), xp.max())
             edge |= bool(at_edge)
             where = "\n(at the edge of the swept range)" if at_edge else ""
+            # in the half of the panel away from the star, so that it never covers it
+            low_star = xr_[i] - xr_.min() < 0.5 * (xr_.max() - xr_.min())
             axes[0, j].text(
                 0.02,
-                0.02,
+                0.98 if low_star else 0.02,
                 f"best {_short(best_by)}: {best['value']:.3g} [{lo:.3g}, {hi:.3g}]{where}",
                 transform=axes[0, j].transAxes,
+                va="top" if low_star else "bottom",
                 fontsize=7,
                 color="w",
                 bbox={"facecolor": "k", "alpha": 0.4, "lw": 0, "pad": 1},
