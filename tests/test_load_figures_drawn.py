@@ -109,6 +109,14 @@ def test_the_design_maps_best_point_note_never_covers_the_star(power):
     assert not (box.y0 <= at[1] <= box.y1), (box, at)
 
 
+def test_one_design_map_keeps_its_legend_within_the_figure_width():
+    """With one map the legend's long lines ran far past the one-panel figure, and the saved
+    figure's tight box widened to more than twice the panel."""
+    fig = fig_design_maps(_maps(np.array([1.0, 0.9, 0.8, 0.7]), (0.3, 0.1, 0.2, 0.1)))
+    FigureCanvasAgg(fig).draw()
+    assert fig._suptitle.get_window_extent().width <= fig.bbox.width
+
+
 def test_the_design_maps_legend_names_only_what_is_drawn_and_their_units():
     """The legend explained a black ring that no cell had; the maps' R_phi * mean(Omega)
     against the curves' mean(Omega) with no word."""

@@ -227,12 +227,14 @@ def fig_design_maps(ds: xr.Dataset) -> Figure:
                 bbox={"facecolor": "k", "alpha": 0.4, "lw": 0, "pad": 1},
                 in_layout=False,  # inside the axes: the layout must not shrink them for it
             )
+    # one map: a clause per line, the figure being one panel wide
+    sep = "\n" if len(maps) == 1 else "; "
     fig.suptitle(
         f"red star: largest {_short(best_by)}"
-        + (" (at the edge: the maximum may lie outside the swept range)" if edge else "")
-        + "; white rings: points whose 95 % interval reaches it\nx: runs backwards at no load"
-        + ("; black ring: no stall up to the largest load" if rings else "")
-        + "\nspeeds and powers times $R_\\phi$ (units $\\Phi_0/t_c$); the torque–speed "
+        + (f"{sep}(at the edge: the maximum may lie outside the swept range)" if edge else "")
+        + f"{sep}white rings: points whose 95 % interval reaches it\nx: runs backwards at no load"
+        + (f"{sep}black ring: no stall up to the largest load" if rings else "")
+        + f"\nspeeds and powers times $R_\\phi$ (units $\\Phi_0/t_c$){sep}the torque–speed "
         "curves draw $\\bar\\Omega$ and $\\tau_L\\bar\\Omega$, these divided by $R_\\phi$",
         fontsize=8,
     )
