@@ -38,13 +38,24 @@ effects: [impacts, contact]
 stop: {{impacts: 50}}
 """
 needs_snakemake = pytest.mark.skipif(shutil.which("snakemake") is None, reason="no snakemake")
-# the first invocation builds these (fig3 and fig4 run side by side with --cores 2)
+# the first invocation builds these (fig3 and fig4 run side by side with --cores 2); the figure
+# brings the other figures of its batch, drawn by the same job
 TARGETS = [
     "simulations/fig3.nc",
     "simulations/fig4.nc",
     "figures/fig4_trajectory_e06.png",
     "reproduction.md",
 ]
+
+
+#: the figure table (workflow/config/figures.yaml): one job draws every figure of a batch
+FIGURE_TABLE = yaml.safe_load((ROOT / "workflow" / "config" / "figures.yaml").read_text())
+FIG4_BATCH = FIGURE_TABLE["fig4_trajectory_e06"]["batch"]
+
+
+def batch_figures(batch: str) -> set[str]:
+    """The figures of ``batch`` (those of figure 4's batch need no config key: all drawn)."""
+    return {name for name, row in FIGURE_TABLE.items() if row["batch"] == batch}
 
 
 def free_port() -> int:
@@ -298,15 +309,14 @@ def test_two_invocations_two_parent_runs_and_the_diff_names_the_change(two_runs)
     d = json.loads(p.stdout)
     assert set(d["params"]) == set(changed)
     assert d["params"]["simulations/fig4/r_phi"] == ["0.01", "0.02"]
-    depends = ("simulations/fig4/", "bands/fig4/", "figures/fig4_trajectory_e06/")
+    # figure 4 is redrawn by the job of its batch (figures/paper), with the batch's other figures
+    depends = ("simulations/fig4/", "bands/fig4/", f"figures/{FIG4_BATCH}/")
     assert d["metrics"] and all(k.startswith(depends) for k in d["metrics"]), d["metrics"]
     assert "simulations/fig4/final_omega" in d["metrics"]
-    assert "simulations/fig4.nc" in d["outputs"]
-    assert set(d["outputs"]) <= {
-        "simulations/fig4.nc",
-        "bands/fig4.nc",
-        "figures/fig4_trajectory_e06.png",
-        "figures/fig4_trajectory_e06.pdf",
+    assert f"figures/{FIG4_BATCH}/benchmark.s" in d["metrics"]
+    assert {"simulations/fig4.nc", "figures/fig4_trajectory_e06.png"} <= set(d["outputs"])
+    assert set(d["outputs"]) <= {"simulations/fig4.nc", "bands/fig4.nc"} | {
+        f"figures/{name}.{ext}" for name in batch_figures(FIG4_BATCH) for ext in ("png", "pdf")
     }
     # text form too
     text = subprocess.run(
@@ -342,14 +352,17 @@ def test_first_run_keeps_its_metrics_artifacts_and_every_job_record(two_runs):
     kids = client.search_runs([exp], filter_string=f"tags.mlflow.parentRunId = '{a.info.run_id}'")
     kinds = {k.data.tags["bouncedisk.kind"] for k in kids}
     assert {"simulation", "figure", "check", "build"} <= kinds
-    fig = next(
-        k
-        for k in kids
-        if k.data.tags["bouncedisk.rule"] == "figure"
-        and k.data.params.get("wildcards.fig") == "fig4_trajectory_e06"
-    )
-    names = [f.path for f in client.list_artifacts(fig.info.run_id, "outputs")]
-    assert "outputs/fig4_trajectory_e06.png" in names
+    # the figures are drawn in batches: one job, named figures/<batch>, draws figure 4 and the
+    # other figures of its batch, and its record holds every one of them
+    batches = [k for k in kids if k.data.tags["bouncedisk.kind"] == "figure"]
+    assert {k.data.tags["bouncedisk.job"] for k in batches} == {f"figures/{FIG4_BATCH}"}
+    (fig,) = batches
+    assert fig.data.tags["bouncedisk.rule"] == f"figure_{FIG4_BATCH}"
+    assert fig.data.params["rule.figures.fig4_trajectory_e06.plot"] == "trajectory"
+    names = {f.path for f in client.list_artifacts(fig.info.run_id, "outputs")}
+    assert names == {
+        f"outputs/{name}.{ext}" for name in batch_figures(FIG4_BATCH) for ext in ("png", "pdf")
+    }
     png = Path(client.download_artifacts(fig.info.run_id, "outputs/fig4_trajectory_e06.png"))
     assert png.read_bytes()[:4] == b"\x89PNG"
     manifest = json.loads(

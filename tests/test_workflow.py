@@ -222,6 +222,49 @@ def test_a_bad_figure_table_names_the_table_and_the_entry(tmp_path, monkeypatch)
     assert not (tmp_path / "r").exists()
 
 
+def test_a_figure_without_a_batch_or_with_a_bad_batch_name_is_refused_before_any_job(
+    tmp_path, monkeypatch
+):
+    # each figure is drawn by the job of its batch (rule figure_<batch>): the batch is required
+    # and a plain identifier, checked with the table before any job, naming the table and entry
+    copy, table, good = pipeline_copy(tmp_path)
+    entry = "regime_map:\n  batch: dynamics\n"
+    assert entry in good
+    pattern = "does not match '^[A-Za-z][A-Za-z0-9_]*$'"
+    for broken, message in (
+        (good.replace(entry, "regime_map:\n"), "regime_map: 'batch' is a required property"),
+        (
+            good.replace(entry, "regime_map:\n  batch: dyn amics\n"),
+            f"regime_map.batch: 'dyn amics' {pattern}",
+        ),
+        (good.replace(entry, "regime_map:\n  batch: 2nd\n"), f"regime_map.batch: '2nd' {pattern}"),
+        (
+            good.replace(entry, "regime_map:\n  batch: ../x\n"),
+            f"regime_map.batch: '../x' {pattern}",
+        ),
+        (
+            good.replace(entry, "regime_map:\n  batch: [dynamics]\n"),
+            "regime_map.batch: ['dynamics'] is not of type 'string'",
+        ),
+        # a figure's name holds no "__": its batch job's inputs and outputs are <figure>__<name>
+        (
+            good.replace(entry, "regime__map:\n  batch: dynamics\n"),
+            "(top level): 'regime__map' does not match",
+        ),
+    ):
+        table.write_text(broken)
+        out = parse_error(SMALL, tmp_path / "r", monkeypatch, cwd=copy)
+        assert f"figures.yaml: {message}" in out, out[-2000:]
+        assert "config file" not in out
+    # the end-to-end command: it fails before any job, the message on one line
+    table.write_text(good.replace(entry, "regime_map:\n  batch: dyn amics\n"))
+    p = dry_run(SMALL, tmp_path / "r", cwd=copy)
+    lines = [ln for ln in (p.stdout + p.stderr).splitlines() if "figures.yaml" in ln]
+    assert p.returncode != 0 and len(lines) == 1, p.stdout[-2000:] + p.stderr[-2000:]
+    assert "regime_map.batch: 'dyn amics'" in lines[0]
+    assert not (tmp_path / "r").exists()
+
+
 def planned_jobs(out: str) -> list[tuple[str, list[str]]]:
     """(rule, outputs) of every job a dry run printed."""
     jobs = []
@@ -240,25 +283,56 @@ def planned_jobs(out: str) -> list[tuple[str, list[str]]]:
 JOINT_FIGURES = {"fit_load", "fit_identifiability"}
 
 
-def test_one_figure_rule_draws_exactly_what_rule_all_wants(tmp_path):
+def test_the_figure_batches_draw_exactly_what_rule_all_wants(tmp_path):
+    table = yaml.safe_load((ROOT / "workflow" / "config" / "figures.yaml").read_text())
     res = tmp_path / "r"
     p = dry_run(SMALL, res)
     assert p.returncode == 0, p.stdout[-3000:] + p.stderr[-3000:]
-    figures = {
-        str(Path(o).relative_to(res))
+    jobs = [
+        (rule, {str(Path(o).relative_to(res)) for o in outs if o.startswith(str(res / "figures"))})
         for rule, outs in planned_jobs(p.stdout)
-        for o in outs
-        if o.startswith(str(res / "figures"))
-    }
+    ]
     drawn = FIGURE_NAMES - JOINT_FIGURES  # the small config sets prototype.load_curve: null
-    assert figures == {f"figures/{n}.{ext}" for n in drawn for ext in ("pdf", "png")}
-    rules = {rule for rule, outs in planned_jobs(p.stdout) if any("/figures/" in o for o in outs)}
-    assert rules == {"figure"}
-    assert sum(rule == "figure" for rule, _ in planned_jobs(p.stdout)) == len(drawn)
-    # with the default config (a load curve) the joint fit's figures are wanted too
+    # one job per batch (rule figure_<batch>), drawing exactly its figures, PDF and PNG
+    wanted = {}
+    for name in drawn:
+        wanted.setdefault(f"figure_{table[name]['batch']}", set()).update(
+            {f"figures/{name}.pdf", f"figures/{name}.png"}
+        )
+    figure_jobs = [(rule, figs) for rule, figs in jobs if figs]
+    assert sorted(rule for rule, _ in figure_jobs) == sorted(wanted)
+    assert dict(figure_jobs) == wanted
+    assert len(wanted) < len(drawn) / 3  # batches, not a job per figure
+    # with the default config (a load curve) the joint fit's figures are wanted too, drawn by
+    # the job of their batch
     q = dry_run(ROOT / "workflow" / "config" / "config.yaml", tmp_path / "full")
     assert q.returncode == 0, q.stdout[-3000:] + q.stderr[-3000:]
+    for rule, outs in planned_jobs(q.stdout):
+        for name in JOINT_FIGURES:
+            made = str(tmp_path / "full" / "figures" / f"{name}.png") in outs
+            assert made == (rule == f"figure_{table[name]['batch']}"), (rule, name)
     assert all(f"figures/{n}.png" in q.stdout for n in JOINT_FIGURES)
+
+
+def test_one_figure_asked_for_runs_the_job_of_its_batch(tmp_path):
+    table = yaml.safe_load((ROOT / "workflow" / "config" / "figures.yaml").read_text())
+    res = tmp_path / "r"
+    p = subprocess.run(
+        ["snakemake", "--cores", "1", "--configfile", str(SMALL), "--config", f"results={res}"]
+        + ["-n", "--", str(res / "figures" / "regime_map.pdf")],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+    )
+    assert p.returncode == 0, p.stdout[-3000:] + p.stderr[-3000:]
+    batch = table["regime_map"]["batch"]
+    same = {n for n, row in table.items() if row["batch"] == batch} - JOINT_FIGURES
+    figure_jobs = [(r, o) for r, o in planned_jobs(p.stdout) if any("/figures/" in x for x in o)]
+    assert [r for r, _ in figure_jobs] == [f"figure_{batch}"]
+    assert set(figure_jobs[0][1]) == {
+        str(res / "figures" / f"{n}.{e}") for n in same for e in ("pdf", "png")
+    }
+    assert not res.exists()
 
 
 def test_figure_registry_refuses_an_unknown_figure_or_wrong_inputs(tmp_path):
@@ -269,6 +343,52 @@ def test_figure_registry_refuses_an_unknown_figure_or_wrong_inputs(tmp_path):
     with pytest.raises(ValueError, match=r"takes the parameters \['labels'\], given \[\]"):
         drawing.draw_figure("poincare", {"maps": []})
     assert drawing.draw_figure("fig2", {}).axes
+
+
+def run_figure_script(tmp_path, figures, inputs):
+    """Run workflow/scripts/figure.py as Snakemake would, on a batch of ``figures`` (name ->
+    plot, options) with ``inputs`` (``<figure>__<name>`` -> path); the outputs' folder."""
+    import runpy
+    from types import SimpleNamespace
+
+    out = tmp_path / "figures"
+    out.mkdir(parents=True)
+    outputs = {f"{n}__{e}": str(out / f"{n}.{e}") for n in figures for e in ("pdf", "png")}
+    fake = SimpleNamespace(
+        input={"code": str(tmp_path / "flag"), **inputs},  # what it reads: items(), by name
+        output=outputs,
+        log=[str(tmp_path / "batch.log")],
+        params=SimpleNamespace(
+            batch="b",
+            figures={
+                n: {"plot": plot, "options": options, "caption": n}
+                for n, (plot, options) in figures.items()
+            },
+        ),
+    )
+    runpy.run_path(str(ROOT / "workflow" / "scripts" / "figure.py"), {"snakemake": fake})
+    return out
+
+
+def test_the_figure_script_draws_a_batch_and_a_failing_figure_leaves_no_output(tmp_path):
+    # a batch of two figures: both drawn, PDF and PNG, in one process
+    out = run_figure_script(tmp_path / "ok", {"a": ("fig2", {}), "b": ("fig2", {})}, {})
+    assert sorted(p.name for p in out.iterdir()) == ["a.pdf", "a.png", "b.pdf", "b.png"]
+    assert (out / "a.png").read_bytes()[:4] == b"\x89PNG"
+    assert (out / "b.pdf").read_bytes()[:5] == b"%PDF-"
+    # the second of three figures fails (a table without the columns it plots): the job fails
+    # naming it, the first figure's files are removed again, the third is never drawn
+    bad = tmp_path / "bad.csv"
+    bad.write_text("x,y\n1,2\n")
+    figures = {"first": ("fig2", {}), "broken": ("scaling", {}), "third": ("fig2", {})}
+    with pytest.raises(RuntimeError) as info:
+        run_figure_script(tmp_path / "fail", figures, {"broken__table": str(bad)})
+    assert str(info.value).startswith("figure batch 'b': figure 'broken' (plot 'scaling') failed: ")
+    assert list((tmp_path / "fail" / "figures").iterdir()) == []  # no temporary either
+    log = (tmp_path / "fail" / "batch.log").read_text()
+    assert (
+        "figure 'broken'" in log and f"removed {tmp_path / 'fail' / 'figures' / 'first.png'}" in log
+    )
 
 
 @pytest.mark.slow

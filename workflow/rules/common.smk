@@ -100,7 +100,7 @@ def sweep_shards(wildcards):
 
 
 def all_targets():
-    # FIGURES: the figure table's names (figures.smk, workflow/config/figures.yaml)
+    # FIGURES: the figure table's names (figure_table.smk, workflow/config/figures.yaml)
     figs = expand(f"{RES}/figures/{{fig}}.{{ext}}", fig=FIGURES, ext=["pdf", "png"])
     return figs + [
         f"{RES}/reproduction.md",
@@ -116,6 +116,8 @@ def all_targets():
 
 
 def fig_out(name, caption, category):
+    """results/figures/<name>.pdf and .png, the PNG in the report with its caption
+    (workflow/report/<caption>.rst) in its section ``category``."""
     return {
         "pdf": f"{RES}/figures/{name}.pdf",
         "png": report(f"{RES}/figures/{name}.png", caption=f"../report/{caption}.rst",

@@ -1,8 +1,10 @@
-# The figure table workflow/config/figures.yaml (what each figure is drawn from, how, and where the
-# report shows it), checked against the figure registry before any job runs, and the functions
-# rule `figure` (figures.smk) reads it with. The registry is bouncedisk.figures.registry, the light
-# declaration bouncedisk.figures.drawing.FIGURES is built from: every Snakemake invocation and every
-# job parses this file, and importing it loads no matplotlib, xarray or pandas.
+# The figure table workflow/config/figures.yaml (what each figure is drawn from, how, in which
+# batch, and where the report shows it), checked against the figure registry before any job runs,
+# and the functions the rules figure_<batch> (figures.smk) are built with: one rule per batch,
+# whose job draws every figure of the batch in one process. The registry is
+# bouncedisk.figures.registry, the light declaration bouncedisk.figures.drawing.FIGURES is built
+# from: every Snakemake invocation and every job parses this file, and importing it loads no
+# matplotlib, xarray or pandas.
 import re
 
 import yaml
@@ -92,17 +94,44 @@ def _check_figures():
 _check_figures()
 
 
-def figure_inputs(wildcards):
-    return {"code": rules.compile_engine.output[0], **_figure_paths(wildcards.fig)}
+# the batches (figures.yaml `batch`), in the table's order: batch -> its figures of FIGURES (a
+# figure left out for an unset `needs` is left out of its batch; a batch left empty has no rule)
+FIGURE_BATCHES = {}
+for _name in FIGURES:
+    FIGURE_BATCHES.setdefault(FIGURE_TABLE[_name]["batch"], []).append(_name)
+# rule name -> the batch job's name in the tracking store (tracking.smk), figures/<batch>
+FIGURE_JOB_NAMES = {f"figure_{batch}": f"figures/{batch}" for batch in FIGURE_BATCHES}
 
 
-def figure_params(wildcards):
-    """The figure's parameters: each a config mapping's values, in the order of its keys."""
-    params = FIGURE_TABLE[wildcards.fig].get("params", {})
-    return {key: list(config[mapping].values()) for key, mapping in params.items()}
+def figure_batch_inputs(batch):
+    """The batch's inputs: the engine's flag, then each figure's inputs as <figure>__<input> (a
+    list-valued input, e.g. the Poincaré maps, stays one list)."""
+    paths = {"code": rules.compile_engine.output[0]}
+    for name in FIGURE_BATCHES[batch]:
+        paths.update({f"{name}__{key}": p for key, p in _figure_paths(name).items()})
+    return paths
 
 
-def figure_caption(wildcards):
-    """The text of the figure's caption (workflow/report/figure.rst shows it in the report)."""
-    caption = FIGURE_TABLE[wildcards.fig]["caption"]
-    return Path(workflow.basedir, "workflow", "report", f"{caption}.rst").read_text()
+def figure_batch_outputs(batch):
+    """Each figure's PDF and PNG as <figure>__pdf and <figure>__png, the PNG in the report with
+    the figure's own caption (workflow/report/<caption>.rst) and category."""
+    outputs = {}
+    for name in FIGURE_BATCHES[batch]:
+        row = FIGURE_TABLE[name]
+        outputs.update({f"{name}__{ext}": path
+                        for ext, path in fig_out(name, row["caption"], row["category"]).items()})
+    return outputs
+
+
+def figure_batch_params(batch):
+    """Per figure of the batch: its plot (a key of bouncedisk.figures.drawing.FIGURES), its
+    options (each a config mapping's values, in the order of its keys) and its caption's name."""
+    return {
+        name: {
+            "plot": FIGURE_TABLE[name]["plot"],
+            "options": {key: list(config[mapping].values())
+                        for key, mapping in FIGURE_TABLE[name].get("params", {}).items()},
+            "caption": FIGURE_TABLE[name]["caption"],
+        }
+        for name in FIGURE_BATCHES[batch]
+    }

@@ -29,6 +29,7 @@ def _tracking_jobs():
                 benchmark=str(job.benchmark) if job.benchmark else None,
                 logs=[str(x) for x in job.log],
                 ran=workflow.dag.needrun(job),
+                name=FIGURE_JOB_NAMES.get(job.rule.name),  # a batch of figures: figures/<batch>
             )
         )
     return records

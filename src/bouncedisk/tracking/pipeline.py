@@ -85,9 +85,15 @@ class JobRecord:
     benchmark: str | None = None
     logs: list[str] = dataclasses.field(default_factory=list)
     ran: bool = True
+    #: the job's name in the store where its first output does not name it: a batch of
+    #: figures (rule ``figure_<batch>``, several figures in one job) is ``figures/<batch>``
+    name: str | None = None
 
     def key(self, results: Path) -> str:
-        """Name of the job in the store: its first output, relative to results, sans suffix."""
+        """Name of the job in the store: :attr:`name` if set, else its first output, relative
+        to results, sans suffix."""
+        if self.name:
+            return self.name
         if not self.outputs:
             return self.rule
         p = Path(self.outputs[0])
