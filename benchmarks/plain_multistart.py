@@ -116,7 +116,8 @@ def local_searches(
         progress_bar=False,
         options=pypesto.optimize.OptimizeOptions(allow_failed_starts=True),
     )
-    ends = [obj.from_unit(np.clip(r.x, 0.0, 1.0), obj.lo) for r in result.optimize_result.list]
+    done = [r for r in result.optimize_result.list if r.x is not None]  # a failed start: none
+    ends = [obj.from_unit(np.clip(r.x, 0.0, 1.0), obj.lo) for r in done]
     chis = [obj.chi2(x, s.members) for x in ends]
     order = sorted(range(len(ends)), key=lambda i: rank_key(chis[i], ends[i]))
     return np.array([chis[i] for i in order]), np.array([ends[i] for i in order])

@@ -265,12 +265,15 @@ def test_fit_file_has_the_interface(tiny_fit):
     assert {"steady_speed_rad_s", "time_constant_s"} <= set(ds.attrs)
     # the waterfall: every start's end chi2, best first, none below the fit's best (each end was
     # evaluated, and the fit returns the best point it evaluated); the count that reach the best
-    falls = ds["start_chi2"].values
-    assert ds.attrs["starts"] == len(falls) >= 1 and np.all(np.diff(falls) >= 0)
-    assert falls[0] >= ds.attrs["chi2"] * (1 - 1e-12)
-    reach = falls <= ds.attrs["chi2"] + ds.attrs["starts_delta_chi2"]
-    assert ds.attrs["starts_at_best"] == int(reach.sum())
-    assert ds.attrs["starts_delta_chi2"] >= 3.84
+    falls, a = ds["start_chi2"].values, ds.attrs
+    assert a["starts"] == len(falls) == ds["start_x"].shape[0] >= 1 and np.all(np.diff(falls) >= 0)
+    assert falls[0] >= a["chi2"] * (1 - 1e-12)
+    # the intervals' acceptance: delta_chi2 (each parameter's) above the higher of the best chi2
+    # and the level on fresh members
+    assert a["chi2_reference"] == max(a["chi2"], a["chi2_fresh_members"])
+    assert a["delta_chi2"] == ds["e"].attrs["delta_chi2"] >= 3.84
+    reach = falls <= a["chi2_reference"] + a["delta_chi2"]
+    assert a["starts_accepted"] == int(reach.sum())
 
 
 @pytest.mark.slow  # a second fit

@@ -527,9 +527,11 @@ def test_the_figures_say_synthetic_and_zoom_on_the_intervals(tiny_fit):
                 c0, c1, s0, s1 = a["ci_low"], a["ci_high"], a["search_low"], a["search_high"]
             pad = 0.5 * (c1 - c0)
             assert lo == pytest.approx(max(s0, c0 - pad)) and hi == pytest.approx(min(s1, c1 + pad))
-            # the dashed line is the threshold the file's interval used, not a fixed 3.84
+            # the dashed line is where the file's interval accepts a point, not a fixed 3.84:
+            # delta_chi2 above the reference (the level on fresh members when higher)
             (line,) = [ln for ln in ax.get_lines() if ln.get_linestyle() == "--"]
-            assert line.get_ydata()[0] == pytest.approx(a["delta_chi2"])
+            offset = ds.attrs["chi2_reference"] - ds.attrs["chi2"]
+            assert line.get_ydata()[0] == pytest.approx(offset + a["delta_chi2"])
             assert ("widened: several basins" in ax.get_title()) == bool(a["multimodal"])
 
 
@@ -554,8 +556,10 @@ def test_the_profile_figure_draws_the_threshold_its_interval_used(threshold, mul
 
 
 def test_the_waterfall_panel_draws_each_start_above_the_best_and_counts_those_that_reach_it():
-    """The last panel of the profile figure: each start's end chi2 above the best, best first,
-    the dashed line at the file's threshold, the title counting the starts under it."""
+    """The last panel of the profile figure: each start's end chi2 above the best, best first;
+    the dashed line, in it and in the profile panels, where the intervals accept a point
+    (delta_chi2 above the reference, here the level 3 above the best); the title counting the
+    starts under it."""
     from bouncedisk.figures.motor import fig_fit_profiles
 
     values = np.linspace(0.4, 0.6, 9)
@@ -568,15 +572,23 @@ def test_the_waterfall_panel_draws_each_start_above_the_best_and_counts_those_th
             "start_chi2": ("start", [12.0, 14.0, 30.0, 112.0]),
         },
         coords={"profile_e": values},
-        attrs={"chi2": 10.0, "starts": 4, "starts_at_best": 2, "starts_delta_chi2": 5.0},
+        attrs={
+            "chi2": 10.0,
+            "chi2_reference": 13.0,
+            "delta_chi2": 5.0,
+            "starts": 4,
+            "starts_accepted": 3,
+        },  # fmt: skip
     )
     profile, falls = fig_fit_profiles(ds).axes
+    (line,) = [ln for ln in profile.get_lines() if ln.get_linestyle() == "--"]
+    assert line.get_ydata()[0] == 8.0 and "level on fresh members (+3)" in line.get_label()
     (points,) = [ln for ln in falls.get_lines() if ln.get_marker() == "s"]
     assert list(points.get_xdata()) == [1, 2, 3, 4]
     assert list(points.get_ydata()) == [2.0, 4.0, 20.0, 102.0]
     (line,) = [ln for ln in falls.get_lines() if ln.get_linestyle() == "--"]
-    assert line.get_ydata()[0] == 5.0
-    assert falls.get_title() == "waterfall: 2 of 4 starts reach the best"
+    assert line.get_ydata()[0] == 8.0
+    assert falls.get_title() == "waterfall: 3 of 4 starts end where the intervals accept"
     assert falls.get_ylim()[1] >= 102.0
 
 

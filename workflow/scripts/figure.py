@@ -5,8 +5,9 @@ The rule's inputs and outputs are named ``<figure>__<name>`` (a figure's name ho
 its params hold, per figure, the plot, its options and its caption. Each figure is saved
 atomically and closed before the next is drawn (the package's figures are pyplot-free
 ``Figure`` objects: no figure manager holds them, clearing one and dropping it frees it). The
-first figure that fails stops the job with an error naming it, and the figures the batch had
-saved are removed again: a failed batch leaves none of its outputs.
+first figure that fails (or Ctrl-C) stops the job with an error naming it, and the figures the
+batch had saved are removed again; a job killed by a signal leaves its outputs to Snakemake,
+which removes the outputs of a job that did not finish.
 """
 
 from bouncedisk.figures import common, drawing
@@ -55,8 +56,8 @@ with log_to(snakemake.log[0]) as log, recording_outputs():
             by_figure(dict(snakemake.output.items())),
             log,
         )
-    except BaseException as ex:  # a figure failed, or the job was interrupted
-        log.error("%s", ex)
+    except BaseException:  # a figure failed, or the job was interrupted (Ctrl-C)
+        log.exception("figure batch %r failed", snakemake.params.batch)
         for path in remove_outputs():
             log.error("removed %s (the batch failed)", path)
         raise

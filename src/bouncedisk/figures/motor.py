@@ -156,9 +156,11 @@ PARAM_LABELS = {
 def fig_fit_profiles(fitted: xr.Dataset) -> Figure:
     """Profile likelihoods of the fitted parameters: ``Δχ²`` against each parameter.
 
-    The dashed line is the 95 % threshold the file's intervals use, each parameter's
-    ``delta_chi2``: ``χ²₁(0.95) = 3.84``, scaled by ``χ²/dof`` when the fit's ``χ²`` exceeds its
-    degrees of freedom (docs/fitting_method.md "The intervals"); the shaded span is the reported
+    The dashed line is where the file's intervals accept a point: each parameter's ``delta_chi2``
+    (``χ²₁(0.95) = 3.84``, scaled by ``χ²/dof`` when the fit's ``χ²`` exceeds its degrees of
+    freedom) above the intervals' reference ``chi2_reference`` (the best ``χ²``, or the level on
+    fresh members when that is higher; docs/fitting_method.md "The intervals"), drawn above the
+    best ``χ²`` as every profile is; the shaded span is the reported
     interval, the star the estimate. An interval widened to other acceptable points (the
     parameter's ``multimodal = 1``: several basins) reaches beyond where its profile crosses the
     line, and the panel's title says so. A profile that stays under the line over the whole search
@@ -166,9 +168,9 @@ def fig_fit_profiles(fitted: xr.Dataset) -> Figure:
     end, within the search range) so that the profile's curvature shows; an inadequate fit (the
     file's ``identified = "no"``) has no interval: the panel shows the profiled range and says so.
     The axis is linear up to 10 and logarithmic above, so that it holds every profile point shown
-    and still shows the threshold. A last panel, the waterfall, shows where each start of the
-    local search ended (the file's ``start_chi2``) above the best ``χ²``: starts under the
-    threshold reached the best basin.
+    and still shows the threshold. A last panel, the waterfall, shows the ``χ²`` each start of
+    the local search ended at (the file's ``start_chi2``) above the best, against the same line:
+    the starts under it ended where the intervals accept a point.
     """
     names = [
         n
@@ -204,7 +206,7 @@ def _profile_panel(ax, fitted: xr.Dataset, n: str) -> None:
         )
     ax.plot(x, y, "o-", color=COLORS["fit"], ms=3, lw=1, label="profile")
     thr = float(a["delta_chi2"])
-    ax.axhline(thr, ls="--", color="k", lw=0.8, label=f"95% threshold Δχ² = {thr:.3g}")
+    ax.axhline(_offset(fitted) + thr, ls="--", color="k", lw=0.8, label=_line_label(fitted, thr))
     ax.plot([float(fitted[n])], [0.0], "k*", ms=8, label="estimate")
     lo, hi = (a["ci_low"], a["ci_high"]) if has_ci else (np.nanmin(x), np.nanmax(x))
     ax.set_xlim(*_zoom(lo, hi, a["search_low"], a["search_high"], log))
@@ -214,7 +216,8 @@ def _profile_panel(ax, fitted: xr.Dataset, n: str) -> None:
         ax.xaxis.set_major_formatter(FormatStrFormatter("%.3g"))
         ax.xaxis.set_minor_locator(NullLocator())
     shown = (x >= ax.get_xlim()[0]) & (x <= ax.get_xlim()[1]) & np.isfinite(y)
-    _delta_axis(ax, float(np.max(y[shown])) if shown.any() else 10.0)
+    top = float(np.max(y[shown])) if shown.any() else 10.0
+    _delta_axis(ax, max(top, _offset(fitted) + thr))
     label = PARAM_LABELS.get(n, n)
     ax.set_xlabel(f"{label} [{a['units']}]")
     tag = "" if a.get("identified", 1) else " (not identified)"
@@ -229,29 +232,44 @@ def _delta_axis(ax, top: float) -> None:
     above, labelled at round values."""
     ax.set_yscale("symlog", linthresh=10.0)
     ax.set_ylim(-0.5, max(10.0, top * 1.3))
-    ticks = [t for t in (0, 2, 4, 6, 8, 10, 20, 50, 100, 200, 500, 1000) if t <= top * 1.3]
+    steps = (0, 2, 4, 6, 8, 10, 20, 50, 100, 200, 500, 1000, 10**4, 10**5, 10**6)
+    ticks = [t for t in steps if t <= top * 1.3]
     ax.yaxis.set_major_locator(FixedLocator(ticks))
     ax.yaxis.set_major_formatter(FormatStrFormatter("%g"))
     ax.yaxis.set_minor_locator(NullLocator())
 
 
+def _offset(fitted: xr.Dataset) -> float:
+    """How far the intervals' reference ``χ²`` lies above the best (0 for a file without it)."""
+    a = fitted.attrs
+    return float(a["chi2_reference"]) - float(a["chi2"]) if "chi2_reference" in a else 0.0
+
+
+def _line_label(fitted: xr.Dataset, thr: float) -> str:
+    """The legend of the acceptance line: its threshold, and the reference when not the best."""
+    off = _offset(fitted)
+    level = f" above the level on fresh members (+{off:.3g})" if off > 0 else ""
+    return f"95% threshold Δχ² = {thr:.3g}{level}"
+
+
 def _waterfall_panel(ax, fitted: xr.Dataset) -> None:
     """The local search's starts in :func:`fig_fit_profiles`: each start's end ``χ²`` above the
-    best (the file's ``start_chi2``), best first, against the intervals' threshold (the file's
-    ``starts_delta_chi2``); the title counts the starts that reach the best value
-    (``starts_at_best``)."""
+    best (the file's ``start_chi2``), best first, against the line where the intervals accept a
+    point (``chi2_reference`` + ``delta_chi2``); the title counts the starts under it
+    (``starts_accepted``)."""
     above = fitted["start_chi2"].values - float(fitted.attrs["chi2"])
     rank = np.arange(1, len(above) + 1)
     ax.plot(rank, np.maximum(above, 0.0), "s-", color=COLORS["fit"], ms=4, lw=1)
-    thr = float(fitted.attrs["starts_delta_chi2"])
-    ax.axhline(thr, ls="--", color="k", lw=0.8)
-    _delta_axis(ax, float(np.max(above)))
+    line = _offset(fitted) + float(fitted.attrs["delta_chi2"])
+    ax.axhline(line, ls="--", color="k", lw=0.8)
+    _delta_axis(ax, max(float(np.max(above)), line))
     ax.set_xticks(rank)
     ax.set_xlabel("local-search start, best first")
     ax.set_ylabel("χ² at its end − best χ²")
     a = fitted.attrs
     ax.set_title(
-        f"waterfall: {a['starts_at_best']} of {a['starts']} starts reach the best", fontsize=8
+        f"waterfall: {a['starts_accepted']} of {a['starts']} starts end where the intervals accept",
+        fontsize=8,
     )
 
 

@@ -269,6 +269,10 @@ class FitResult:
     chi2_level: float = math.nan  # chi2 at the search's best on fresh members (chi2_level)
     #: each local-search start's end chi2 under the final covariance, best first (the waterfall)
     start_chi2: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+    #: each start's end point (search coordinates), in the order of start_chi2
+    start_x: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 0)))
+    #: the intervals' Δχ² threshold (birge of the search's best chi2), measured from the level
+    interval_threshold: float = THRESHOLD
 
     @property
     def n_statistics(self) -> int:
@@ -448,6 +452,7 @@ def fit_curve(
                 f"chi2 {final.chi2:.4g} on {obj.n_stats} statistics (p < {ADEQUATE_P:g}): "
                 "the fit does not reproduce the data; no parameter reported identified"
             )
+    falls = waterfall(obj, found.ends, s.members)  # under the final covariance
     comb_sd, comb_vec = combinations(jac, obj.span)
     ens = obj.ensemble(final.x, s.pilot_members)
     theta = obj.theta(final.x)
@@ -489,5 +494,7 @@ def fit_curve(
         runs=tuple(runs),
         load=load_fit,
         chi2_level=level,
-        start_chi2=waterfall(obj, found.ends, s.members),
+        start_chi2=falls[0],
+        start_x=falls[1],
+        interval_threshold=thr,
     )

@@ -20,7 +20,7 @@ from ..io.provenance import base_attrs, new_run_id, sha256_file
 from .core import FitResult
 from .members import BOUNDS
 from .summary_stats import STAT_LONG_NAMES, STAT_UNITS, STATS, trend_stride
-from .uncertainty import THRESHOLD, adequate, birge, identified
+from .uncertainty import THRESHOLD, adequate, identified, reference_chi2
 
 #: Public name: (search coordinate, transform, units, long name).
 PUBLIC = {
@@ -260,15 +260,22 @@ def _basins(fit: FitResult) -> xr.Dataset:
     )
 
 
-def starts_at_best(fit: FitResult) -> int:
-    """How many local-search starts end within the intervals' ``Δχ²`` threshold of the best
-    ``χ²`` (:func:`.uncertainty.birge`): the waterfall's plateau at the best value."""
-    thr = birge(fit.chi2, fit.n_statistics, len(fit.names))
-    return int(np.sum(np.asarray(fit.start_chi2) <= fit.chi2 + thr))
+def interval_reference(fit: FitResult) -> float:
+    """The ``χ²`` the intervals' ``Δχ²`` is measured from: the best, or the level on fresh
+    members when that is higher (:func:`.uncertainty.reference_chi2`)."""
+    level = fit.chi2_level if np.isfinite(fit.chi2_level) else None
+    return reference_chi2(fit.chi2, level)
+
+
+def starts_accepted(fit: FitResult) -> int:
+    """How many local-search starts end where the intervals would accept a point: ``χ²`` at most
+    the intervals' threshold above their reference (:func:`interval_reference`)."""
+    limit = interval_reference(fit) + fit.interval_threshold
+    return int(np.sum(np.asarray(fit.start_chi2) <= limit))
 
 
 def _waterfall(fit: FitResult) -> xr.Dataset:
-    """Every local-search start's end ``χ²`` (the waterfall) and how many reach the best."""
+    """Every local-search start's end ``χ²`` and point, best first (the waterfall)."""
     n = len(fit.start_chi2)
     return xr.Dataset(
         {
@@ -280,9 +287,14 @@ def _waterfall(fit: FitResult) -> xr.Dataset:
                     "long_name": "chi2 each local-search start ended at, under the final "
                     "covariance, best first (the waterfall)",
                 },
-            )
+            ),
+            "start_x": (
+                ("start", "parameter"),
+                np.asarray(fit.start_x, float).reshape(n, len(fit.names)),
+                {"units": "1", "long_name": "where each start ended, in search coordinates"},
+            ),
         },
-        coords={"start": ("start", np.arange(n))},
+        coords={"start": ("start", np.arange(n)), "parameter": ("parameter", fit.names)},
     )
 
 
@@ -379,9 +391,10 @@ def _global_attrs(fit: FitResult, paths: list[str], not_identified: list[str]) -
         "(95% intervals: block bootstrap); model_*: trend of the fitted model's ensemble mean",
         "not_identified": ",".join(not_identified) or "none",
         "basins": len(fit.basins),
+        "chi2_reference": interval_reference(fit),
+        "delta_chi2": fit.interval_threshold,
         "starts": len(fit.start_chi2),
-        "starts_at_best": starts_at_best(fit),
-        "starts_delta_chi2": birge(fit.chi2, n_stats, len(fit.names)),
+        "starts_accepted": starts_accepted(fit),
         "basin_rule": "basins: evaluated points within the interval threshold of the best chi2, "
         "grouped within 5% of every search range; the estimate is the basin with the lowest chi2 "
         "(10 significant digits, ties to the smaller point); more than one basin: the data do not "
@@ -448,8 +461,9 @@ def summary_text(ds: xr.Dataset) -> str:
     )
     if a.get("starts", 0):
         lines.append(
-            f"  local search: {a['starts_at_best']} of {a['starts']} starts end within the "
-            "intervals' threshold of the best chi2 (start_chi2: the waterfall)"
+            f"  local search: {a['starts_accepted']} of {a['starts']} starts end within the "
+            f"intervals' acceptance, chi2 <= {a['chi2_reference'] + a['delta_chi2']:.4g} "
+            "(start_chi2, start_x: the waterfall)"
         )
     if not a.get("fit_adequate", 1):
         lines.append(

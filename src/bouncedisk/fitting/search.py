@@ -756,15 +756,21 @@ class SearchResult:
     #: The best logged point at the fit's members under the final covariance.
     best: Evaluation
     #: Where each start of the multi-start stage ended (search coordinates; each was evaluated):
-    #: their ``χ²`` under the final covariance, sorted, is the fit's waterfall
+    #: with their ``χ²`` under the final covariance, best first, the fit's waterfall
     #: (:func:`waterfall`).
     ends: list[np.ndarray]
 
 
-def waterfall(obj: Objective, ends: list[np.ndarray], members: int) -> np.ndarray:
-    """The starts' end ``χ²`` under the objective's covariance now, best first: how many
-    starts reach the best value is the search's own evidence that it found the best basin."""
-    return np.sort([obj.chi2_now(x, members) for x in ends])
+def waterfall(
+    obj: Objective, ends: list[np.ndarray], members: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The starts' end ``χ²`` under the objective's covariance now and their end points, best
+    first: how many starts reach the best value is the search's own evidence that it found the
+    best basin, and where they ended tells another basin from a start that stopped early."""
+    chis = [obj.chi2_now(x, members) for x in ends]
+    order = sorted(range(len(ends)), key=lambda i: rank_key(chis[i], ends[i]))
+    points = np.array([ends[i] for i in order]).reshape(len(ends), len(obj.names))
+    return np.array([chis[i] for i in order]), points
 
 
 def search(

@@ -120,7 +120,7 @@ def _side(obj, x0, j, sign, step, chi0, members, jac, max_steps, thr=THRESHOLD):
     return out
 
 
-def _reference(chi2: float, level: float | None) -> float:
+def reference_chi2(chi2: float, level: float | None) -> float:
     """The ``χ²`` a ``Δχ²`` is measured from: the lowest one read, or the level on fresh
     members (:func:`chi2_level`) when that is higher."""
     return chi2 if level is None else max(chi2, level)
@@ -140,7 +140,7 @@ def profile(
     """Profile likelihood of coordinate ``j`` about the estimate ``x0`` (module docstring);
     ``Δχ²`` is measured from ``level`` (:func:`chi2_level`) when that is above ``x0``'s."""
     chi0 = obj.chi2(x0, members)
-    ref = _reference(chi0, level)
+    ref = reference_chi2(chi0, level)
     step = float(
         np.clip(sd if np.isfinite(sd) else np.inf, MIN_STEP * obj.span[j], 0.2 * obj.span[j])
     )
@@ -166,7 +166,7 @@ def profile(
 def _interval(values, chis, obj, j, thr=THRESHOLD, level=None):
     """95 % interval from a profile: crossings of the threshold above its minimum (or above
     ``level`` when higher), or the bounds if open."""
-    base = _reference(chis.min(), level)
+    base = reference_chi2(chis.min(), level)
     k0 = int(np.argmin(chis))
     below = chis - base <= thr
 
@@ -247,7 +247,7 @@ def acceptable_points(
     pts = {tuple(ev.x): ev.x for ev in obj.log if ev.members == members}
     xs = np.array(list(pts.values()))
     chis = np.array([obj.chi2_now(x, members) for x in xs])
-    return xs[chis <= _reference(chis.min(), level) + thr]
+    return xs[chis <= reference_chi2(chis.min(), level) + thr]
 
 
 #: Fresh member blocks read at the best point for its unbiased ``χ²`` (:func:`chi2_level`).
