@@ -361,8 +361,7 @@ def run_figure_script(tmp_path, figures, inputs):
         params=SimpleNamespace(
             batch="b",
             figures={
-                n: {"plot": plot, "options": options, "caption": n}
-                for n, (plot, options) in figures.items()
+                n: {"plot": plot, "options": options} for n, (plot, options) in figures.items()
             },
         ),
     )

@@ -124,14 +124,14 @@ def figure_batch_outputs(batch):
 
 
 def figure_batch_params(batch):
-    """Per figure of the batch: its plot (a key of bouncedisk.figures.drawing.FIGURES), its
-    options (each a config mapping's values, in the order of its keys) and its caption's name."""
+    """Per figure of the batch: its plot (a key of bouncedisk.figures.drawing.FIGURES) and its
+    options (each a config mapping's values, in the order of its keys); its caption goes with its
+    PNG in the report (figure_batch_outputs)."""
     return {
         name: {
             "plot": FIGURE_TABLE[name]["plot"],
             "options": {key: list(config[mapping].values())
                         for key, mapping in FIGURE_TABLE[name].get("params", {}).items()},
-            "caption": FIGURE_TABLE[name]["caption"],
         }
         for name in FIGURE_BATCHES[batch]
     }

@@ -2,7 +2,7 @@
 PDF and PNG, in one process.
 
 The rule's inputs and outputs are named ``<figure>__<name>`` (a figure's name holds no ``__``);
-its params hold, per figure, the plot, its options and its caption. Each figure is saved
+its params hold, per figure, the plot and its options. Each figure is saved
 atomically and closed before the next is drawn (the package's figures are pyplot-free
 ``Figure`` objects: no figure manager holds them, clearing one and dropping it frees it). The
 first figure that fails (or Ctrl-C) stops the job with an error naming it, and the figures the
@@ -29,7 +29,7 @@ def by_figure(named):
 
 
 def draw_batch(batch, figures, inputs, outputs, log):
-    """Draw and save each figure of ``figures`` (name -> plot, options, caption) in turn."""
+    """Draw and save each figure of ``figures`` (name -> plot, options) in turn."""
     for name, spec in figures.items():
         fig = None
         try:
