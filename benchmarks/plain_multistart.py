@@ -39,7 +39,13 @@ from scipy.stats import qmc
 from bouncedisk.fitting.core import FitSettings, pose_fit
 from bouncedisk.fitting.likelihood_basins import rank_key
 from bouncedisk.fitting.objective import Evaluation, Objective
-from bouncedisk.fitting.search import DIFF_STEP, difference_points, measure_cov, search
+from bouncedisk.fitting.search import (
+    DIFF_STEP,
+    difference_points,
+    measure_cov,
+    search,
+    waterfall,
+)
 from bouncedisk.fitting.synthetic import read_spec
 from bouncedisk.io.load_curves import read_load_curve
 from bouncedisk.io.runup_curves import read_curve
@@ -101,9 +107,9 @@ def _problem(obj: Objective, members: int) -> pypesto.Problem:
 
 def local_searches(
     obj: Objective, starts: list[np.ndarray], s: MultistartSettings
-) -> tuple[np.ndarray, np.ndarray]:
-    """pyPESTO's multi-start from ``starts``: each start's end ``χ²`` and end point (search
-    coordinates), best first."""
+) -> list[np.ndarray]:
+    """pyPESTO's multi-start from ``starts``: each start's end point (search coordinates; each
+    was evaluated, and logged, by the residuals)."""
     problem = _problem(obj, s.members)
     problem.set_x_guesses(np.array([obj.to_unit(x) for x in starts]))
     optimizer = pypesto.optimize.ScipyOptimizer(
@@ -117,10 +123,7 @@ def local_searches(
         options=pypesto.optimize.OptimizeOptions(allow_failed_starts=True),
     )
     done = [r for r in result.optimize_result.list if r.x is not None]  # a failed start: none
-    ends = [obj.from_unit(np.clip(r.x, 0.0, 1.0), obj.lo) for r in done]
-    chis = [obj.chi2(x, s.members) for x in ends]
-    order = sorted(range(len(ends)), key=lambda i: rank_key(chis[i], ends[i]))
-    return np.array([chis[i] for i in order]), np.array([ends[i] for i in order])
+    return [obj.from_unit(np.clip(r.x, 0.0, 1.0), obj.lo) for r in done]
 
 
 def multistart(
@@ -138,17 +141,16 @@ def multistart(
     scored.sort(key=lambda p: rank_key(p[0], p[1]))
     starts = [x for _, x in scored[: s.starts]]
     say(f"covariance measured at the design's best point; {len(starts)} starts")
-    _, ends = local_searches(obj, starts, s)
+    ends = local_searches(obj, starts, s)
     obj.set_cov(measure_cov(obj, obj.best(s.members).x, s.pilot_members))
     local_searches(obj, [obj.best(s.members).x], s)
-    waterfall = np.array([obj.chi2_now(x, s.members) for x in ends])
-    order = sorted(range(len(ends)), key=lambda i: rank_key(waterfall[i], ends[i]))
+    falls, points = waterfall(obj, ends, s.members)  # the fit's own waterfall, final covariance
     best = obj.best(s.members)
     say(
-        f"multi-start: chi2 {best.chi2:.4g}; starts' ends {np.round(waterfall[order], 3)} "
+        f"multi-start: chi2 {best.chi2:.4g}; starts' ends {np.round(falls, 3)} "
         f"({len(obj.read)} ensembles evaluated)"
     )
-    return MultistartResult(best, waterfall[order], ends[order])
+    return MultistartResult(best, falls, points)
 
 
 CURVE, LOAD = "data/prototype/synthetic_motor.csv", "data/prototype/synthetic_motor_load.csv"
