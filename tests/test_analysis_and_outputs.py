@@ -1,6 +1,7 @@
 """Sweeps and shards, the clipped model, Poincaré datasets, checks and figures."""
 
 import math
+import re
 
 import numpy as np
 import pandas as pd
@@ -240,3 +241,30 @@ def test_every_figure_function_returns_a_figure(sim_file, tmp_path):
         assert isinstance(fig, Figure)
         common.save_figure(fig, tmp_path / f"f{i}.png")
         assert (tmp_path / f"f{i}.png").stat().st_size > 1000
+
+
+def test_save_figure_lays_out_once_and_crops_every_format_to_the_same_box(tmp_path):
+    """The PDF and the PNG of one figure: both cropped to the figure's tight box (the PNG's
+    pixels are that box at its dpi, as a save of its own gives them), the layout frozen after
+    the first save (no layout engine left), and the PDF's page the same box in points."""
+    from PIL import Image
+
+    def draw():
+        fig = Figure(figsize=(6, 3), layout="constrained")
+        for k, ax in enumerate(fig.subplots(1, 2)):
+            ax.plot([0, 1], [0, k + 1])
+            ax.set_xlabel("a long label that reaches below the axes")
+            ax.set_title(f"panel {k}")
+        return fig
+
+    fig = draw()
+    common.save_figure(fig, tmp_path / "a.pdf", tmp_path / "a.png", dpi=100)
+    assert fig.get_layout_engine() is None
+    alone = draw()
+    alone.savefig(tmp_path / "alone.png", dpi=100, bbox_inches="tight")
+    width, height = Image.open(tmp_path / "a.png").size
+    w0, h0 = Image.open(tmp_path / "alone.png").size
+    assert abs(width - w0) <= 3 and abs(height - h0) <= 3, ((width, height), (w0, h0))
+    pdf = (tmp_path / "a.pdf").read_bytes()
+    box = [float(v) for v in re.search(rb"/MediaBox \[ *([^\]]+)\]", pdf).group(1).split()]
+    assert abs(box[2] * 100 / 72 - width) <= 3 and abs(box[3] * 100 / 72 - height) <= 3, box

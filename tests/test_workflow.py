@@ -24,14 +24,16 @@ pytestmark = [
 
 
 def targets(res: Path) -> list[str]:
+    """A sharded sweep, simulations, a Poincaré map, a figure batch and a study: what a scene
+    change must or must not rerun, and shards that an interrupted run leaves half done (the
+    sensitivity study's shards and the continuation are tested on their own:
+    tests/test_sensitivity.py, tests/test_analysis_and_outputs.py)."""
     names = [
-        "continuation/up.nc",
         "sweeps/regime_map.nc",
         "simulations/fig4.nc",
         "poincare/poincare_e06.nc",
         "figures/fig3_trajectory_e03.png",
         "studies/clipped_vs_bouncing.nc",
-        "sensitivity/points.nc",
     ]
     return [str(res / n) for n in names]
 
@@ -391,7 +393,7 @@ def test_the_figure_script_draws_a_batch_and_a_failing_figure_leaves_no_output(t
 
 
 @pytest.mark.slow
-@pytest.mark.cost(140)
+@pytest.mark.cost(70)
 def test_one_run_is_final_reruns_only_what_a_scene_change_affects_and_cores_do_not_matter(tmp_path):
     """One run of the small pipeline on one core serves three checks (each ran it once before):
     a second invocation has nothing to do; after one scene changes, the plan reruns only what

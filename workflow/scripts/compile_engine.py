@@ -1,18 +1,15 @@
 """Compile (or load from the numba cache), with tiny runs, the engine kernel (axial and with
-torsion), the load rows (``engine.loads``, the fit's), the ensemble reduction
-(``analysis.ensembles``) and the regime tests (``analysis.observables``), which most jobs call:
-compiled here once, the later jobs load them from the cache rather than several compiling the
-same function side by side (a function only one other job calls, such as the work-precision
-comparator, compiles there)."""
+torsion), the ensemble reduction (``analysis.ensembles``) and the regime tests
+(``analysis.observables``), which most jobs call: compiled here once, the later jobs load them
+from the cache rather than several compiling the same function side by side. A function only one
+job calls compiles in that job: the work-precision comparator, and the load rows
+(``engine.loads``), which only the fit calls, so that the jobs waiting for this one start sooner."""
 
 from pathlib import Path
-
-import numpy as np
 
 from bouncedisk.analysis.observables import chatter_cycle, find_period
 from bouncedisk.analysis.statistics import run_stats
 from bouncedisk.engine import EngineConfig, simulate_arrays
-from bouncedisk.engine.loads import omega_integrals
 from bouncedisk.io.job_log import log_to
 from bouncedisk.model.scene import scene_from_mapping
 
@@ -44,10 +41,6 @@ with log_to(snakemake.log[0]) as log:
     tail = (ev["t"], ev["phase"], ev["v_rel"], ev["kind"], cfg.omega_s)
     cycle, period = chatter_cycle(*tail), find_period(*tail)
     log.info("regime tests ready: chatter cycle %s, period %s", cycle, period)
-    cfg = EngineConfig(
-        e=0.3, omega_s=1.5, torsion=True, t_end=5.0, stats_from=1.0, max_events=events
-    )
-    log.info("load rows ready: %s", omega_integrals(cfg, np.array([0.0, 0.1])))
     stats = run_stats(scene_from_mapping(WARM_SCENE, source="compile_engine"))
     log.info("ensemble reduction ready: regime %s", stats.regime[0])
     Path(snakemake.output[0]).touch()
