@@ -119,6 +119,74 @@ def test_a_curve_at_another_drive_frequency_is_read_at_its_condition():
     assert stated_truth([stated])["omega_s"] == pytest.approx(3.4)
 
 
+def test_a_curve_at_another_stated_amplitude_is_read_at_its_condition():
+    """Where the curves state different axial amplitudes (``motor.U0_m``), a curve's ``U0`` is
+    the reference's times the ratio (``ω_s ∝ √U0``, ``R_φ ∝ U0``: four times the amplitude is
+    twice ``ω_s`` and four times ``R_φ``); where they state one amplitude or none, ``U0`` is
+    held; where they differ, a curve that states none is one line naming it."""
+    import dataclasses
+    from types import SimpleNamespace
+
+    from bouncedisk.fitting.joint import reference_u0
+    from bouncedisk.model.errors import InputError
+
+    theta = {"e": 0.55, "log10_r_phi": math.log10(0.002), "psi": 0.4, "omega_s": 1.7}
+    base = dataclasses.replace(_fake_load_data(), sidecar={"motor": {"U0_m": 1e-6}})
+    big = dataclasses.replace(base, sidecar={"motor": {"U0_m": 4e-6}}, path="big.csv")
+    part = lp.LoadPart([base, big], 0.03, 5, drive_hz=F_HZ, phi0_rad=PHI0, u0=1e-6)
+    at = part.condition(theta, big)
+    assert at["omega_s"] == pytest.approx(3.4, rel=1e-12)
+    assert at["log10_r_phi"] == pytest.approx(math.log10(0.008), abs=1e-12)
+    assert part.condition(theta, base) == pytest.approx(theta, rel=1e-12)
+    held = lp.LoadPart([base, big], 0.03, 5, drive_hz=F_HZ, phi0_rad=PHI0)  # no u0: held
+    assert held.condition(theta, big) == pytest.approx(theta, rel=1e-12)
+    # which: amplitudes that differ are conditions; one or none is held; a gap is one line
+    assert lp.amplitudes([base, big], 1e-6, "run.yaml") is True
+    assert lp.amplitudes([base, base], 1e-6, "run.yaml") is False
+    assert lp.amplitudes([base, dataclasses.replace(base, sidecar={})], None, "run.yaml") is False
+    with pytest.raises(InputError, match=r"^run.yaml: motor.U0_m: is required") as ex:
+        lp.amplitudes([base, big], None, "run.yaml")
+    assert "\n" not in ex.value.line()
+    with pytest.raises(InputError, match=r"^gap.yaml: motor.U0_m: is required"):
+        lp.amplitudes([big, dataclasses.replace(base, sidecar={}, path="gap.csv")], 1e-6, "r.yaml")
+    # the run-ups' stated amplitude is the reference's only where the amplitudes are conditions
+    runups = SimpleNamespace(sidecar={"motor": {"U0_m": 1e-6}}, sidecar_path="run.yaml", path="")
+    assert reference_u0([base, big], runups) == 1e-6
+    assert reference_u0([base, base], runups) is None
+
+
+@pytest.mark.cost(8)
+def test_the_generating_point_reproduces_a_curve_at_four_times_the_amplitude(tmp_path):
+    """A load curve of the test motor run at four times the stator's amplitude (made at ``ω_s``
+    doubled and ``R_φ`` four times), read by the load part at the run-ups' point: with the
+    amplitudes stated its readings are within their spread (``χ²`` of 5 readings near 5); read
+    as if the amplitude were held, they are not."""
+    true, top = CASES["periodic"]
+    spec = {
+        "parameters": {**true, "omega_s": 2 * true["omega_s"], "r_phi": 4 * true["r_phi"]},
+        "e_sigma": 0.03, "drive_frequency_hz": F_HZ, "Phi0_rad": PHI0, "rotor": ROTOR,
+        "preload_N": PRELOAD,
+        "load_curve": {"loads_Nm": list(np.linspace(0.0, 0.8, 5) * torque_scale(true)),
+                       "repeats": 5, "window_s": [0.03, 0.06], "seed": 72},
+    }  # fmt: skip
+    ldf, side = synthetic_load_curve(spec)
+    side["motor"]["U0_m"] = 4e-6
+    write_curve(ldf, tmp_path / "big.csv", side)
+    big = read_load_curve(tmp_path / "big.csv")
+    x = {"e": true["e"], "log10_r_phi": math.log10(true["r_phi"]), "psi": true["psi"],
+         "omega_s": true["omega_s"]}  # fmt: skip
+    key = np.array([*x.values(), 0.03])
+
+    def chi2(u0):
+        part = lp.LoadPart([big], 0.03, 5, drive_hz=F_HZ, phi0_rad=PHI0, u0=u0)
+        part.set_cov(part.values(x, key, lp.LOAD_PILOT))
+        r = part.residuals(x, key, lp.LOAD_MEMBERS)
+        return float(r @ r)
+
+    stated, held = chi2(1e-6), chi2(None)
+    assert stated < 20.0 < 10 * stated < held, (stated, held)
+
+
 def test_a_reading_is_the_members_window_mean():
     """:func:`loadpart.curve_readings` is, at every load, the ensemble reducer's mean speed over
     the window of the same member run under that load alone, in rad/s (two routes through the

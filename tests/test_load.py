@@ -529,7 +529,7 @@ def test_the_reference_condition_does_not_hang_on_the_order_of_the_curves(tmp_pa
     other = dataclasses.replace(base, drive_frequency_hz=14000.0, rotor=heavy, preload_n=2.0)
     for curves in ([base, other], [other, base]):
         ref = reference_setup(curves, 20000.0, 2e-4)
-        assert ref == (20000.0, 2e-4, base.rotor, base.preload_n)
+        assert ref == (20000.0, 2e-4, base.rotor, base.preload_n, None)  # no amplitude stated
     # no curve at the run-ups' drive: every curve's, which must agree
     assert reference_setup([other], 20000.0, 2e-4).rotor == heavy
     clash = dataclasses.replace(base, rotor=heavy, path=str(tmp_path / "clash.csv"))

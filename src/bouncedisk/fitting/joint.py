@@ -15,7 +15,7 @@ import numpy as np
 from ..io.load_curves import LoadCurveData
 from ..io.runup_curves import MotorCurve
 from ..model.errors import InputError
-from .loadpart import LoadPart, Setup, check_window, convert, setup
+from .loadpart import LoadPart, Setup, amplitudes, check_window, convert, setup, stated_u0
 from .loadpart import band as load_band
 from .members import EnsembleSpec
 from .objective import Objective, snap
@@ -51,7 +51,7 @@ def stated_truth(curves: list[LoadCurveData], reference: Setup | None = None) ->
             out = {k: float(gen[k]) for k in (*TRUTH_KEYS, "e_sigma") if k in gen}
             if reference is not None:
                 theta = {**out, "log10_r_phi": math.log10(out["r_phi"])}
-                theta = convert(theta, setup(d), reference)
+                theta = convert(theta, setup(d, reference.u0 is not None), reference)
                 out["omega_s"], out["r_phi"] = theta["omega_s"], 10.0 ** theta["log10_r_phi"]
             return out
     return {}
@@ -102,7 +102,8 @@ def load_part(
     """The load curves' part of the likelihood (``None`` without load curves), after checking
     that the run-ups state ``Φ0`` (the torque scale needs it). Each curve is read at its own
     condition (:meth:`.loadpart.LoadPart.condition`); the reference is the run-ups' drive and
-    ``Φ0`` with the rotor and preload of the curves run at them (:func:`.loadpart.reference_setup`)."""
+    ``Φ0`` with the rotor and preload of the curves run at them (:func:`.loadpart.reference_setup`),
+    and their amplitude where the curves state different ones (:func:`.loadpart.amplitudes`)."""
     if not curves:
         return None
     for d in curves:
@@ -122,7 +123,16 @@ def load_part(
         progress=progress,
         drive_hz=fitted.drive_frequency_hz,
         phi0_rad=fitted.phi0_rad,
+        u0=reference_u0(curves, fitted),
     )
+
+
+def reference_u0(curves: list[LoadCurveData], fitted: MotorCurve) -> float | None:
+    """The run-ups' stated axial amplitude where the curves' amplitudes are conditions, else
+    ``None`` (:func:`.loadpart.amplitudes`; one line naming a curve that states none, when some
+    differ)."""
+    u0 = stated_u0(fitted.sidecar)
+    return u0 if amplitudes(curves, u0, fitted.sidecar_path or fitted.path) else None
 
 
 def joint_consistent(obj: Objective, members: int, best_chi2: float) -> np.ndarray:

@@ -20,7 +20,7 @@ import xarray as xr
 
 from ..io.provenance import sha256_file
 from .core import FitResult
-from .joint import stated_truth, truth_coordinate
+from .joint import reference_u0, stated_truth, truth_coordinate
 from .loadpart import LOAD_BAND, LOAD_MEMBERS, reference_setup, setup
 from .members import BOUNDS
 from .uncertainty import identified
@@ -147,7 +147,9 @@ def truth(fit: FitResult) -> dict[str, float]:
 
 def _reference(fit: FitResult):
     """The condition the fit's parameters are stated at (:func:`.loadpart.reference_setup`)."""
-    return reference_setup(fit.load.curves, fit.curve.drive_frequency_hz, fit.curve.phi0_rad)
+    curve = fit.curve
+    u0 = reference_u0(fit.load.curves, curve)
+    return reference_setup(fit.load.curves, curve.drive_frequency_hz, curve.phi0_rad, u0)
 
 
 def _condition_attrs(fit: FitResult) -> dict:
@@ -156,14 +158,16 @@ def _condition_attrs(fit: FitResult) -> dict:
 
     def words(s) -> str:
         r = s.rotor
+        amplitude = "" if s.u0 is None else f", U0 {s.u0:g} m"
         return (
             f"{s.f:g} Hz, Phi0 {s.phi0:g} rad, rotor m_r {r['m_r_kg']:g} kg, r_g "
-            f"{r['r_g_m']:g} m, r_c {r['r_c_m']:g} m, preload {s.preload:g} N"
+            f"{r['r_g_m']:g} m, r_c {r['r_c_m']:g} m, preload {s.preload:g} N{amplitude}"
         )
 
+    conditions = (setup(d, ref.u0 is not None) for d in fit.load.curves)
     return {
         "reference_condition": words(ref),
-        "load_curve_conditions": "; ".join(words(setup(d)) for d in fit.load.curves),
+        "load_curve_conditions": "; ".join(words(c) for c in conditions),
     }
 
 

@@ -31,9 +31,13 @@ amplitude ``Φ0``, rotor and preload: each is a condition of the same motor. Its
 nondimensional ``ω_s = 2π f t_c`` (``t_c = √(U0/g_eff)``, ``g_eff = g + F/m_r``) and ``R_φ = μ U0
 r_eff / (r_g² Φ0)`` are those of the reference condition, the run-ups' drive and ``Φ0`` with the
 rotor and preload of the load curves run at them (:func:`reference_setup`; docs/model.md
-"Physical conversion"; :meth:`LoadPart.condition`). Holding ``U0`` and ``ψ`` across drive
-frequencies assumes the lab holds the stator's amplitude (a driver with amplitude feedback) and
-that its phase does not move; a curve's stated ``U0_m`` is not read.
+"Physical conversion"; :meth:`LoadPart.condition`). The stator's amplitude is a condition too:
+where the curves state different axial amplitudes (sidecar ``motor.U0_m``, the run-ups' and
+every load curve's, :func:`amplitudes`), a curve's ``U0`` is the reference's times the ratio of
+the stated amplitudes (``ω_s ∝ √U0``, ``R_φ ∝ U0``); the absolute ``U0`` stays the fit's (its
+``ω_s`` at the reference drive). Where they state none or one amplitude, ``U0`` is held across
+conditions, which assumes the lab holds the stator's amplitude (a driver with amplitude feedback);
+``ψ`` is held, which assumes the stator's phase does not move.
 """
 
 from __future__ import annotations
@@ -81,7 +85,8 @@ def _physical(
     theta: dict[str, float], f: float, phi0: float, rotor: dict, preload: float
 ) -> PhysicalParameters:
     """The motor of parameter point ``θ`` driven at ``(f, Φ0)`` with ``rotor`` and ``preload``,
-    in SI units (:meth:`~bouncedisk.model.params.PhysicalParameters.from_nondimensional`)."""
+    in SI units (:meth:`~bouncedisk.model.params.PhysicalParameters.from_nondimensional`; ``U0``
+    follows from ``ω_s``, ``f`` and ``g_eff``)."""
     p = Parameters(
         e=theta["e"], omega_s=theta["omega_s"], r_phi=10.0 ** theta["log10_r_phi"], psi=theta["psi"]
     )
@@ -93,27 +98,60 @@ def _physical(
 
 class Setup(NamedTuple):
     """What a curve states of how the motor ran: drive ``f`` (Hz), ``Φ0`` (rad), the rotor
-    (``m_r_kg``, ``r_g_m``, ``r_c_m``) and the preload (N)."""
+    (``m_r_kg``, ``r_g_m``, ``r_c_m``), the preload (N) and the axial amplitude ``u0`` (m;
+    ``None`` where not stated or where every curve states the same, module docstring)."""
 
     f: float
     phi0: float
     rotor: dict
     preload: float
+    u0: float | None = None
 
 
-def setup(d: LoadCurveData) -> Setup:
-    """The condition load curve ``d`` states."""
-    return Setup(d.drive_frequency_hz, d.phi0_rad, d.rotor, d.preload_n)
+def stated_u0(sidecar: dict) -> float | None:
+    """The axial amplitude ``motor.U0_m`` (m) a curve's sidecar states, ``None`` if none."""
+    value = (sidecar.get("motor") or {}).get("U0_m")
+    return None if value is None else float(value)
+
+
+def amplitudes(curves: list[LoadCurveData], runups_u0: float | None, runups: str) -> bool:
+    """Whether the amplitudes are conditions (module docstring): ``True`` when the run-ups
+    (``runups_u0``, stated in the sidecar of ``runups``) and the load curves state different
+    ``U0_m``, each then stating one (one line naming the first that does not, otherwise);
+    ``False`` when they state one amplitude or none (``U0`` held across conditions)."""
+    stated = [runups_u0] + [stated_u0(d.sidecar) for d in curves]
+    if len({u for u in stated if u is not None}) <= 1:
+        return False
+    paths = [runups] + [str(Path(d.path).with_suffix(".yaml")) for d in curves]
+    for path, u in zip(paths, stated, strict=True):
+        if u is None:
+            raise InputError(
+                path,
+                "motor.U0_m",
+                "is required: the motor's curves state different axial amplitudes, and each "
+                "amplitude is a condition of the motor (docs/user_guide/fitting.md, Conditions)",
+            )
+    return True
+
+
+def setup(d: LoadCurveData, with_u0: bool = False) -> Setup:
+    """The condition load curve ``d`` states (its amplitude when ``with_u0``, :func:`amplitudes`)."""
+    u0 = stated_u0(d.sidecar) if with_u0 else None
+    return Setup(d.drive_frequency_hz, d.phi0_rad, d.rotor, d.preload_n, u0)
 
 
 def reference_setup(
-    curves: list[LoadCurveData], drive_hz: float | None, phi0_rad: float | None
+    curves: list[LoadCurveData],
+    drive_hz: float | None,
+    phi0_rad: float | None,
+    u0: float | None = None,
 ) -> Setup:
     """The condition a fit's parameter point is stated at (module docstring, "Conditions"): the
     run-ups' drive ``drive_hz`` and ``phi0_rad`` (the first curve's where ``None``) with the
     rotor and preload of the load curves run at that drive and ``Φ0`` (of every curve when none
     is): the run-ups' sidecars state no rotor. Those curves must agree on it (one line naming
-    the first that does not, otherwise), so the order of the curves changes nothing."""
+    the first that does not, otherwise), so the order of the curves changes nothing. ``u0``: the
+    run-ups' stated amplitude where the amplitudes are conditions (:func:`amplitudes`)."""
     f = curves[0].drive_frequency_hz if drive_hz is None else drive_hz
     phi0 = curves[0].phi0_rad if phi0_rad is None else phi0_rad
     same = [d for d in curves if (d.drive_frequency_hz, d.phi0_rad) == (f, phi0)] or curves
@@ -125,19 +163,22 @@ def reference_setup(
                 f"differs from {same[0].path}'s, at the same drive and Phi0: the run-ups' rotor "
                 "and preload are ambiguous (docs/user_guide/fitting.md, Conditions)",
             )
-    return Setup(f, phi0, same[0].rotor, same[0].preload_n)
+    return Setup(f, phi0, same[0].rotor, same[0].preload_n, u0)
 
 
 def convert(theta: dict[str, float], src: Setup, dst: Setup) -> dict[str, float]:
     """Parameter point ``θ`` of the motor run as ``src`` states, for the same motor run as
     ``dst`` states (module docstring, "Conditions"): the motor in SI units
     (:meth:`~bouncedisk.model.params.PhysicalParameters.from_nondimensional`), driven and loaded
-    as ``dst`` says, made nondimensional again; ``U0``, ``μ``, ``e`` and ``ψ`` are kept."""
+    as ``dst`` says, made nondimensional again; ``μ``, ``e`` and ``ψ`` are kept, and ``U0``
+    too unless both state an amplitude (then scaled by ``dst.u0 / src.u0``)."""
     if src == dst:
         return theta
     r = dst.rotor
+    p = _physical(theta, src.f, src.phi0, src.rotor, src.preload)
     p = dataclasses.replace(
-        _physical(theta, *src),
+        p,
+        U0=p.U0 * (dst.u0 / src.u0) if src.u0 and dst.u0 else p.U0,
         f=dst.f,
         Phi0=dst.phi0,
         m_r=r["m_r_kg"],
@@ -225,6 +266,9 @@ class LoadPart:
         The drive frequency and ``Φ0`` of the reference condition (the run-ups'), the condition
         ``θ`` is stated at (:func:`reference_setup`); a curve of another condition is read at its
         own (:meth:`condition`). ``None``: the first curve's.
+    u0 : float or None
+        The run-ups' stated axial amplitude (m) where the amplitudes are conditions
+        (:func:`amplitudes`), else ``None`` (``U0`` held across conditions).
     given_reference : Setup or None
         The reference condition itself, when known whole (``drive_hz`` and ``phi0_rad`` are then
         not used).
@@ -238,6 +282,7 @@ class LoadPart:
     progress: Callable[[str], None] | None = None  # long evaluations report through it
     drive_hz: float | None = None
     phi0_rad: float | None = None
+    u0: float | None = None
     given_reference: Setup | None = None
     cache: dict = field(default_factory=dict)
     cov_model: np.ndarray | None = None
@@ -254,12 +299,12 @@ class LoadPart:
         self.floor = LOAD_FLOOR * max(float(np.max(np.abs(self.y))), 1e-12)
         #: The reference condition (``given_reference``, else :func:`reference_setup`).
         self.reference = self.given_reference or reference_setup(
-            self.curves, self.drive_hz, self.phi0_rad
+            self.curves, self.drive_hz, self.phi0_rad, self.u0
         )
 
     def condition(self, theta: dict[str, float], d: LoadCurveData) -> dict[str, float]:
         """``θ`` (stated at the reference condition) at curve ``d``'s (:func:`convert`)."""
-        return convert(theta, self.reference, setup(d))
+        return convert(theta, self.reference, setup(d, self.reference.u0 is not None))
 
     def slices(self) -> list[tuple[np.ndarray, slice]]:
         """Every curve's torques (N·m) and where its readings sit in the flattened vectors."""
