@@ -33,28 +33,38 @@ from bouncedisk.io.runup_curves import write_curve
 
 SPEC = "workflow/config/synthetic_motor.yaml"
 SHIPPED_LOAD = "data/prototype/synthetic_motor_load.csv"
-#: The candidate second conditions: changes to the shipped motor's drive, rotor or preload.
+#: The candidate second conditions: changes to the shipped motor's drive, rotor, preload or the
+#: stator's axial amplitude (factors).
 CONDITIONS = {
     "drive frequency x 1.5": {"drive_frequency_hz": 1.5},
     "drive frequency x 0.7": {"drive_frequency_hz": 0.7},
     "added inertia: r_g x 1.5": {"r_g_m": 1.5},
     "preload x 3": {"preload_N": 3.0},
+    "axial amplitude x 0.5": {"U0_m": 0.5},
+    "axial amplitude x 2": {"U0_m": 2.0},
+    "drive voltage x 0.5 (U0 and Phi0 halved)": {"U0_m": 0.5, "Phi0_rad": 0.5},
 }
+#: The stated axial amplitude of the shipped condition (m): only ratios of amplitudes are read
+#: (:func:`bouncedisk.fitting.loadpart.convert`), so any value serves.
+U0_NOMINAL = 1.0e-6
 #: Members of each point's covariance and of its mean reading (the fit's LOAD_PILOT, LOAD_MEMBERS).
 COV_MEMBERS, MEAN_MEMBERS = lp.LOAD_PILOT, lp.LOAD_MEMBERS
 
 
 def condition_spec(spec: dict, change: dict) -> dict:
     """The shipped motor's spec run as ``change`` says (factors on the drive frequency, the
-    rotor's ``r_g_m`` or the preload), its parameters converted to that condition and its loads
-    the shipped ones as fractions of the torque scale."""
-    ref = lp.Setup(spec["drive_frequency_hz"], spec["Phi0_rad"], spec["rotor"], spec["preload_N"])
+    rotor's ``r_g_m``, the preload, the axial amplitude ``U0_m`` or ``Φ0``), its parameters converted to
+    that condition and its loads the shipped ones as fractions of the torque scale."""
+    ref = lp.Setup(
+        spec["drive_frequency_hz"], spec["Phi0_rad"], spec["rotor"], spec["preload_N"], U0_NOMINAL
+    )
     rotor = {k: v * change.get(k, 1.0) for k, v in spec["rotor"].items()}
     cond = lp.Setup(
         ref.f * change.get("drive_frequency_hz", 1.0),
-        ref.phi0,
+        ref.phi0 * change.get("Phi0_rad", 1.0),
         rotor,
         ref.preload * change.get("preload_N", 1.0),
+        U0_NOMINAL * change.get("U0_m", 1.0),
     )
     p = spec["parameters"]
     theta = {
@@ -66,7 +76,9 @@ def condition_spec(spec: dict, change: dict) -> dict:
     at = lp.convert(theta, ref, cond)
     t0 = lp.motor_scales(theta, _data(ref))[2]
     t1 = lp.motor_scales(at, _data(cond))[2]
-    out = dict(spec, drive_frequency_hz=cond.f, rotor=rotor, preload_N=cond.preload)
+    out = dict(
+        spec, drive_frequency_hz=cond.f, Phi0_rad=cond.phi0, rotor=rotor, preload_N=cond.preload
+    )
     out["parameters"] = dict(p, omega_s=at["omega_s"], r_phi=10.0 ** at["log10_r_phi"])
     loads = [x * t1 / t0 for x in spec["load_curve"]["loads_Nm"]]
     out["load_curve"] = dict(
@@ -117,11 +129,13 @@ def main() -> None:
         ap.error(f"{args.fit}: no fit file; run the pipeline first (snakemake --cores 2)")
     spec = read_spec(SPEC)
     pts = points(args.fit, spec)
-    ref = lp.setup(read_load_curve(SHIPPED_LOAD))
+    # the shipped condition with its amplitude stated: each second curve states its own
+    ref = lp.setup(read_load_curve(SHIPPED_LOAD))._replace(u0=U0_NOMINAL)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for name, change in CONDITIONS.items():
             df, side = synthetic_load_curve(condition_spec(spec, change))
+            side["motor"]["U0_m"] = U0_NOMINAL * change.get("U0_m", 1.0)
             path = Path(tmp) / "second.csv"
             write_curve(df, path, side)
             second = read_load_curve(path)
