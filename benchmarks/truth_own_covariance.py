@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 from scipy.stats import chi2 as chi2_dist
-from validation_motors import FIT_SEED, make_data
+from validation_motors import FIT_SEED, conditions_of, make_data
 
 from bouncedisk.fitting import FitSettings
 from bouncedisk.fitting.core import pose_fit
@@ -40,7 +40,7 @@ def own_reading(row: dict, cores: int) -> tuple[float, int]:
     """The generating point's chi2 under its own covariance, and the number of statistics."""
     m, k = row["true"], row["motor"]
     with tempfile.TemporaryDirectory() as tmp:
-        run, loads = make_data(Path(tmp), m, k, tuple(row["drives"]))
+        run, loads = make_data(Path(tmp), m, k, tuple(conditions_of(row)))
         settings = FitSettings(seed=FIT_SEED, cores=cores)
         obj = pose_fit(read_curve(run), settings, None, [read_load_curve(x) for x in loads]).obj
         values = {**m, "log10_r_phi": math.log10(m["r_phi"])}

@@ -10,14 +10,15 @@ mm, a run-up of 0.05-1 s sampled at 0.4 drive periods, and a load curve of 12 lo
 (``bouncedisk fit RUN.csv --load LOAD.csv``: ``e_sigma`` fitted, the default search). With
 ``--second-drive 0.7`` each motor also has a second load curve, of the same loads' design, at
 0.7 times its drive frequency (the stator's amplitude, ``Phi0``, rotor and preload held: a
-second condition, docs/user_guide/fitting.md "Conditions"); the fitted parameters are those at
-the run-up's drive. Nothing in the package names or reads these motors. ``--seed S`` draws
+second condition, docs/user_guide/fitting.md "Conditions"); with ``--second-voltage 0.5`` a
+second load curve at the same drive with both stator amplitudes (``U0`` and ``Phi0``) halved,
+every curve stating its ``U0_m``. The fitted parameters are those at the run-up's condition. Nothing in the package names or reads these motors. ``--seed S`` draws
 other motors of the same design (a tuning draw, kept apart from the validation motors; their
 noise streams are keyed by the motor's index as the validation motors' are) and ``--scan N``
 sets the fit's scan points, to compare search settings on tuning motors.
 
     python benchmarks/validation_motors.py --motors 32 [--first K --count N] [--cores 2]
-        [--second-drive 0.7] [--seed S] [--scan N] [--json benchmarks/out/fit_validation_rows.jsonl]
+        [--second-drive 0.7 | --second-voltage 0.5] [--seed S] [--scan N] [--json benchmarks/out/fit_validation_rows.jsonl]
     python benchmarks/validation_motors.py --rates benchmarks/out/fit_validation_rows.jsonl [--record]
     python benchmarks/validation_motors.py --rates benchmarks/out/fit_validation_2drives_rows.jsonl \
         --record --name fit_validation_2drives
@@ -120,16 +121,28 @@ def stall(m: dict) -> float:
     return float(loads[stop[0]] if len(stop) else loads[-1])
 
 
-def at_drive(m: dict, factor: float) -> dict:
-    """Motor ``m`` driven at ``factor`` times its drive frequency, its stator amplitude, rotor,
-    ``Phi0`` and preload held: ``omega_s`` and ``R_phi`` converted
-    (:func:`bouncedisk.fitting.loadpart.convert`)."""
-    if factor == 1.0:
+def u0(m: dict) -> float:
+    """Motor ``m``'s axial amplitude ``U0 = g_eff t_c²`` (m), ``t_c = omega_s / 2π f``."""
+    g_eff = 9.81 + PRELOAD / m["rotor"]["m_r_kg"]
+    return g_eff * (m["omega_s"] / (2 * math.pi * m["f_hz"])) ** 2
+
+
+def at_condition(m: dict, condition: tuple[float, float]) -> dict:
+    """Motor ``m`` driven at ``drive`` times its drive frequency and ``voltage`` times its
+    stator's amplitudes (``U0`` and ``Phi0``; ``condition = (drive, voltage)``), its rotor and
+    preload held: ``omega_s`` and ``R_phi`` converted (:func:`bouncedisk.fitting.loadpart.convert`),
+    and ``u0_m``, the amplitude its curve states, where ``m`` states one."""
+    drive, voltage = condition
+    if condition == (1.0, 1.0):
         return m
-    src = lp.Setup(m["f_hz"], m["phi0"], m["rotor"], PRELOAD)
-    dst = lp.Setup(m["f_hz"] * factor, m["phi0"], m["rotor"], PRELOAD)
+    a = u0(m)
+    src = lp.Setup(m["f_hz"], m["phi0"], m["rotor"], PRELOAD, a)
+    dst = lp.Setup(m["f_hz"] * drive, m["phi0"] * voltage, m["rotor"], PRELOAD, a * voltage)
     at = lp.convert(_theta(m), src, dst)
-    return dict(m, f_hz=dst.f, omega_s=at["omega_s"], r_phi=10.0 ** at["log10_r_phi"])
+    out = dict(m, f_hz=dst.f, phi0=dst.phi0, omega_s=at["omega_s"], r_phi=10.0 ** at["log10_r_phi"])
+    if "u0_m" in m:  # the curves state their amplitudes (make_data)
+        out["u0_m"] = dst.u0
+    return out
 
 
 def write_load_curve(path: Path, m: dict, seed: int, key: list[int]) -> Path:
@@ -146,6 +159,8 @@ def write_load_curve(path: Path, m: dict, seed: int, key: list[int]) -> Path:
                            "window_s": m["window_s"], "seed": seed}}  # fmt: skip
     ldf, side = synthetic_load_curve(spec)
     side["repeats"] = REPEATS
+    if "u0_m" in m:  # the amplitudes are conditions: every curve states its own
+        side["motor"]["U0_m"] = m["u0_m"]
     noise = READING_NOISE * speed
     ldf["speed_sd_rad_s"] = np.sqrt(ldf["speed_sd_rad_s"].fillna(0.0) ** 2 + noise**2)
     ldf["speed_rad_s"] += rng.normal(0.0, noise / math.sqrt(REPEATS), len(ldf))
@@ -153,9 +168,9 @@ def write_load_curve(path: Path, m: dict, seed: int, key: list[int]) -> Path:
     return path
 
 
-def make_data(folder: Path, m: dict, k: int, drives: tuple[float, ...]) -> tuple[Path, list]:
-    """Motor ``k``'s run-up, and a load curve at each of ``drives`` times its drive frequency
-    (module docstring), written to ``folder``."""
+def make_data(folder: Path, m: dict, k: int, conditions: tuple) -> tuple[Path, list]:
+    """Motor ``k``'s run-up, and a load curve at each of ``conditions`` (``(drive, voltage)``
+    factors, :func:`at_condition`; module docstring), written to ``folder``."""
     t_c = m["omega_s"] / (2 * math.pi * m["f_hz"])
     speed = m["r_phi"] * m["phi0"] / t_c  # rad/s per unit of nondimensional speed
     dt = PER_PERIOD / m["f_hz"]
@@ -163,28 +178,32 @@ def make_data(folder: Path, m: dict, k: int, drives: tuple[float, ...]) -> tuple
     df = synthesize_curve(params, m["f_hz"], m["phi0"], m["span_s"], dt, NOISE * speed,
                           5000 + k, member=0, e_sigma=m["e_sigma"])  # fmt: skip
     run = folder / "run.csv"
+    motor = {"drive_frequency_hz": m["f_hz"], "Phi0_rad": m["phi0"]}
+    if any(v != 1.0 for _, v in conditions):
+        m = dict(m, u0_m=u0(m))
+        motor["U0_m"] = m["u0_m"]
     write_curve(df, run, {"source": "benchmark", "synthetic": True,
-                          "units": {"time": "s", "omega": "rad/s"},
-                          "motor": {"drive_frequency_hz": m["f_hz"], "Phi0_rad": m["phi0"]}})  # fmt: skip
-    loads = [write_load_curve(folder / f"load{j}.csv", at_drive(m, x), 6000 + k + 1000 * j,
-                              [k, j] if j else [k]) for j, x in enumerate(drives)]  # fmt: skip
+                          "units": {"time": "s", "omega": "rad/s"}, "motor": motor})  # fmt: skip
+    loads = [write_load_curve(folder / f"load{j}.csv", at_condition(m, c), 6000 + k + 1000 * j,
+                              [k, j] if j else [k]) for j, c in enumerate(conditions)]  # fmt: skip
     return run, loads
 
 
 def recover(
-    m: dict, k: int, cores: int, drives: tuple[float, ...] = (1.0,), scan: int = FitSettings.scan
+    m: dict, k: int, cores: int, conditions: tuple = ((1.0, 1.0),), scan: int = FitSettings.scan
 ) -> dict:
     """Fit motor ``k`` jointly (the default fit, at ``scan`` scan points) on its run-up and its
-    load curves at ``drives`` times its drive frequency, and read its intervals against the
-    truth."""
+    load curves at ``conditions`` (``(drive, voltage)`` factors), and read its intervals against
+    the truth."""
     with tempfile.TemporaryDirectory() as tmp:
-        run, loads = make_data(Path(tmp), m, k, drives)
+        run, loads = make_data(Path(tmp), m, k, conditions)
         start = time.perf_counter()
         settings = FitSettings(seed=FIT_SEED, cores=cores, scan=scan)
         fit = fit_curve(read_curve(run), settings,
                         load=[read_load_curve(x) for x in loads])  # fmt: skip
         ds = fit_dataset(fit)
-    row = {"motor": k, "true": m, "drives": list(drives), "scan": scan, "chi2": round(float(ds.attrs["chi2"]), 3),
+    drives, voltages = ([c[i] for c in conditions] for i in (0, 1))
+    row = {"motor": k, "true": m, "drives": drives, "voltages": voltages, "scan": scan, "chi2": round(float(ds.attrs["chi2"]), 3),
            "n": int(ds.attrs["n_statistics"]), "adequate": ds.attrs["identified"] == "yes",
            "wall_s": round(time.perf_counter() - start, 1), "holds": {}, "widths": {},
            "chi2_truth": round(float(ds.attrs.get("chi2_generating_both", math.nan)), 3)}  # fmt: skip
@@ -235,6 +254,20 @@ def motor_line(r: dict) -> tuple[str, str]:
     return design, result
 
 
+def conditions_of(row: dict) -> list[tuple[float, float]]:
+    """A row's load-curve conditions, ``(drive, voltage)`` factors (rows without voltages: 1)."""
+    drives = row.get("drives", [1.0])
+    return list(zip(drives, row.get("voltages", [1.0] * len(drives)), strict=True))
+
+
+def condition_words(c: tuple[float, float]) -> str:
+    """``(drive, voltage)`` factors in words."""
+    drive, voltage = c
+    if voltage == 1.0:
+        return f"{drive:g} x the drive frequency"
+    return f"{voltage:g} x the drive voltage"
+
+
 def write_rates_record(rows: list[dict], name: str = "fit_validation") -> None:
     """The rates and the motors' lines as the performance page's record named ``name``."""
     from record import write_record
@@ -248,13 +281,15 @@ def write_rates_record(rows: list[dict], name: str = "fit_validation") -> None:
                f"fit on {r['generating_point_better']}; median widths e {q['e'] and q['e'][1]}, "
                f"psi {q['psi'] and q['psi'][1]}, omega_s {q['omega_s'] and q['omega_s'][1]}; "
                f"longest fit {r['wall_s_max']:g} s")  # fmt: skip
-    drives = sorted({tuple(x.get("drives", [1.0])) for x in rows})
-    design = " and ".join(" + ".join(f"{d:g} x" for d in ds) for ds in drives)
+    designs = sorted({tuple(conditions_of(x)) for x in rows})
+    design = " and ".join(" + ".join(condition_words(c) for c in cs) for cs in designs)
     lines = [(f"the default joint fit on {r['motors']} validation motors, load curves at "
-              f"{design} the drive frequency", summary)]  # fmt: skip
+              f"{design}", summary)]  # fmt: skip
+    second = [c for cs in designs for c in cs[1:]]
     title = "The fit on validation motors" + (
-        ", two drive frequencies" if len(drives[-1]) > 1 else ""
-    )
+        ", two drive voltages" if any(v != 1.0 for _, v in second)
+        else ", two drive frequencies" if second else ""
+    )  # fmt: skip
     write_record(name, title,
                  lines + [motor_line(x) for x in rows])  # fmt: skip
 
@@ -269,6 +304,12 @@ def main() -> None:
         type=float,
         metavar="FACTOR",
         help="a second load curve at FACTOR times the drive frequency (e.g. 0.7)",
+    )
+    ap.add_argument(
+        "--second-voltage",
+        type=float,
+        metavar="FACTOR",
+        help="a second load curve at FACTOR times the drive voltage: U0 and Phi0 (e.g. 0.5)",
     )
     ap.add_argument(
         "--seed",
@@ -297,9 +338,14 @@ def main() -> None:
         except (KeyError, TypeError) as ex:
             ap.error(f"--rates {args.rates}: not rows of this benchmark ({ex})")
         return
-    drives = (1.0,) if args.second_drive is None else (1.0, args.second_drive)
+    conditions = [(1.0, 1.0)]
+    if args.second_drive is not None:
+        conditions.append((args.second_drive, 1.0))
+    if args.second_voltage is not None:
+        conditions.append((1.0, args.second_voltage))
     sample = draw(args.motors, args.seed)
-    rows = run_slice(args, lambda true, k: recover(true, k, args.cores, drives, args.scan), sample)
+    run = lambda true, k: recover(true, k, args.cores, tuple(conditions), args.scan)  # noqa: E731
+    rows = run_slice(args, run, sample)
     print(json.dumps(rates(rows)))
 
 

@@ -247,7 +247,7 @@ def test_save_figure_lays_out_once_and_crops_every_format_to_the_same_box(tmp_pa
     """The PDF and the PNG of one figure: both cropped to the figure's tight box (the PNG's
     pixels are that box at its dpi, as a save of its own gives them), the layout frozen after
     the first save (no layout engine left), and the PDF's page the same box in points."""
-    from PIL import Image
+    from PIL import Image, ImageChops
 
     def draw():
         fig = Figure(figsize=(6, 3), layout="constrained")
@@ -262,9 +262,14 @@ def test_save_figure_lays_out_once_and_crops_every_format_to_the_same_box(tmp_pa
     assert fig.get_layout_engine() is None
     alone = draw()
     alone.savefig(tmp_path / "alone.png", dpi=100, bbox_inches="tight")
-    width, height = Image.open(tmp_path / "a.png").size
-    w0, h0 = Image.open(tmp_path / "alone.png").size
+    png, alone = (Image.open(tmp_path / n).convert("RGB") for n in ("a.png", "alone.png"))
+    (width, height), (w0, h0) = png.size, alone.size
     assert abs(width - w0) <= 3 and abs(height - h0) <= 3, ((width, height), (w0, h0))
+    # the content sits where a save of its own puts it: the box is not only as large, but there
+    white = Image.new("RGB", png.size, "white")
+    inked = ImageChops.difference(png, white).getbbox()
+    inked0 = ImageChops.difference(alone, Image.new("RGB", alone.size, "white")).getbbox()
+    assert max(abs(a - b) for a, b in zip(inked, inked0, strict=True)) <= 3, (inked, inked0)
     pdf = (tmp_path / "a.pdf").read_bytes()
     box = [float(v) for v in re.search(rb"/MediaBox \[ *([^\]]+)\]", pdf).group(1).split()]
     assert abs(box[2] * 100 / 72 - width) <= 3 and abs(box[3] * 100 / 72 - height) <= 3, box

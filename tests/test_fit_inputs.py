@@ -303,3 +303,20 @@ def test_a_synthetic_curve_has_every_sample_its_span_asks_for():
     df = synthesize_curve(true, f, 1.47e-3, span, dt, 0.01, 5007, member=0, e_sigma=0.0)
     assert len(df) == math.floor(span / dt + 1e-9) + 1 == 7848
     assert np.isfinite(df["omega_rad_s"]).all()
+
+
+def test_run_ups_at_different_stated_amplitudes_are_refused(tmp_path, frame, capsys):
+    """The run-ups of one fit are one experiment: a second run-up that states another axial
+    amplitude (``motor.U0_m``), or none where the first states one, is one line naming it and
+    the field, exit 2 (its amplitude would otherwise be the first's, unread)."""
+    a = _curve(tmp_path, frame, _sidecar(motor={"U0_m": 1e-6}), "a.csv")
+    same = _curve(tmp_path, frame, _sidecar(motor={"U0_m": 1e-6}), "same.csv")
+    other = _curve(tmp_path, frame, _sidecar(motor={"U0_m": 2e-6}), "other.csv")
+    unstated = _curve(tmp_path, frame, _sidecar(), "unstated.csv")
+    core.check_runs([read_curve(a), read_curve(same)])  # one amplitude: accepted
+    for bad in (other, unstated):
+        with pytest.raises(InputError, match=r"motor\.U0_m: is .*, but 1e-06 in ") as ex:
+            core.check_runs([read_curve(a), read_curve(bad)])
+        assert ex.value.line().startswith(str(bad)) and "\n" not in ex.value.line()
+    _fails(capsys, [str(a), str(other), "-o", str(tmp_path / "f.nc")], "motor.U0_m", other)
+    assert not (tmp_path / "f.nc").exists()

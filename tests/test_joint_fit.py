@@ -184,7 +184,7 @@ def test_the_generating_point_reproduces_a_curve_at_four_times_the_amplitude(tmp
         return float(r @ r)
 
     stated, held = chi2(1e-6), chi2(None)
-    assert stated < 20.0 < 10 * stated < held, (stated, held)
+    assert stated < 20.0 and 10 * stated < held, (stated, held)
 
 
 def test_a_reading_is_the_members_window_mean():

@@ -24,17 +24,19 @@ def save_figure(fig: Figure, *paths: str | Path, dpi: int = 150) -> None:
     """Save ``fig`` to each path (format from the suffix), atomically, cropped to its content.
 
     The first save lays the figure out (its layout engine) and crops it to the tight box; the
-    others reuse that layout and box, so each further format costs one drawing instead of
-    three (laying out, measuring, drawing). The figure keeps the layout: its layout engine is
-    removed after the first save.
+    others reuse that layout and box (measured once, after the first save), so each further
+    format costs one drawing where a save of its own lays out, measures and draws. After more
+    than one path the figure keeps its layout and has no layout engine.
     """
     box = "tight"
-    for p in paths:
-        with atomic_path(p) as tmp:
-            fig.savefig(tmp, dpi=dpi, format=Path(p).suffix.lstrip("."), bbox_inches=box)
-        if box == "tight":
-            box = fig.get_tightbbox().padded(rcParams["savefig.pad_inches"])
-            with rc_context({"figure.autolayout": False, "figure.constrained_layout.use": False}):
+    # no rc setting may bring a layout engine back between the saves (matplotlib restores the
+    # engine it removes for a save through rcParams)
+    with rc_context({"figure.autolayout": False, "figure.constrained_layout.use": False}):
+        for k, p in enumerate(paths):
+            with atomic_path(p) as tmp:
+                fig.savefig(tmp, dpi=dpi, format=Path(p).suffix.lstrip("."), bbox_inches=box)
+            if k == 0 and len(paths) > 1:
+                box = fig.get_tightbbox().padded(rcParams["savefig.pad_inches"])
                 fig.set_layout_engine(None)  # no engine: the layout stays as drawn
 
 

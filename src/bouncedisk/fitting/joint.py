@@ -12,10 +12,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..io.curve_files import stated_u0
 from ..io.load_curves import LoadCurveData
 from ..io.runup_curves import MotorCurve
 from ..model.errors import InputError
-from .loadpart import LoadPart, Setup, amplitudes, check_window, convert, setup, stated_u0
+from .loadpart import LoadPart, Setup, amplitudes, check_window, convert, setup
 from .loadpart import band as load_band
 from .members import EnsembleSpec
 from .objective import Objective, snap

@@ -54,6 +54,7 @@ import numpy as np
 
 from ..engine import InitialState
 from ..engine.loads import omega_integrals
+from ..io.curve_files import stated_u0
 from ..io.load_curves import LoadCurveData
 from ..model.engine_config import motor_config
 from ..model.errors import InputError
@@ -106,12 +107,6 @@ class Setup(NamedTuple):
     rotor: dict
     preload: float
     u0: float | None = None
-
-
-def stated_u0(sidecar: dict) -> float | None:
-    """The axial amplitude ``motor.U0_m`` (m) a curve's sidecar states, ``None`` if none."""
-    value = (sidecar.get("motor") or {}).get("U0_m")
-    return None if value is None else float(value)
 
 
 def amplitudes(curves: list[LoadCurveData], runups_u0: float | None, runups: str) -> bool:

@@ -8,7 +8,7 @@ one motor are ``M`` independent realizations, and the mean of their statistics s
 times less. The fit then compares the runs' mean statistics with the model's ensemble mean, with
 covariance ``C (1/M + 1/K)`` (:mod:`.objective`).
 
-The runs must be the same experiment: the same motor constants (drive frequency, Φ0), the same
+The runs must be the same experiment: the same motor constants (drive frequency, Φ0, U0), the same
 measurement noise and the same sampling (interval and length), each starting from rest.
 """
 
@@ -20,6 +20,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..io.curve_files import stated_u0
 from ..io.runup_curves import MotorCurve
 from ..model.errors import InputError
 
@@ -37,7 +38,7 @@ def _text(v: float | None) -> str:
 def check_runs(curves: Sequence[MotorCurve]) -> None:
     """Raise :class:`InputError` naming the first run that differs from the first run.
 
-    Compared: ``drive_frequency_hz`` and ``Phi0_rad`` (the sidecar's ``motor``), the measurement
+    Compared: ``drive_frequency_hz``, ``Phi0_rad`` and ``U0_m`` (the sidecar's ``motor``), the measurement
     noise ``sigma``, the sampling interval, the number of samples and the start time.
     """
     first = curves[0]
@@ -45,6 +46,7 @@ def check_runs(curves: Sequence[MotorCurve]) -> None:
         checks = (
             ("motor.drive_frequency_hz", first.drive_frequency_hz, c.drive_frequency_hz),
             ("motor.Phi0_rad", first.phi0_rad, c.phi0_rad),
+            ("motor.U0_m", stated_u0(first.sidecar), stated_u0(c.sidecar)),
             ("sigma_rad_s", first.sigma, c.sigma),
             ("time_s (sampling interval)", first.dt, c.dt),
             ("time_s (start)", float(first.time[0]), float(c.time[0])),

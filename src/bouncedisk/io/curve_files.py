@@ -134,3 +134,10 @@ def column(
         message = f"row {row + 2}: {x[row]:g} exceeds {largest[0]:.4g} ({largest[1]})"
         raise InputError(src, col, message + "; check the units")
     return x
+
+
+def stated_u0(sidecar: dict) -> float | None:
+    """The axial amplitude ``motor.U0_m`` (m) a curve's sidecar states (checked by
+    :func:`read_motor`), ``None`` if none."""
+    value = (sidecar.get("motor") or {}).get("U0_m")
+    return None if value is None else float(value)
