@@ -35,6 +35,7 @@ class LoadFit:
     intervals: dict[str, list[Profile]]  # "runup", "load", "both" -> one profile per coordinate
     data_var: np.ndarray
     chi2_generating: dict[str, float] | None = None  # "runup", "load", "both" at the truth
+    reference: Setup | None = None  # the condition the parameters are stated at (the load part's)
 
 
 #: The generating parameters a synthetic load curve's sidecar must state to be compared with.
@@ -205,4 +206,5 @@ def load_result(
         intervals=intervals,
         data_var=part.data_var(),
         chi2_generating=chi2_at_truth(obj, members),
+        reference=part.reference,
     )

@@ -20,8 +20,8 @@ import xarray as xr
 
 from ..io.provenance import sha256_file
 from .core import FitResult
-from .joint import reference_u0, stated_truth, truth_coordinate
-from .loadpart import LOAD_BAND, LOAD_MEMBERS, reference_setup, setup
+from .joint import stated_truth, truth_coordinate
+from .loadpart import LOAD_BAND, LOAD_MEMBERS, setup
 from .members import BOUNDS
 from .uncertainty import identified
 
@@ -146,10 +146,9 @@ def truth(fit: FitResult) -> dict[str, float]:
 
 
 def _reference(fit: FitResult):
-    """The condition the fit's parameters are stated at (:func:`.loadpart.reference_setup`)."""
-    curve = fit.curve
-    u0 = reference_u0(fit.load.curves, curve)
-    return reference_setup(fit.load.curves, curve.drive_frequency_hz, curve.phi0_rad, u0)
+    """The condition the fit's parameters are stated at (the load part's,
+    :func:`.loadpart.reference_setup`)."""
+    return fit.load.reference
 
 
 def _condition_attrs(fit: FitResult) -> dict:
