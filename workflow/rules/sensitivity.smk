@@ -34,6 +34,7 @@ rule sensitivity_join:
     input:
         compiled=rules.compile_engine.output,
         shards=expand(f"{SENS}/shard-{{i}}.nc", i=range(SENSITIVITY.shards)),
+    priority: 5  # on the chain to the studies' figures, the last batch: run when ready, so that it starts early
     output:
         f"{SENS}/points.nc",
     conda:
@@ -50,6 +51,7 @@ rule sensitivity_map:
     """Design map over (psi, log10_r_phi) at the i-th e of design_map.e: results/sensitivity/map-<i>.nc."""
     input:
         compiled=rules.compile_engine.output,
+    priority: 5  # on the chain to the studies' figures, the last batch: run when ready, so that it starts early
     output:
         f"{SENS}/map-{{i}}.nc",
     conda:
@@ -72,6 +74,7 @@ rule sensitivity_analyse:
         compiled=rules.compile_engine.output,
         points=f"{SENS}/points.nc",
         maps=expand(f"{SENS}/map-{{i}}.nc", i=range(len(SENSITIVITY.map_e))),
+    priority: 5  # on the chain to the studies' figures, the last batch: run when ready, so that it starts early
     output:
         indices=f"{SENS}/indices.nc",
         maps=f"{SENS}/maps.nc",
