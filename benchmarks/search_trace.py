@@ -42,6 +42,19 @@ def truth_x(obj) -> np.ndarray:
     return np.array([TRUTH[n] for n in obj.names], dtype=float)
 
 
+def quiet_chi2(obj, x: np.ndarray, members: int) -> float:
+    """``chi2`` at ``x`` neither logged nor counted as one of the fit's evaluations."""
+    read = set(obj.read)
+    value = obj.chi2_now(x, members)
+    obj.read.intersection_update(read)
+    return value
+
+
+def wrapped(angle: float) -> float:
+    """An angle difference in (-pi, pi]."""
+    return float(-((-angle + math.pi) % (2 * math.pi) - math.pi))
+
+
 def axial_distance(obj, x: np.ndarray) -> float:
     """Distance from the truth in ``(e, omega_s)``, in units of the search box."""
     i = [obj.names.index("e"), obj.names.index("omega_s")]
@@ -69,13 +82,15 @@ def near_scan(obj, ranked, s) -> None:
     i = [obj.names.index(n) for n in ("psi", "log10_r_phi")]
     given = x.copy()
     given[i] = t[i]
-    chis = [obj.chi2_now(y, s.global_members) for y in (x, S.load_matched(obj, x), given)]
+    chis = [quiet_chi2(obj, y, s.global_members) for y in (x, S.load_matched(obj, x), given)]
     say("near", f"rank {k} at {d:.3f}: run-ups reproduced {ok}; psi, log10 R_phi "
-        f"{x[i[0]]:.3f}, {x[i[1]]:.3f} (truth {t[i[0]]:.3f}, {t[i[1]]:.3f}); joint chi2 "
+        f"{x[i[0]]:.3f}, {x[i[1]]:.3f} (truth {t[i[0]]:.3f}, {t[i[1]]:.3f}; psi off by "
+        f"{abs(wrapped(x[i[0]] - t[i[0]])):.3f} rad); joint chi2 "
         f"{chis[0]:.4g}, R_phi matched {chis[1]:.4g}, the truth's psi and R_phi {chis[2]:.4g}")  # fmt: skip
 
 
 def say(stage: str, text: str) -> None:
+    """Print one stage's line."""
     print(f"[{stage}] {text}", flush=True)
 
 
@@ -84,38 +99,42 @@ def wrap() -> None:
     scan, cands, rerank, local = S.global_stage, S.joint_candidates, S.rerank, S.local_stage
 
     def global_stage(obj, s, progress=None):
+        """The stage, then what it kept."""
         ranked = scan(obj, s, progress)
         k, d = nearest(obj, [ev.x for ev in ranked])
-        truth = obj.chi2_now(truth_x(obj), s.global_members)
-        say("scan", f"{len(ranked)} points; nearest the truth: rank {k} at {d:.3f} "
+        truth = quiet_chi2(obj, truth_x(obj), s.global_members)
+        say("scan", f"{len(ranked)} one-member evaluations; nearest the truth: rank {k} at {d:.3f} "
             f"chi2 {ranked[k].chi2:.4g}; best {ranked[0].chi2:.4g}; truth {truth:.4g}")  # fmt: skip
         return ranked
 
     def joint_candidates(obj, ranked, s, progress=None):
+        """The stage, then what it kept."""
         near_scan(obj, ranked, s)
         out = cands(obj, ranked, s, progress)
         k, d = nearest(obj, out)
-        truth = obj.chi2_now(truth_x(obj), s.global_members)
-        best = min(obj.chi2_now(x, s.global_members) for x in out)
+        truth = quiet_chi2(obj, truth_x(obj), s.global_members)
+        best = min(quiet_chi2(obj, x, s.global_members) for x in out)
         say("candidates", f"{len(out)}; nearest the truth: #{k} at {d:.3f}; best joint chi2 "
             f"{best:.4g}; truth {truth:.4g} ({s.global_members} member)")  # fmt: skip
         return out
 
     def rerank_(obj, cs, s):
+        """The stage, then what it kept."""
         scores = rerank(obj, cs, s)
         k, d = nearest(obj, cs)
-        truth = obj.chi2_now(truth_x(obj), s.members)
+        truth = quiet_chi2(obj, truth_x(obj), s.members)
         say("rerank", f"nearest #{k} at {d:.3f} chi2 {scores[k]:.4g}; best {min(scores):.4g}; "
             f"truth {truth:.4g} ({s.members} members)")  # fmt: skip
         return scores
 
     def local_stage(obj, starts, members, nfev, progress=None):
+        """The stage, then what it kept."""
         best, ends = local(obj, starts, members, nfev, progress)
         k, d = nearest(obj, starts)
         ke, de = nearest(obj, ends)
-        truth = obj.chi2_now(truth_x(obj), members)
+        truth = quiet_chi2(obj, truth_x(obj), members)
         say("local", f"{len(starts)} starts, nearest at {d:.3f}; ends nearest at {de:.3f} "
-            f"(chi2 {obj.chi2_now(ends[ke], members):.4g}); best {best.chi2:.4g} at "
+            f"(chi2 {quiet_chi2(obj, ends[ke], members):.4g}); best {best.chi2:.4g} at "
             f"{axial_distance(obj, best.x):.3f}; truth {truth:.4g}")  # fmt: skip
         return best, ends
 
@@ -124,6 +143,7 @@ def wrap() -> None:
 
 
 def main() -> None:
+    """Trace one tuning motor's fit (module docstring)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument(
         "--seed", type=int, required=True, help="a tuning draw (never the validation's)"

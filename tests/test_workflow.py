@@ -350,6 +350,7 @@ def test_figure_registry_refuses_an_unknown_figure_or_wrong_inputs(tmp_path):
 def run_figure_script(tmp_path, figures, inputs):
     """Run workflow/scripts/figure.py as Snakemake would, on a batch of ``figures`` (name ->
     plot, options) with ``inputs`` (``<figure>__<name>`` -> path); the outputs' folder."""
+    import gc
     import runpy
     from types import SimpleNamespace
 
@@ -367,7 +368,10 @@ def run_figure_script(tmp_path, figures, inputs):
             },
         ),
     )
-    runpy.run_path(str(ROOT / "workflow" / "scripts" / "figure.py"), {"snakemake": fake})
+    try:
+        runpy.run_path(str(ROOT / "workflow" / "scripts" / "figure.py"), {"snakemake": fake})
+    finally:
+        gc.unfreeze()  # log_to froze the heap, as at a job's end: this process goes on
     return out
 
 

@@ -16,8 +16,19 @@ def log_to(path: str | Path) -> Iterator[logging.Logger]:
     A batch job is one process that ends with the block. The objects alive when the block
     starts (the imports') and when it ends live until the process exits, so both times they
     are moved out of the cyclic garbage collector's view (:func:`gc.freeze`): the collections
-    during the job and the one at the interpreter's exit skip them. That is a third of a small
-    job's CPU time (``benchmarks/out/job_overhead.json``).
+    during the job and the one at the interpreter's exit skip them, a fifth of a small job's
+    CPU time (``benchmarks/out/job_overhead.json``). A process that goes on after the block (a
+    test running a job script in its own process) gives them back with :func:`gc.unfreeze`.
+
+    Parameters
+    ----------
+    path : str or Path
+        The job's log file (its folder is made).
+
+    Yields
+    ------
+    logging.Logger
+        The ``bouncedisk.job`` logger, writing to the log file.
     """
     gc.freeze()
     p = Path(path)
