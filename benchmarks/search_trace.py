@@ -158,16 +158,11 @@ def main() -> None:
     if args.seed == vm.VALIDATION_SEED:
         ap.error("--seed: the validation motors are not traced")
     m = vm.draw(args.motors, args.seed)[args.motor]
-    TRUTH.update({"e": m["e"], "log10_r_phi": math.log10(m["r_phi"]), "psi": m["psi"],
-                  "omega_s": m["omega_s"], "e_sigma": m["e_sigma"]})  # fmt: skip
-    conditions = [(1.0, 1.0)]
-    if args.second_drive:
-        conditions.append((args.second_drive, 1.0))
-    if args.second_voltage:
-        conditions.append((1.0, args.second_voltage))
+    TRUTH.update({**vm._theta(m), "e_sigma": m["e_sigma"]})  # as recover() reads the truth
+    conditions = vm.conditions_from(args.second_drive, args.second_voltage)
     wrap()
     with tempfile.TemporaryDirectory() as tmp:
-        run, loads = vm.make_data(Path(tmp), m, args.motor, tuple(conditions))
+        run, loads = vm.make_data(Path(tmp), m, args.motor, conditions)
         settings = FitSettings(seed=vm.FIT_SEED, cores=args.cores, scan=args.scan)
         fit = fit_curve(read_curve(run), settings, load=[read_load_curve(x) for x in loads])
     say("fit", f"chi2 {fit.chi2:.4g}; truth {TRUTH}")

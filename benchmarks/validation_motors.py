@@ -254,6 +254,18 @@ def motor_line(r: dict) -> tuple[str, str]:
     return design, result
 
 
+def conditions_from(second_drive: float | None, second_voltage: float | None) -> tuple:
+    """The load curves' conditions, ``(drive, voltage)`` factors: the run-up's, then a second
+    drive frequency and a second drive voltage where given (``--second-drive``,
+    ``--second-voltage``)."""
+    conditions = [(1.0, 1.0)]
+    if second_drive is not None:
+        conditions.append((second_drive, 1.0))
+    if second_voltage is not None:
+        conditions.append((1.0, second_voltage))
+    return tuple(conditions)
+
+
 def conditions_of(row: dict) -> list[tuple[float, float]]:
     """A row's load-curve conditions, ``(drive, voltage)`` factors (rows without voltages: 1)."""
     drives = row.get("drives", [1.0])
@@ -338,13 +350,9 @@ def main() -> None:
         except (KeyError, TypeError) as ex:
             ap.error(f"--rates {args.rates}: not rows of this benchmark ({ex})")
         return
-    conditions = [(1.0, 1.0)]
-    if args.second_drive is not None:
-        conditions.append((args.second_drive, 1.0))
-    if args.second_voltage is not None:
-        conditions.append((1.0, args.second_voltage))
+    conditions = conditions_from(args.second_drive, args.second_voltage)
     sample = draw(args.motors, args.seed)
-    run = lambda true, k: recover(true, k, args.cores, tuple(conditions), args.scan)  # noqa: E731
+    run = lambda true, k: recover(true, k, args.cores, conditions, args.scan)  # noqa: E731
     rows = run_slice(args, run, sample)
     print(json.dumps(rates(rows)))
 
