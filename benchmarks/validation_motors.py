@@ -206,7 +206,9 @@ def recover(
     row = {"motor": k, "true": m, "drives": drives, "voltages": voltages, "scan": scan, "chi2": round(float(ds.attrs["chi2"]), 3),
            "n": int(ds.attrs["n_statistics"]), "adequate": ds.attrs["identified"] == "yes",
            "wall_s": round(time.perf_counter() - start, 1), "holds": {}, "widths": {},
-           "chi2_truth": round(float(ds.attrs.get("chi2_generating_both", math.nan)), 3)}  # fmt: skip
+           "chi2_truth": round(float(ds.attrs.get("chi2_generating_both", math.nan)), 3),
+           "loglik_own": {k: round(float(ds.attrs.get(f"loglik_own_{k}", math.nan)), 3)
+                          for k in ("generating", "estimate")}}  # fmt: skip
     truth = {**_theta(m), "e_sigma": m["e_sigma"]}
     both = [str(s) for s in ds["data_set"].values].index("both")
     for j, name in enumerate(str(n) for n in ds["parameter"].values):
@@ -233,10 +235,19 @@ def rates(rows: list[dict]) -> dict:
             "coverage": coverage([sum(r["holds"].values()) for r in rows], len(names)),
             "holds_by_parameter": {m: sum(r["holds"][m] for r in rows) for m in names},
             "generating_point_better": sum(r["chi2_truth"] < r["chi2"] for r in rows),
+            "generating_point_better_own": sum(_own_better(r) for r in rows if "loglik_own" in r),
+            "rows_with_own": sum("loglik_own" in r for r in rows),
             "r_phi_factor_below_2": sum((r["r_phi_factor"] or math.inf) < 2 for r in rows) / n
             if n else math.nan,
             "width_quartiles": {m: quartiles(m) for m in ("log10_r_phi", "e", "psi", "omega_s")},
             "wall_s_max": max((r["wall_s"] for r in rows), default=math.nan)}  # fmt: skip
+
+
+def _own_better(r: dict) -> bool:
+    """Whether the generating point's ``-2 log L`` with its own covariance is below the
+    estimate's (the fit file's ``loglik_own_*``): the search missed a better basin."""
+    own = r["loglik_own"]
+    return own["generating"] < own["estimate"]
 
 
 def motor_line(r: dict) -> tuple[str, str]:
@@ -247,7 +258,11 @@ def motor_line(r: dict) -> tuple[str, str]:
               f"{t['e_sigma']:g}")  # fmt: skip
     held = [n for n, ok in r["holds"].items() if ok]
     factor = r["r_phi_factor"]
-    result = (f"chi2 {r['chi2']:g} on {r['n']} (the generating point {r['chi2_truth']:g}), "
+    own = ""
+    if "loglik_own" in r:
+        own = (f"; -2 log L with its own covariance {r['loglik_own']['generating']:g}, the "
+               f"estimate {r['loglik_own']['estimate']:g}")  # fmt: skip
+    result = (f"chi2 {r['chi2']:g} on {r['n']} (the generating point {r['chi2_truth']:g}{own}), "
               f"{'adequate' if r['adequate'] else 'inadequate'}; {len(held)} of "
               f"{len(r['holds'])} intervals hold the truth; R_phi to a factor "
               f"{'none' if factor is None else f'{factor:g}'}; {r['wall_s']:g} s")  # fmt: skip
@@ -290,7 +305,10 @@ def write_rates_record(rows: list[dict], name: str = "fit_validation") -> None:
                f"hold the truth ({100 * c.get('rate', math.nan):.0f} %, over motors "
                f"{c.get('ci95_motors')}); R_phi to a factor below 2 on "
                f"{round(100 * r['r_phi_factor_below_2'])} %; the generating point reads below the "
-               f"fit on {r['generating_point_better']}; median widths e {q['e'] and q['e'][1]}, "
+               f"fit on {r['generating_point_better']}"
+               + (f" (by each point's own likelihood on {r['generating_point_better_own']} of "
+                  f"{r['rows_with_own']})" if r["rows_with_own"] else "")
+               + f"; median widths e {q['e'] and q['e'][1]}, "
                f"psi {q['psi'] and q['psi'][1]}, omega_s {q['omega_s'] and q['omega_s'][1]}; "
                f"longest fit {r['wall_s_max']:g} s")  # fmt: skip
     designs = sorted({tuple(conditions_of(x)) for x in rows})

@@ -359,26 +359,46 @@ class LoadPart:
 
     def set_cov(self, values: np.ndarray) -> None:
         """Hold the members' covariance across loads at that of ``values`` ``(K, n)``,
-        shrunk toward its diagonal (as the run-ups', :func:`.summary_stats.regularized_cov`)."""
+        shrunk toward its diagonal (:meth:`members_cov`)."""
+        self.cov_model = self.members_cov(values)
+        self._white = {}
+
+    def members_cov(self, values: np.ndarray) -> np.ndarray:
+        """The members' covariance across loads of ``values`` ``(K, n)``, shrunk toward its
+        diagonal (as the run-ups', :func:`.summary_stats.regularized_cov`)."""
         from .summary_stats import EnsembleStats, regularized_cov
 
         ens = EnsembleStats.from_values(values)
-        self.cov_model = regularized_cov(ens.cov, np.full(self.n, self.floor))
-        self._white = {}
+        return regularized_cov(ens.cov, np.full(self.n, self.floor))
 
-    def data_var(self) -> np.ndarray:
-        """``D``: the data's variance of each reading (module docstring)."""
-        model = np.diag(self.cov_model) if self.cov_model is not None else np.zeros(self.n)
+    def data_var(self, cov: np.ndarray | None = None) -> np.ndarray:
+        """``D``: the data's variance of each reading (module docstring), with the members'
+        covariance ``cov`` (the held one when ``None``)."""
+        cov = self.cov_model if cov is None else cov
+        model = np.diag(cov) if cov is not None else np.zeros(self.n)
         spread = np.where(np.isfinite(self.sd), self.sd**2, model)
         return np.maximum(np.maximum(spread, model), self.floor**2) / self.repeats
 
+    def factor(self, k: int, cov: np.ndarray | None = None) -> np.ndarray:
+        """``L`` with ``L Lᵀ = D + C_L / k``, ``C_L`` the members' covariance ``cov`` (the
+        held one when ``None``; BLAS-free, :mod:`.detlinalg`)."""
+        cov = self.cov_model if cov is None else cov
+        c = cov if cov is not None else np.zeros((self.n, self.n))
+        return detlinalg.cholesky(np.diag(self.data_var(cov)) + c / k)
+
     def whitener(self, k: int) -> np.ndarray:
-        """``L⁻¹`` with ``L Lᵀ = D + C_L / k`` (BLAS-free, :mod:`.detlinalg`)."""
+        """``L⁻¹`` of :meth:`factor` with the held covariance (cached per ``k``)."""
         if k not in self._white:
-            c = self.cov_model if self.cov_model is not None else np.zeros((self.n, self.n))
-            sigma = np.diag(self.data_var()) + c / k
-            self._white[k] = detlinalg.lower_inverse(detlinalg.cholesky(sigma))
+            self._white[k] = detlinalg.lower_inverse(self.factor(k))
         return self._white[k]
+
+    def own_loglik(self, theta: dict[str, float], x: np.ndarray, k: int) -> float:
+        """``−2 log L`` of the readings, up to a constant, with the members' covariance measured
+        at ``x`` itself on its ``k`` members: ``rᵀ Σ⁻¹ r + log det Σ``, ``Σ = D + C_L(x)/k``
+        (:meth:`.objective.Objective.own_loglik`)."""
+        low = self.factor(k, self.members_cov(self.values(theta, x, k)))
+        r = detlinalg.matvec(detlinalg.lower_inverse(low), self.mean(theta, x, k) - self.y)
+        return detlinalg.dot(r, r) + 2.0 * math.fsum(np.log(np.diag(low)).tolist())
 
     def mean(
         self, theta: dict[str, float], x: np.ndarray, k: int, serial: bool = False, first: int = 0

@@ -266,14 +266,46 @@ class Objective:
 
         def runup() -> np.ndarray:
             ens = self.ensemble(x, members)
-            cov = regularized_cov(ens.cov, stat_floor(self.target))
             return self._whitened(
-                ens.mean, detlinalg.lower_inverse(detlinalg.cholesky(cov)), members
+                ens.mean, detlinalg.lower_inverse(self._own_factor(x, members)), members
             )
 
         return self._joined(
             runup, lambda: self.load.residuals(self.theta(x), x, members_for(members))
         )
+
+    def _own_factor(self, x: np.ndarray, members: int) -> np.ndarray:
+        """Cholesky factor ``L`` of the run-ups' covariance ``C(x)`` measured at ``x`` on its
+        own ``members`` members, regularized as the held one."""
+        cov = regularized_cov(self.ensemble(x, members).cov, stat_floor(self.target))
+        return detlinalg.cholesky(cov)
+
+    def own_loglik(self, x: np.ndarray, members: int) -> float:
+        """``−2 log`` of the Gaussian synthetic likelihood with every covariance measured at the
+        point itself (Wood, Nature 466, 1102, 2010; docs/fitting_method.md "Generating point"),
+        up to a constant, not logged: the run-ups'
+
+            (s_d − μ(x))ᵀ Σ(x)⁻¹ (s_d − μ(x)) + log det Σ(x),   Σ(x) = C(x) (1/M + 1/K),
+
+        plus the load curves' likewise (:meth:`.loadpart.LoadPart.own_loglik`), per ``parts``.
+        Unlike ``χ²`` under one held ``C``, it compares points of regimes whose members spread
+        differently: a quiet point's small ``C`` no longer makes a noisy regime's points read
+        far off, and a noisy point's large ``C`` is charged its ``log det``.
+        """
+        x = snap(x)
+
+        def runup() -> float:
+            factor = self._own_factor(x, members)
+            mean = self.ensemble(x, members).mean
+            r = self._whitened(mean, detlinalg.lower_inverse(factor), members)
+            scale = 1.0 / self.runs + 1.0 / members
+            log_det = 2.0 * math.fsum(np.log(np.diag(factor)).tolist())
+            return _sum_of_squares(r) + log_det + len(self.target) * math.log(scale)
+
+        def load() -> float:
+            return self.load.own_loglik(self.theta(x), x, members_for(members))
+
+        return math.fsum(self._joined(lambda: np.array([runup()]), lambda: np.array([load()])))
 
     def own_chi2(self, x: np.ndarray, members: int) -> float:
         """``χ²`` of :meth:`own_residuals`, not logged."""
