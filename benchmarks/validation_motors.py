@@ -24,8 +24,9 @@ sets the fit's scan points, to compare search settings on tuning motors.
         --record --name fit_validation_2drives
 
 Each row: the motor, its data design, ``χ²``, adequacy, which 95 % intervals hold the truth,
-their widths (``R_phi`` as a factor, ``e``, ``psi``, ``omega_s``), the generating point's
-``χ²`` and the wall time; ``--rates`` prints the success rate (adequate), the pooled coverage with its
+their widths (``R_phi`` as a factor, ``e``, ``psi``, ``omega_s``), the estimate, the generating
+point's ``χ²`` under the fit's metric, both points' own likelihood (``loglik_own``,
+:func:`bouncedisk.fitting.joint.missed_basin`) and the wall time; ``--rates`` prints the success rate (adequate), the pooled coverage with its
 interval over motors (resampling whole motors) and the widths' quartiles; with ``--record`` it
 also writes them, and one line per motor, as the performance page's record
 ``benchmarks/out/fit_validation.json`` (another name with ``--name``, e.g.
@@ -46,11 +47,14 @@ from random_motors import coverage, read_rows, run_slice, slice_arguments
 
 from bouncedisk.fitting import FitSettings, fit_curve, fit_dataset, synthesize_curve
 from bouncedisk.fitting import loadpart as lp
+from bouncedisk.fitting.joint import missed_basin
 from bouncedisk.fitting.members import BOUNDS
 from bouncedisk.fitting.synthetic import synthetic_load_curve
 from bouncedisk.io.load_curves import LoadCurveData, read_load_curve
 from bouncedisk.io.runup_curves import read_curve, write_curve
 
+#: The fit file's estimates kept in each row (global attributes).
+ESTIMATE = ("e", "r_phi", "psi", "omega_s", "e_sigma")
 #: This benchmark's own seed: its motors are drawn apart from every other sample.
 VALIDATION_SEED = 49_2026_1127
 #: The sample's coordinates: the parameters, then the data design (unit-box columns).
@@ -207,8 +211,9 @@ def recover(
            "n": int(ds.attrs["n_statistics"]), "adequate": ds.attrs["identified"] == "yes",
            "wall_s": round(time.perf_counter() - start, 1), "holds": {}, "widths": {},
            "chi2_truth": round(float(ds.attrs.get("chi2_generating_both", math.nan)), 3),
-           "loglik_own": {k: round(float(ds.attrs.get(f"loglik_own_{k}", math.nan)), 3)
-                          for k in ("generating", "estimate")}}  # fmt: skip
+           "loglik_own": {p: round(float(ds.attrs.get(f"loglik_own_{p}", math.nan)), 3)
+                          for p in ("generating", "estimate")},
+           "estimate": {p: round(float(ds.attrs[p]), 7) for p in ESTIMATE}}  # fmt: skip
     truth = {**_theta(m), "e_sigma": m["e_sigma"]}
     both = [str(s) for s in ds["data_set"].values].index("both")
     for j, name in enumerate(str(n) for n in ds["parameter"].values):
@@ -235,19 +240,27 @@ def rates(rows: list[dict]) -> dict:
             "coverage": coverage([sum(r["holds"].values()) for r in rows], len(names)),
             "holds_by_parameter": {m: sum(r["holds"][m] for r in rows) for m in names},
             "generating_point_better": sum(r["chi2_truth"] < r["chi2"] for r in rows),
-            "generating_point_better_own": sum(_own_better(r) for r in rows if "loglik_own" in r),
-            "rows_with_own": sum("loglik_own" in r for r in rows),
+            "generating_point_better_own": sum(_own_better(r) for r in _with_own(rows)),
+            "rows_with_own": len(_with_own(rows)),
             "r_phi_factor_below_2": sum((r["r_phi_factor"] or math.inf) < 2 for r in rows) / n
             if n else math.nan,
             "width_quartiles": {m: quartiles(m) for m in ("log10_r_phi", "e", "psi", "omega_s")},
             "wall_s_max": max((r["wall_s"] for r in rows), default=math.nan)}  # fmt: skip
 
 
+def _with_own(rows: list[dict]) -> list[dict]:
+    """The rows whose fit file read the generating point's own likelihood."""
+    return [
+        r
+        for r in rows
+        if all(math.isfinite(v) for v in r.get("loglik_own", {"": math.nan}).values())
+    ]
+
+
 def _own_better(r: dict) -> bool:
-    """Whether the generating point's ``-2 log L`` with its own covariance is below the
-    estimate's (the fit file's ``loglik_own_*``): the search missed a better basin."""
-    own = r["loglik_own"]
-    return own["generating"] < own["estimate"]
+    """Whether the fit file's ``loglik_own_*`` say the search missed a better basin
+    (:func:`bouncedisk.fitting.joint.missed_basin`)."""
+    return missed_basin(r["loglik_own"])
 
 
 def motor_line(r: dict) -> tuple[str, str]:

@@ -398,9 +398,12 @@ def test_the_fit_file_holds_the_load_curves_and_the_identifiability_table(tiny_f
     at = {k: back.attrs[f"chi2_generating_{k}"] for k in ("runup", "load", "both")}
     assert at["both"] == pytest.approx(at["runup"] + at["load"], rel=1e-12) and at["load"] > 0
     assert f"at the generating point: chi2 {at['both']:.4g}" in text
-    own, fit = (back.attrs[f"loglik_own_{k}"] for k in ("generating", "estimate"))
-    verdict = "the search missed" if own < fit else "not below the estimate's"
-    assert f"-2 log L {own:.4g} at the generating point" in text and verdict in text
+    from bouncedisk.fitting.joint import missed_basin
+
+    own = {k: back.attrs[f"loglik_own_{k}"] for k in ("generating", "estimate")}
+    verdict = "the search missed" if missed_basin(own) else "not below the estimate's by more"
+    assert f"-2 log L {own['generating']:.4g} at the generating point" in text
+    assert verdict in text and f"{own['estimate']:.4g}" in text
 
 
 @pytest.mark.xdist_group("tiny_joint_fit")  # one worker fits, not both
@@ -1001,7 +1004,7 @@ def test_the_jacobians_points_are_predicted_and_read_together():
 def test_the_chi2_at_the_generating_point_changes_no_cache_and_no_count(data_dir):
     """:func:`~bouncedisk.fitting.joint.chi2_at_truth` reads the generating point after the fit:
     the objective's cache and its points read (the fit's count of evaluations) are as before."""
-    from bouncedisk.fitting.joint import chi2_at_truth, loglik_at_truth
+    from bouncedisk.fitting.joint import chi2_at_truth, generating_x, loglik_at_truth, missed_basin
 
     obj = _small_objective(data_dir)
     obj.chi2(np.array([0.6, math.log10(0.0027), -0.3, 1.5]), 4)
@@ -1009,9 +1012,19 @@ def test_the_chi2_at_the_generating_point_changes_no_cache_and_no_count(data_dir
     at = chi2_at_truth(obj, 4)
     assert at is not None and at["both"] == pytest.approx(at["runup"] + at["load"], rel=1e-12)
     assert set(obj.cache) == cache and set(obj.read) == read and len(read) == 1
-    own = loglik_at_truth(obj, np.array([0.6, math.log10(0.0027), -0.3, 1.5]), 4)
-    assert own is not None and set(own) == {"generating", "estimate"}
-    assert set(obj.cache) == cache and set(obj.read) == read
+    log = list(obj.log)
+    estimate = np.array([0.6, math.log10(0.0027), -0.3, 1.5])
+    own = loglik_at_truth(obj, estimate, 4, 6)
+    assert set(obj.cache) == cache and set(obj.read) == read and obj.log == log
+    # each point read on the same members: the constant dropped is the same for both
+    assert own == {
+        "generating": obj.own_loglik(generating_x(obj), 4, 6),
+        "estimate": obj.own_loglik(estimate, 4, 6),
+    }
+    assert own["generating"] != own["estimate"]
+    # the verdict: below by more than the 95 % point of chi2(1), not merely below
+    assert missed_basin({"generating": 0.0, "estimate": 3.9})
+    assert not missed_basin({"generating": 0.0, "estimate": 3.8})
 
 
 def test_own_loglik_is_woods_gaussian_log_likelihood(data_dir):

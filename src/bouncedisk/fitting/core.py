@@ -463,7 +463,9 @@ def fit_curve(
     load_fit = None
     if part is not None:
         which = s.profile and list(s.profile)
-        load_fit = load_result(obj, final.x, s.members, which, profiles, reread, progress)
+        load_fit = load_result(
+            obj, final.x, s.members, which, profiles, reread, progress, s.pilot_members
+        )
     return FitResult(
         names=obj.names,
         x=final.x,

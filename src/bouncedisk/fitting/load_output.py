@@ -20,10 +20,10 @@ import xarray as xr
 
 from ..io.provenance import sha256_file
 from .core import FitResult
-from .joint import stated_truth, truth_coordinate
+from .joint import missed_basin, stated_truth, truth_coordinate
 from .loadpart import LOAD_BAND, LOAD_MEMBERS, setup
 from .members import BOUNDS
-from .uncertainty import identified
+from .uncertainty import THRESHOLD, identified
 
 #: Data sets of the identifiability table, in order: (key of ``LoadFit.intervals``, label).
 DATA_SETS = (("runup", "run-ups"), ("load", "load curve"), ("both", "both"))
@@ -243,11 +243,12 @@ def _truth_lines(attrs: dict) -> list[str]:
         f"under the fit's metric, the fit's {attrs['chi2']:.4g}"
     ]
     if "loglik_own_generating" in attrs:
-        at, fit = attrs["loglik_own_generating"], attrs["loglik_own_estimate"]
+        own = {k: attrs[f"loglik_own_{k}"] for k in ("generating", "estimate")}
+        at, fit = own["generating"], own["estimate"]
         verdict = (
-            "below the estimate's: the search missed a better basin"
-            if at < fit
-            else "not below the estimate's"
+            f"below the estimate's by more than {THRESHOLD:.3g}: the search missed a better basin"
+            if missed_basin(own)
+            else f"not below the estimate's by more than {THRESHOLD:.3g}"
         )
         lines.append(
             f"  with each point's own covariance: -2 log L {at:.4g} at the generating point, "

@@ -395,8 +395,11 @@ class LoadPart:
     def own_loglik(self, theta: dict[str, float], x: np.ndarray, k: int) -> float:
         """``−2 log L`` of the readings, up to a constant, with the members' covariance measured
         at ``x`` itself on its ``k`` members: ``rᵀ Σ⁻¹ r + log det Σ``, ``Σ = D + C_L(x)/k``
-        (:meth:`.objective.Objective.own_loglik`)."""
-        low = self.factor(k, self.members_cov(self.values(theta, x, k)))
+        (:meth:`.objective.Objective.own_loglik`); ``inf`` where a member did not reach a reading."""
+        values = self.values(theta, x, k)
+        if not np.isfinite(values).all():
+            return math.inf
+        low = self.factor(k, self.members_cov(values))
         r = detlinalg.matvec(detlinalg.lower_inverse(low), self.mean(theta, x, k) - self.y)
         return detlinalg.dot(r, r) + 2.0 * math.fsum(np.log(np.diag(low)).tolist())
 

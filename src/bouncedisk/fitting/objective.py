@@ -280,30 +280,36 @@ class Objective:
         cov = regularized_cov(self.ensemble(x, members).cov, stat_floor(self.target))
         return detlinalg.cholesky(cov)
 
-    def own_loglik(self, x: np.ndarray, members: int) -> float:
+    def own_loglik(self, x: np.ndarray, members: int, load_members: int | None = None) -> float:
         """``−2 log`` of the Gaussian synthetic likelihood with every covariance measured at the
         point itself (Wood, Nature 466, 1102, 2010; docs/fitting_method.md "Generating point"),
-        up to a constant, not logged: the run-ups'
+        up to a constant, not logged: the run-ups' on ``members`` members,
 
             (s_d − μ(x))ᵀ Σ(x)⁻¹ (s_d − μ(x)) + log det Σ(x),   Σ(x) = C(x) (1/M + 1/K),
 
-        plus the load curves' likewise (:meth:`.loadpart.LoadPart.own_loglik`), per ``parts``.
-        Unlike ``χ²`` under one held ``C``, it compares points of regimes whose members spread
-        differently: a quiet point's small ``C`` no longer makes a noisy regime's points read
-        far off, and a noisy point's large ``C`` is charged its ``log det``.
+        plus the load curves' likewise on ``load_members`` (:func:`.loadpart.members_for` when
+        ``None``; :meth:`.loadpart.LoadPart.own_loglik`), per ``parts``; ``inf`` where a member
+        did not reach a reading. Unlike ``χ²`` under one held ``C``, it compares points of
+        regimes whose members spread differently: a quiet point's small ``C`` does not make a
+        noisy regime's points read far off, and a noisy point's large ``C`` is charged its
+        ``log det``. ``C`` is estimated from the members, so ``members`` should well exceed the
+        statistics' count.
         """
         x = snap(x)
 
         def runup() -> float:
+            ens = self.ensemble(x, members)
+            if not np.isfinite(ens.values).all():
+                return math.inf
             factor = self._own_factor(x, members)
-            mean = self.ensemble(x, members).mean
-            r = self._whitened(mean, detlinalg.lower_inverse(factor), members)
+            r = self._whitened(ens.mean, detlinalg.lower_inverse(factor), members)
             scale = 1.0 / self.runs + 1.0 / members
             log_det = 2.0 * math.fsum(np.log(np.diag(factor)).tolist())
             return _sum_of_squares(r) + log_det + len(self.target) * math.log(scale)
 
         def load() -> float:
-            return self.load.own_loglik(self.theta(x), x, members_for(members))
+            k = members_for(members) if load_members is None else load_members
+            return self.load.own_loglik(self.theta(x), x, k)
 
         return math.fsum(self._joined(lambda: np.array([runup()]), lambda: np.array([load()])))
 
