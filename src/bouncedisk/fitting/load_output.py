@@ -246,12 +246,12 @@ def _truth_lines(attrs: dict) -> list[str]:
         own = {k: attrs[f"loglik_own_{k}"] for k in ("generating", "estimate")}
         at, fit = own["generating"], own["estimate"]
         verdict = (
-            f"below the estimate's by more than {THRESHOLD:.3g}: the search missed a better basin"
+            f"more than {THRESHOLD:.3g} below: the search missed a better basin"
             if missed_basin(own)
-            else f"not below the estimate's by more than {THRESHOLD:.3g}"
+            else f"not more than {THRESHOLD:.3g} below"
         )
         lines.append(
             f"  with each point's own covariance: -2 log L {at:.4g} at the generating point, "
-            f"{verdict} {fit:.4g}"
+            f"{fit:.4g} at the estimate; {verdict}"
         )
     return lines
