@@ -462,10 +462,7 @@ def fit_curve(
     td = first_order_trend(layout.t[::step], records.mean(axis=0)[::step])
     load_fit = None
     if part is not None:
-        which = s.profile and list(s.profile)
-        load_fit = load_result(
-            obj, final.x, s.members, which, profiles, reread, progress, s.pilot_members
-        )
+        load_fit = load_result(obj, final.x, s, profiles, reread, progress)
     return FitResult(
         names=obj.names,
         x=final.x,

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -29,6 +30,9 @@ from .uncertainty import (
     consistent_points,
     fit_limit,
 )
+
+if TYPE_CHECKING:
+    from .core import FitSettings
 
 
 @dataclass
@@ -234,17 +238,17 @@ def identifiability(
 def load_result(
     obj: Objective,
     x: np.ndarray,
-    members: int,
-    which: list[str] | None,
+    settings: FitSettings,
     profiles: list[Profile],
     reread: np.ndarray,
     progress: Callable[[str], None] | None,
-    pilot: int,
 ) -> LoadFit:
-    """The joint fit's load part: identifiability intervals, the fitted load curve's band and
-    the load part's ``χ²`` at the estimate; for synthetic data the generating point read too,
-    its own likelihood on ``pilot`` run-up members (:func:`loglik_at_truth`)."""
-    part = obj.load
+    """The joint fit's load part: identifiability intervals (on ``settings.members``, for the
+    coordinates ``settings.profile``), the fitted load curve's band and the load part's ``χ²``
+    at the estimate; for synthetic data the generating point read too, its own likelihood on
+    ``settings.pilot_members`` run-up members (:func:`loglik_at_truth`)."""
+    part, members = obj.load, settings.members
+    which = settings.profile and list(settings.profile)
     intervals = identifiability(obj, x, members, which, reread)
     intervals["both"] = profiles
     if progress is not None:
@@ -265,6 +269,6 @@ def load_result(
         intervals=intervals,
         data_var=part.data_var(),
         chi2_generating=chi2_at_truth(obj, members),
-        loglik_own=loglik_at_truth(obj, xs, pilot, LOAD_PILOT),
+        loglik_own=loglik_at_truth(obj, xs, settings.pilot_members, LOAD_PILOT),
         reference=part.reference,
     )
