@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 
@@ -31,8 +31,13 @@ from .uncertainty import (
     fit_limit,
 )
 
-if TYPE_CHECKING:
-    from .core import FitSettings
+
+class FitSizes(Protocol):
+    """The fit's settings :func:`load_result` reads (:class:`.core.FitSettings` has them)."""
+
+    members: int
+    pilot_members: int
+    profile: tuple[str, ...] | None
 
 
 @dataclass
@@ -238,7 +243,7 @@ def identifiability(
 def load_result(
     obj: Objective,
     x: np.ndarray,
-    settings: FitSettings,
+    settings: FitSizes,
     profiles: list[Profile],
     reread: np.ndarray,
     progress: Callable[[str], None] | None,
