@@ -62,6 +62,12 @@ def cholesky(c: np.ndarray) -> np.ndarray:
     return low
 
 
+def log_det(low: np.ndarray) -> float:
+    """``log det C`` from the Cholesky factor ``L`` of ``C`` (:func:`cholesky`): ``2 Σ log L_ii``,
+    summed exactly rounded."""
+    return 2.0 * math.fsum(np.log(np.diag(np.asarray(low, float))).tolist())
+
+
 def lower_inverse(low: np.ndarray) -> np.ndarray:
     """``L⁻¹`` of a lower-triangular ``L`` by forward substitution."""
     low = np.asarray(low, float)

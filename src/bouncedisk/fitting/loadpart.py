@@ -401,7 +401,7 @@ class LoadPart:
             return math.inf
         low = self.factor(k, self.members_cov(values))
         r = detlinalg.matvec(detlinalg.lower_inverse(low), self.mean(theta, x, k) - self.y)
-        return detlinalg.dot(r, r) + 2.0 * math.fsum(np.log(np.diag(low)).tolist())
+        return detlinalg.dot(r, r) + detlinalg.log_det(low)
 
     def mean(
         self, theta: dict[str, float], x: np.ndarray, k: int, serial: bool = False, first: int = 0

@@ -263,22 +263,17 @@ class Objective:
         spread yet read far off under the held one (:func:`.uncertainty.consistent_points`).
         """
         x = snap(x)
-
-        def runup() -> np.ndarray:
-            ens = self.ensemble(x, members)
-            return self._whitened(
-                ens.mean, detlinalg.lower_inverse(self._own_factor(x, members)), members
-            )
-
         return self._joined(
-            runup, lambda: self.load.residuals(self.theta(x), x, members_for(members))
+            lambda: self._own_runup(x, members)[0],
+            lambda: self.load.residuals(self.theta(x), x, members_for(members)),
         )
 
-    def _own_factor(self, x: np.ndarray, members: int) -> np.ndarray:
-        """Cholesky factor ``L`` of the run-ups' covariance ``C(x)`` measured at ``x`` on its
-        own ``members`` members, regularized as the held one."""
-        cov = regularized_cov(self.ensemble(x, members).cov, stat_floor(self.target))
-        return detlinalg.cholesky(cov)
+    def _own_runup(self, x: np.ndarray, members: int) -> tuple[np.ndarray, np.ndarray]:
+        """The run-ups' residuals whitened by their covariance ``C(x)`` measured at ``x`` on its
+        own ``members`` members (regularized as the held one), and ``C(x)``'s Cholesky factor."""
+        ens = self.ensemble(x, members)
+        factor = detlinalg.cholesky(regularized_cov(ens.cov, stat_floor(self.target)))
+        return self._whitened(ens.mean, detlinalg.lower_inverse(factor), members), factor
 
     def own_loglik(self, x: np.ndarray, members: int, load_members: int | None = None) -> float:
         """``−2 log`` of the Gaussian synthetic likelihood with every covariance measured at the
@@ -298,13 +293,11 @@ class Objective:
         x = snap(x)
 
         def runup() -> float:
-            ens = self.ensemble(x, members)
-            if not np.isfinite(ens.values).all():
+            if not np.isfinite(self.ensemble(x, members).values).all():
                 return math.inf
-            factor = self._own_factor(x, members)
-            r = self._whitened(ens.mean, detlinalg.lower_inverse(factor), members)
+            r, factor = self._own_runup(x, members)
             scale = 1.0 / self.runs + 1.0 / members
-            log_det = 2.0 * math.fsum(np.log(np.diag(factor)).tolist())
+            log_det = detlinalg.log_det(factor)
             return _sum_of_squares(r) + log_det + len(self.target) * math.log(scale)
 
         def load() -> float:
