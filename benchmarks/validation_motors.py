@@ -26,7 +26,7 @@ sets the fit's scan points, to compare search settings on tuning motors.
 Each row: the motor, its data design, ``χ²``, adequacy, which 95 % intervals hold the truth,
 their widths (``R_phi`` as a factor, ``e``, ``psi``, ``omega_s``), the estimate, the generating
 point's ``χ²`` under the fit's metric, both points' own likelihood (``loglik_own``,
-:func:`bouncedisk.fitting.joint.missed_basin`) and the wall time; ``--rates`` prints the success rate (adequate), the pooled coverage with its
+:func:`bouncedisk.fitting.joint.generating_point_better`) and the wall time; ``--rates`` prints the success rate (adequate), the pooled coverage with its
 interval over motors (resampling whole motors) and the widths' quartiles; with ``--record`` it
 also writes them, and one line per motor, as the performance page's record
 ``benchmarks/out/fit_validation.json`` (another name with ``--name``, e.g.
@@ -47,7 +47,7 @@ from random_motors import coverage, read_rows, run_slice, slice_arguments
 
 from bouncedisk.fitting import FitSettings, fit_curve, fit_dataset, synthesize_curve
 from bouncedisk.fitting import loadpart as lp
-from bouncedisk.fitting.joint import missed_basin
+from bouncedisk.fitting.joint import generating_point_better
 from bouncedisk.fitting.members import BOUNDS
 from bouncedisk.fitting.synthetic import synthetic_load_curve
 from bouncedisk.io.load_curves import LoadCurveData, read_load_curve
@@ -259,8 +259,8 @@ def _with_own(rows: list[dict]) -> list[dict]:
 
 def _own_better(r: dict) -> bool:
     """Whether the fit file's ``loglik_own_*`` say the search missed a better basin
-    (:func:`bouncedisk.fitting.joint.missed_basin`)."""
-    return missed_basin(r["loglik_own"])
+    (:func:`bouncedisk.fitting.joint.generating_point_better`)."""
+    return generating_point_better(r["loglik_own"])
 
 
 def motor_line(r: dict) -> tuple[str, str]:
@@ -319,7 +319,7 @@ def write_rates_record(rows: list[dict], name: str = "fit_validation") -> None:
                f"{c.get('ci95_motors')}); R_phi to a factor below 2 on "
                f"{round(100 * r['r_phi_factor_below_2'])} %; the generating point reads below the "
                f"fit on {r['generating_point_better']}"
-               + (f" (by each point's own likelihood on {r['generating_point_better_own']} of "
+               + (f" (by the own likelihood of each point on {r['generating_point_better_own']} of "
                   f"{r['rows_with_own']})" if r["rows_with_own"] else "")
                + f"; median widths e {q['e'] and q['e'][1]}, "
                f"psi {q['psi'] and q['psi'][1]}, omega_s {q['omega_s'] and q['omega_s'][1]}; "

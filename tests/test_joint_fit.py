@@ -394,14 +394,18 @@ def test_the_fit_file_holds_the_load_curves_and_the_identifiability_table(tiny_f
     text = summary_text(back)
     assert "load curve: chi2" in text and "95% intervals by data set" in text
     # the chi2 at the generating point, under the fit's final metric: the parts add up; the
-    # summary says whether the search missed a better basin by each point's own likelihood
+    # summary says whether the generating point is more likely, by each point's own likelihood
     at = {k: back.attrs[f"chi2_generating_{k}"] for k in ("runup", "load", "both")}
     assert at["both"] == pytest.approx(at["runup"] + at["load"], rel=1e-12) and at["load"] > 0
     assert f"at the generating point: chi2 {at['both']:.4g}" in text
-    from bouncedisk.fitting.joint import missed_basin
+    from bouncedisk.fitting.joint import generating_point_better
 
     own = {k: back.attrs[f"loglik_own_{k}"] for k in ("generating", "estimate")}
-    verdict = "the search missed" if missed_basin(own) else "not more than 3.84 below"
+    verdict = (
+        "not the likelihood's maximum"
+        if generating_point_better(own)
+        else "not more than 3.84 below"
+    )
     assert f"-2 log L {own['generating']:.4g} at the generating point" in text
     assert verdict in text and f"{own['estimate']:.4g} at the estimate" in text
 
@@ -1004,7 +1008,12 @@ def test_the_jacobians_points_are_predicted_and_read_together():
 def test_the_chi2_at_the_generating_point_changes_no_cache_and_no_count(data_dir):
     """:func:`~bouncedisk.fitting.joint.chi2_at_truth` reads the generating point after the fit:
     the objective's cache and its points read (the fit's count of evaluations) are as before."""
-    from bouncedisk.fitting.joint import chi2_at_truth, generating_x, loglik_at_truth, missed_basin
+    from bouncedisk.fitting.joint import (
+        chi2_at_truth,
+        generating_point_better,
+        generating_x,
+        loglik_at_truth,
+    )
 
     obj = _small_objective(data_dir)
     obj.chi2(np.array([0.6, math.log10(0.0027), -0.3, 1.5]), 4)
@@ -1023,8 +1032,8 @@ def test_the_chi2_at_the_generating_point_changes_no_cache_and_no_count(data_dir
     }
     assert own["generating"] != own["estimate"]
     # the verdict: below by more than the 95 % point of chi2(1), not merely below
-    assert missed_basin({"generating": 0.0, "estimate": 3.9})
-    assert not missed_basin({"generating": 0.0, "estimate": 3.8})
+    assert generating_point_better({"generating": 0.0, "estimate": 3.9})
+    assert not generating_point_better({"generating": 0.0, "estimate": 3.8})
 
 
 def test_own_loglik_is_woods_gaussian_log_likelihood(data_dir):

@@ -135,7 +135,7 @@ def loglik_at_truth(
     both data sets, the run-ups' on ``members`` members and the load curves' on
     ``load_members``: as many as measure the held metrics) at the generating point a synthetic
     load curve states and at the estimate (``None`` when none is stated), not logged
-    (:func:`unlogged`). :func:`missed_basin` reads them."""
+    (:func:`unlogged`). :func:`generating_point_better` reads them."""
     x = generating_x(obj)
     if x is None:
         return None
@@ -149,14 +149,16 @@ def loglik_at_truth(
     )
 
 
-def missed_basin(loglik_own: dict[str, float]) -> bool:
-    """Whether the search missed a better basin: the generating point's ``−2 log L`` with its
+def generating_point_better(loglik_own: dict[str, float]) -> bool:
+    """Whether the generating point is more likely than the estimate: its ``−2 log L`` with its
     own covariance (:func:`loglik_at_truth`) below the estimate's by more than the 95 % point of
     ``χ²(1)`` (:data:`.uncertainty.THRESHOLD`), a margin for the members' noise in both readings.
 
-    Unlike ``χ²`` under the held metric, this reading does not favour the regime the metric was
-    measured in (docs/fitting_method.md "Generating point"). The estimate's members are those
-    the search chose it on, which reads it low: "missed" is the safe side of the verdict.
+    Then the estimate is not the likelihood's maximum: the search missed a better basin, or the
+    ``χ²`` it minimizes under the held metric peaks away from the likelihood (docs/
+    fitting_method.md "Generating point"). Unlike ``χ²`` under the held metric, this reading
+    does not favour the regime the metric was measured in. The estimate's members are those the
+    search chose it on, which reads it low: "better" is the safe side of the verdict.
     """
     return loglik_own["generating"] < loglik_own["estimate"] - THRESHOLD
 

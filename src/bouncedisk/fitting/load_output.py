@@ -20,7 +20,7 @@ import xarray as xr
 
 from ..io.provenance import sha256_file
 from .core import FitResult
-from .joint import missed_basin, stated_truth, truth_coordinate
+from .joint import generating_point_better, stated_truth, truth_coordinate
 from .loadpart import LOAD_BAND, LOAD_MEMBERS, setup
 from .members import BOUNDS
 from .uncertainty import THRESHOLD, identified
@@ -233,7 +233,7 @@ def identifiability_lines(ds: xr.Dataset) -> list[str]:
 
 def _truth_lines(attrs: dict) -> list[str]:
     """The summary's lines on the generating point (synthetic data only): its ``χ²`` under the
-    fit's final metric, and whether the search missed a better basin, judged by ``−2 log L``
+    fit's final metric, and whether it is more likely than the estimate, judged by ``−2 log L``
     with each point's own covariance (``loglik_own_*``, :func:`.joint.loglik_at_truth`)."""
     if "chi2_generating_both" not in attrs:
         return []
@@ -246,8 +246,8 @@ def _truth_lines(attrs: dict) -> list[str]:
         own = {k: attrs[f"loglik_own_{k}"] for k in ("generating", "estimate")}
         at, fit = own["generating"], own["estimate"]
         verdict = (
-            f"more than {THRESHOLD:.3g} below: the search missed a better basin"
-            if missed_basin(own)
+            f"more than {THRESHOLD:.3g} below: the estimate is not the likelihood's maximum"
+            if generating_point_better(own)
             else f"not more than {THRESHOLD:.3g} below"
         )
         lines.append(
