@@ -76,8 +76,11 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=10, help="processes per variant")
     parser.add_argument("--record", action="store_true", help="write benchmarks/out/")
     args = parser.parse_args()
+    has_dask = importlib.util.find_spec("dask") is not None
+    if args.record and not has_dask:  # the record keeps the dask comparison
+        parser.exit(2, 'job_overhead.py: error: --record needs dask (pip install -e ".[test]")\n')
     variants = {"frozen": (JOB, SCENE), "unfrozen": (UNFROZEN, SCENE)}
-    if importlib.util.find_spec("dask") is not None:
+    if has_dask:
         variants.update(stats=(STATS_JOB, STATS_SCENE), stats_no_dask=(STATS_NO_DASK, STATS_SCENE))
     cpu = {name: [] for name in variants}
     with tempfile.TemporaryDirectory() as tmp:

@@ -6,7 +6,8 @@ from the root of a clean clone (``PYTHONPATH=src`` when the package is installed
 tree). Runs Snakemake's command line in this process and prints, when it exits, the wall time,
 the CPU time of this process (Snakemake itself: the DAG, the scheduling, the sampling of the
 jobs' benchmark files, the tracking) and the CPU time of every process it started and waited
-for (the jobs, the shells that start them, their children), from ``getrusage``. The jobs' own
+for (the jobs, the shells that start them, their children, the tracking's ``git`` calls), from
+``getrusage``. The jobs' own
 benchmark files (``pipeline_jobs.py``) sample each job at intervals and miss what a job spends
 after its last sample: their sum is below the jobs' CPU here, most of all for short jobs.
 """
@@ -34,7 +35,8 @@ def main() -> None:
     def report() -> None:
         print(
             f"pipeline_cpu: wall {time.perf_counter() - start:.1f} s; CPU of Snakemake itself "
-            f"{cpu(resource.RUSAGE_SELF):.1f} s, of its jobs {cpu(resource.RUSAGE_CHILDREN):.1f} s",
+            f"{cpu(resource.RUSAGE_SELF):.1f} s, of the processes it started (its jobs) "
+            f"{cpu(resource.RUSAGE_CHILDREN):.1f} s",
             file=sys.stderr,
             flush=True,
         )

@@ -239,7 +239,7 @@ def rates(rows: list[dict]) -> dict:
     return {"motors": n, "adequate": sum(r["adequate"] for r in rows) / n if n else math.nan,
             "coverage": coverage([sum(r["holds"].values()) for r in rows], len(names)),
             "holds_by_parameter": {m: sum(r["holds"][m] for r in rows) for m in names},
-            "generating_point_better": sum(r["chi2_truth"] < r["chi2"] for r in rows),
+            "generating_point_below_held": sum(r["chi2_truth"] < r["chi2"] for r in rows),
             "generating_point_better_own": sum(_own_better(r) for r in _with_own(rows)),
             "rows_with_own": len(_with_own(rows)),
             "r_phi_factor_below_2": sum((r["r_phi_factor"] or math.inf) < 2 for r in rows) / n
@@ -258,8 +258,8 @@ def _with_own(rows: list[dict]) -> list[dict]:
 
 
 def _own_better(r: dict) -> bool:
-    """Whether the fit file's ``loglik_own_*`` say the search missed a better basin
-    (:func:`bouncedisk.fitting.joint.generating_point_better`)."""
+    """Whether the fit file's ``loglik_own_*`` say the generating point is more likely than the
+    estimate (:func:`bouncedisk.fitting.joint.generating_point_better`)."""
     return generating_point_better(r["loglik_own"])
 
 
@@ -318,7 +318,7 @@ def write_rates_record(rows: list[dict], name: str = "fit_validation") -> None:
                f"hold the truth ({100 * c.get('rate', math.nan):.0f} %, over motors "
                f"{c.get('ci95_motors')}); R_phi to a factor below 2 on "
                f"{round(100 * r['r_phi_factor_below_2'])} %; the generating point reads below the "
-               f"fit on {r['generating_point_better']}"
+               f"fit on {r['generating_point_below_held']}"
                + (f" (by the own likelihood of each point on {r['generating_point_better_own']} of "
                   f"{r['rows_with_own']})" if r["rows_with_own"] else "")
                + f"; median widths e {q['e'] and q['e'][1]}, "

@@ -60,3 +60,43 @@ def test_joined_shards_report_the_whole_sweep(tmp_path):
         assert int(mf["n_events"].sum()) == total
         assert mf.attrs.get("n_impacts", total) == total
     assert total == sum(int(s["n_events"].sum()) for s in shards)
+
+
+def test_shards_join_and_stats_write_without_dask(tmp_path):
+    """The package needs no dask (docs/formats.md; the tests install it for ``open_mfdataset``):
+    a sweep's shards joined and written, and an ensemble's statistics made and written, in a
+    process where dask cannot be imported; the joined file is the one-job sweep's."""
+    import subprocess
+    import sys
+
+    code = f"""
+import sys
+sys.modules["dask"] = None
+import numpy as np
+from bouncedisk.analysis.statistics import run_stats, to_dataset
+from bouncedisk.analysis.sweeps import combine_shards, run_sweep
+from bouncedisk.io.netcdf import open_checked, write_dataset
+from bouncedisk.model.scene import scene_from_mapping
+
+base = scene_from_mapping(
+    {{"name": "sw", "parameters": {{"e": 0.3, "omega_s": 1.5}}, "stop": {{"time": 400.0}}}}
+)
+axes = [("e", np.linspace(0.1, 0.7, 4))]
+paths = []
+for i in range(2):
+    paths.append(r"{tmp_path}" + f"/shard-{{i}}.nc")
+    write_dataset(run_sweep(base, axes, shard=i, n_shards=2, tail=5), paths[-1])
+joined = combine_shards([open_checked(p, required=("regime",)) for p in paths])
+write_dataset(joined, r"{tmp_path}/joined.nc")
+whole = run_sweep(base, axes, tail=5)
+assert np.array_equal(joined["regime"].values, whole["regime"].values)
+stats = scene_from_mapping({{"name": "st", "parameters": {{"e": 0.3, "omega_s": 1.5,
+    "e_sigma": 1e-3}}, "effects": ["impacts", "contact", "restitution_noise"], "stop": {{"time": 200.0}},
+    "ensemble": {{"members": 2, "seed": 1}}, "stats": {{"discard": 50.0}}}})
+write_dataset(to_dataset(stats, run_stats(stats, cores=1), 0.0), r"{tmp_path}/stats.nc")
+assert "dask" not in [m.split(".")[0] for m in sys.modules if sys.modules[m] is not None]
+"""
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    with xr.open_dataset(tmp_path / "joined.nc") as ds:
+        assert ds.sizes["e"] == 4

@@ -5,7 +5,7 @@ ensemble (:mod:`bouncedisk.analysis.ensembles`), reduced to ensemble statistics 
 (:mod:`bouncedisk.analysis.statistics`): a long-run number from one run of a chaotic scene is not a result
 (docs/model.md "Long-run statistics of chaotic motion"). The first swept parameter is split into
 contiguous shards, so every shard is a hypercube block and shards join with
-``xarray.combine_by_coords`` / ``open_mfdataset``.
+``xarray.combine_by_coords`` (``open_mfdataset`` too, where dask is installed).
 
 :func:`run_continuation` follows attractors instead: each point of a 1-D sweep starts from the
 previous point's final state, up or down, so coexisting attractors both appear.
