@@ -76,6 +76,8 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=10, help="processes per variant")
     parser.add_argument("--record", action="store_true", help="write benchmarks/out/")
     args = parser.parse_args()
+    if args.repeats < 1:
+        parser.error(f"--repeats: {args.repeats}: at least 1 process per variant")
     has_dask = importlib.util.find_spec("dask") is not None
     if args.record and not has_dask:  # the record keeps the dask comparison
         parser.exit(2, 'job_overhead.py: error: --record needs dask (pip install -e ".[test]")\n')

@@ -7,9 +7,9 @@ tree). Runs Snakemake's command line in this process and prints, when it exits, 
 the CPU time of this process (Snakemake itself: the DAG, the scheduling, the sampling of the
 jobs' benchmark files, the tracking) and the CPU time of every process it started and waited
 for (the jobs, the shells that start them, their children, the tracking's ``git`` calls), from
-``getrusage``. The jobs' own
-benchmark files (``pipeline_jobs.py``) sample each job at intervals and miss what a job spends
-after its last sample: their sum is below the jobs' CPU here, most of all for short jobs.
+``getrusage``. The jobs' own benchmark files (``pipeline_jobs.py``) sample each job at intervals
+and miss what a job spends after its last sample: their sum is below the jobs' CPU here, most of
+all for short jobs.
 """
 
 from __future__ import annotations

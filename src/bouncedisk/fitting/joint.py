@@ -155,9 +155,9 @@ def generating_point_better(loglik_own: dict[str, float]) -> bool:
     ``χ²(1)`` (:data:`.uncertainty.THRESHOLD`), a margin for the members' noise in both readings.
 
     Then the estimate is not the likelihood's maximum: the search missed a better basin, or the
-    ``χ²`` it minimizes under the held metric peaks away from the likelihood (docs/
-    fitting_method.md "Generating point"). Unlike ``χ²`` under the held metric, this reading
-    does not favour the regime the metric was measured in. The estimate's members are those the
+    ``χ²`` it minimizes under the held metric peaks away from the likelihood
+    (docs/fitting_method.md "Generating point"). Unlike ``χ²`` under the held metric, this
+    reading does not favour the regime the metric was measured in. The estimate's members are those the
     search chose it on, which reads it low: "better" is the safe side of the verdict.
     """
     return loglik_own["generating"] < loglik_own["estimate"] - THRESHOLD
