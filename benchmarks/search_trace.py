@@ -1,7 +1,7 @@
 """Where the fit's search loses a tuning motor's generating basin: each stage's points against the truth.
 
 Run:  python benchmarks/search_trace.py --seed S --motors N --motor K [--second-voltage F]
-          [--second-drive F] [--scan N] [--cores 2]
+          [--second-drive F] [--scan N] [--scan-noise S] [--cores 2]
 
 Draws tuning motor ``K`` of ``benchmarks/validation_motors.py``'s design with another seed
 (``--seed`` is required: the validation motors are never traced), makes its run-up and load
@@ -12,7 +12,12 @@ curves as that benchmark does, and runs the default joint fit with the search's 
   (box units) and its ``chi2``, the best point's, and the truth's own ``chi2`` on the same
   data and members;
 - the joint candidates, the re-ranking and the starts' ends: the distance of the nearest to the
-  truth and the best ``chi2``, against the truth's under the covariance then.
+  truth and the best ``chi2``, against the truth's under the covariance then;
+- at the re-ranking, with the noise fitted, the truth read with its ``e_sigma`` set to each of
+  :data:`TRUTH_NOISE` (how sharp the likelihood is in the noise at the truth).
+
+``--scan-noise`` runs the scan at another stated noise than the fit's (a diagnosis: does the
+scan see the truth's basin at that noise?).
 
 A stage that keeps a point near the truth while a later one drops it names the stage that loses
 the basin; a truth whose ``chi2`` is below every candidate's names a basin the scan never
@@ -29,12 +34,15 @@ from pathlib import Path
 import numpy as np
 import validation_motors as vm
 
-from bouncedisk.fitting import FitSettings, fit_curve
+from bouncedisk.fitting import FitSettings, core, fit_curve
 from bouncedisk.fitting import search as S
 from bouncedisk.io.load_curves import read_load_curve
 from bouncedisk.io.runup_curves import read_curve
 
 TRUTH: dict[str, float] = {}
+#: Restitution noise levels at which the re-ranking stage also reads the truth (the other
+#: coordinates the generating ones): how sharp the likelihood is in the noise there.
+TRUTH_NOISE = (0.0, 0.001, 0.01, 0.03)
 
 
 def truth_x(obj) -> np.ndarray:
@@ -119,12 +127,19 @@ def wrap() -> None:
         return out
 
     def rerank_(obj, cs, s):
-        """The stage, then what it kept."""
+        """The stage, then what it kept, and the truth read at each of :data:`TRUTH_NOISE`."""
         scores = rerank(obj, cs, s)
         k, d = nearest(obj, cs)
         truth = quiet_chi2(obj, truth_x(obj), s.members)
         say("rerank", f"nearest #{k} at {d:.3f} chi2 {scores[k]:.4g}; best {min(scores):.4g}; "
             f"truth {truth:.4g} ({s.members} members)")  # fmt: skip
+        if "e_sigma" in obj.names:
+            j, read = obj.names.index("e_sigma"), []
+            for level in TRUTH_NOISE:
+                x = truth_x(obj)
+                x[j] = level
+                read.append(f"{level:g}: {quiet_chi2(obj, x, s.members):.4g}")
+            say("truth noise", "the truth's chi2 with its e_sigma set to " + ", ".join(read))
         return scores
 
     def local_stage(obj, starts, members, nfev, progress=None):
@@ -154,7 +169,17 @@ def main() -> None:
     ap.add_argument("--second-drive", type=float, default=None)
     ap.add_argument("--scan", type=int, default=FitSettings.scan)
     ap.add_argument("--cores", type=int, default=2)
+    ap.add_argument(
+        "--scan-noise",
+        type=float,
+        default=None,
+        help="the restitution noise the scan runs at (default the fit's stated one)",
+    )
     args = ap.parse_args()
+    if args.scan_noise is not None:
+        if not 0.0 <= args.scan_noise <= 0.1:
+            ap.error(f"--scan-noise: {args.scan_noise}: between 0 and 0.1 (the search's range)")
+        core.MODEL_E_SIGMA = args.scan_noise  # read by pose_fit: the scan's stated noise
     if args.seed == vm.VALIDATION_SEED:
         ap.error("--seed: the validation motors are not traced")
     m = vm.draw(args.motors, args.seed)[args.motor]

@@ -13,6 +13,10 @@ from matplotlib.figure import Figure
 
 from .common import COLORS, TWO_PI, _param, shade
 
+#: A cloud of thousands of points (a map's every impact or period): small, translucent, and one
+#: image in the PDF rather than a path per point (a path each is most of the PDF's drawing time).
+CLOUD = {"ms": 1.2, "mew": 0, "alpha": 0.6, "rasterized": True}
+
 
 def fig_poincare(datasets: dict[str, xr.Dataset]) -> Figure:
     """Impact maps (phase vs relative impact velocity) and stroboscopic maps, one column each."""
@@ -26,11 +30,9 @@ def fig_poincare(datasets: dict[str, xr.Dataset]) -> Figure:
             ds["phase"].values[impacts],
             ds["v_rel"].values[impacts],
             ".",
-            ms=1.0,
-            mew=0,
             color="k",
-            alpha=0.6,
             label=f"all {n} impacts",
+            **CLOUD,
         )
         ax.plot(
             ds["phase"].values[impacts][-50:],
@@ -50,7 +52,7 @@ def fig_poincare(datasets: dict[str, xr.Dataset]) -> Figure:
         ax = axes[1, j]
         if "strobe_u" in ds:
             su, sv = ds["strobe_u"].values, ds["strobe_v"].values
-            ax.plot(su, sv, ".", ms=1.0, color=COLORS["rotor"], label=f"all {su.size} periods")
+            ax.plot(su, sv, ".", color=COLORS["rotor"], label=f"all {su.size} periods", **CLOUD)
             ax.plot(su[-50:], sv[-50:], "o", ms=3, color=COLORS["fit"], label="last 50 periods")
             ax.margins(0.08)
             ax.legend(
@@ -91,7 +93,7 @@ def fig_bifurcation(up: xr.Dataset, down: xr.Dataset) -> Figure:
         chat = ds["is_chatter"].values.astype(bool)
         ee = np.broadcast_to(e[:, None], ph.shape)
         imp = ~chat & np.isfinite(ph)
-        ax.plot(ee[imp], ph[imp], "o", ms=1.2, mew=0, color=color, alpha=0.6, label=label)
+        ax.plot(ee[imp], ph[imp], "o", color=color, label=label, **CLOUD)
         ax.plot(
             ee[chat],
             ph[chat],
