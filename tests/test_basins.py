@@ -380,6 +380,15 @@ def test_bad_starts_and_models_are_named_in_one_line(scene_file, tmp_path, capsy
 
 def test_negative_initial_speeds_are_starts_like_any_other(scene_file, capsys):
     assert main(["basins", str(scene_file(TWO)), "--phases", "2", "--speeds=-50,0", "--json"]) == 0
-    js = json.loads(capsys.readouterr().out)
+    captured = capsys.readouterr()
+    js = json.loads(captured.out)
     assert js["per_start"]["speed"] == [-50.0, -50.0, 0.0, 0.0]
+    assert captured.err == ""  # the scene discards a transient: no warning
     assert B.parse_values("-50:50:3", "--speeds", "speed") == [-50.0, 0.0, 50.0]
+
+
+def test_a_window_from_switch_on_is_warned_of(scene_file, capsys):
+    """Without stats.discard the averages hold the start-up: one warning line, as stats says."""
+    assert main(["basins", str(scene_file(TWO)), "--phases", "1", "--set", "stats={}"]) == 0
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert line.startswith("bouncedisk: warning: ") and "stats.discard: 0" in line

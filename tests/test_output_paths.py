@@ -56,3 +56,16 @@ def test_an_empty_max_output_is_refused(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("bouncedisk: error: --max-output")
     assert not out.exists()
+
+
+@pytest.mark.parametrize("name", ["x" * 300 + ".nc", "d/" + "y" * 300 + "/out.nc"])
+def test_a_name_too_long_names_the_option(name, tmp_path, monkeypatch, capsys):
+    """A file or folder name longer than the file system allows: the option's one line, exit 2,
+    no folder made (the system's own error names no field)."""
+    monkeypatch.chdir(tmp_path)
+    scene = tmp_path / "s.yaml"
+    scene.write_text(SCENE)
+    assert main(["simulate", str(scene), "-o", name, "-q"]) == 2
+    (err,) = capsys.readouterr().err.strip().splitlines()
+    assert ": -o: cannot be written: " in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.yaml"]

@@ -112,6 +112,22 @@ def test_bad_values_exit_2_with_one_line(scene_file, tmp_path, capsys, override,
     assert not out.exists() and not list(tmp_path.glob(".out.nc*"))
 
 
+def test_the_clipped_model_names_what_it_needs(scene_file, tmp_path, capsys):
+    """The clipped model's contact never opens: without the contact effect, a time stop or the
+    exact solver it is refused before any run, naming the field."""
+    out = tmp_path / "out.nc"
+    base = ["simulate", str(scene_file(GOOD)), "-o", str(out), "-q", "--set", "model=clipped"]
+    for extra, field in (
+        (["--set", "stop={time: 50}", "--set", "effects=[impacts, torsion]"], "effects "),
+        ([], "stop"),
+        (["--set", "stop={time: 50}", "--set", "solver={method: rk45}"], "solver.method"),
+    ):
+        assert main(base + extra) == 2
+        (err,) = capsys.readouterr().err.strip().splitlines()
+        assert field in err and "clipped" in err
+        assert not out.exists()
+
+
 def test_a_bad_file_value_does_not_blame_an_unrelated_set_option(scene_file, tmp_path, capsys):
     text = "name: x\nparameters: {e: 'high', omega_s: 1.5}\nstop: {impacts: 3}\n"
     f = tmp_path / "bad.yaml"

@@ -170,6 +170,18 @@ class EnsembleStats:
         out["period"] = period
         return out
 
+    def members_with_value(self) -> dict[str, int]:
+        """The quantities some members have no (finite) value of, each with the number of
+        members that have one: its mean and interval in :meth:`summary` are over those only."""
+        out = {}
+        for name in QUANTITIES:
+            if name in LOAD_ONLY and not self.load:
+                continue
+            finite = int(np.isfinite(self.column(name)).sum())
+            if finite < len(self.members):
+                out[name] = finite
+        return out
+
     def _physical_powers(self) -> dict:
         """Powers in W and the motor's mechanical efficiency ``η = P_out / (P_ax + P_t)``
         (docs/model.md "The motor under load"), each with its interval across members."""
@@ -218,9 +230,16 @@ def ensemble_window(scene: Scene) -> tuple[float, float]:
             "stats.discard",
             f"leaves {t_end - t_from:.3g} time units to average over, less than one stator "
             f"period ({period:.4g}): too short to hold an impact or a cycle, so no regime or rate "
-            "can be measured; lower stats.discard or raise stop.time",
+            f"can be measured; lower stats.discard or raise stop.time{_unit_note(scene)}",
         )
     return t_from, t_end
+
+
+def _unit_note(scene: Scene) -> str:
+    """For a physical scene: its times are in units of ``t_c``, not seconds (docs/formats.md)."""
+    if scene.scales is None:
+        return ""
+    return f" (a scene's times are in units of t_c = {scene.scales.t_c:.4g} s, not seconds)"
 
 
 def capped_error(scene: Scene, ex: CappedRun, where: str = "") -> InputError:

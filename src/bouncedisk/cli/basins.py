@@ -11,6 +11,7 @@ from ..model.limits import SETTLE_RANGE
 from ..run.cores import available_cores
 from .common import _add_set_option, command_line, named_override, print_result
 from .tracking_options import _add_track_options, _track, _tracking_store
+from .window_warnings import print_window_warnings
 
 
 def format_basins(summary: dict) -> str:
@@ -73,6 +74,7 @@ def basins_command(args: argparse.Namespace) -> dict:
         check_scene(scene)
     except InputError as ex:  # name the --set that gave the field at fault
         raise named_override(ex, args.set) from None
+    print_window_warnings(scene, [])  # a window from switch-on holds the start-up transient
     speeds = _values(args.speeds, "--speeds", "speed", [scene.initial.omega])
     heights = _values(args.heights, "--heights", "height", [0.0])
     grid = start_grid(args.phases, speeds, heights)
@@ -119,7 +121,11 @@ def _add_basins(sub) -> None:
         "basins",
         help="coexisting motions: which attractor each start reaches, basin fractions with 95%% intervals",
     )
-    p.add_argument("scene", help="scene file (YAML) with torsion, stop.time and stats.discard")
+    p.add_argument(
+        "scene",
+        help="scene file (YAML) with torsion and stop.time; stats.discard (default 0) starts "
+        "the averages",
+    )
     p.add_argument(
         "--phases",
         type=int,

@@ -59,7 +59,13 @@ def _e_sigma_option(text) -> float | None:
 
     if str(text).strip().lower() == "fit":
         return None
-    return E_SIGMA.check(ARG, "--e-sigma", number(ARG, "--e-sigma", text))
+    try:
+        value = number(ARG, "--e-sigma", text)
+    except InputError:
+        raise InputError(
+            ARG, "--e-sigma", f"must be a number or 'fit' (the default), got {text!r}"
+        ) from None
+    return E_SIGMA.check(ARG, "--e-sigma", value)
 
 
 def _cmd_fit(args: argparse.Namespace) -> int:

@@ -35,9 +35,15 @@ def format_summary(summary: dict) -> str:
         f"{'members':>18}: {summary['members']}",
         f"{'averaged over':>18}: {summary['duration']:g} time units after {summary['discard']:g}",
     ]
-    for name in ("mean_omega", "mean_slip", "impact_rate", "chatter_rate", "chatter_interval"):
-        lines.append(_row(name, summary[name], summary[f"{name}_ci95"]))
-    lines.append(_row("lyapunov", summary["lyapunov"], summary["lyapunov_ci95"]))
+    for name in (
+        "mean_omega",
+        "mean_slip",
+        "impact_rate",
+        "chatter_rate",
+        "chatter_interval",
+        "lyapunov",
+    ):
+        lines.append(_row(summary, name))
     if summary["lyapunov_reset_fraction"] > 0:
         lines.append(
             f"{'':>18}  ({100 * summary['lyapunov_reset_fraction']:.0f}% of members reset every "
@@ -45,10 +51,10 @@ def format_summary(summary: dict) -> str:
         )
     for name in ("power_out", "power_torsion_in", "power_axial_in", "efficiency_torsion"):
         if name in summary:
-            lines.append(_row(name, summary[name], summary[f"{name}_ci95"]))
+            lines.append(_row(summary, name))
     for name in ("power_out_W", "power_torsion_in_W", "power_axial_in_W", "efficiency"):
         if name in summary:
-            lines.append(_row(name, summary[name], summary[f"{name}_ci95"]))
+            lines.append(_row(summary, name, counted=name.removesuffix("_W")))
     lines.append(
         f"{'energy audit':>18}: largest relative residual {_g(summary['audit_residual_axial'])} "
         f"(axial), {_g(summary['audit_residual_torsion'])} (torsional)"
@@ -69,12 +75,20 @@ def _g(x: float | None) -> str:
     return "n/a" if x is None else f"{x:.2g}"
 
 
-def _row(name: str, value, ci) -> str:
+def _row(summary: dict, name: str, counted: str | None = None) -> str:
+    """One quantity's line: its mean and interval, and how many members have a value when
+    some have none (``members_with_value``; ``counted`` names the quantity counted, the
+    nondimensional one of a power in W)."""
+    value, ci = summary[name], summary[f"{name}_ci95"]
     if value is None:
         return f"{name:>18}: n/a"
+    n = summary.get("members_with_value", {}).get(counted or name, summary["members"])
+    fewer = n < summary["members"]
+    of = f"{n} of {summary['members']} members" if fewer else "one member"
     if ci[0] is None:
-        return f"{name:>18}: {value:.6g}  (one member: no interval)"
-    return f"{name:>18}: {value:.6g}  95% CI [{ci[0]:.6g}, {ci[1]:.6g}]"
+        return f"{name:>18}: {value:.6g}  ({of}: no interval)"
+    fewer = f"  ({of})" if fewer else ""
+    return f"{name:>18}: {value:.6g}  95% CI [{ci[0]:.6g}, {ci[1]:.6g}]{fewer}"
 
 
 def stats_command(args: argparse.Namespace) -> dict:
@@ -106,6 +120,7 @@ def stats_command(args: argparse.Namespace) -> dict:
         if args.output:
             write_with_history(to_dataset(scene, result, wall), args.output, command_line(args))
     summary = result.summary()
+    summary["members_with_value"] = result.members_with_value()
     print_window_warnings(scene, [summary["regime"]])
     saved = f"per-member values ({wall:.2f} s on {cores} cores)"
     print_result(args, summary, format_summary(summary), saved)

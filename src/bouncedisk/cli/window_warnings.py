@@ -32,7 +32,8 @@ def window_warnings(scene: Scene, regimes: Iterable[str | None]) -> list[str]:
     -------
     list of str
         At most two lines: no ``stats.discard`` (the average includes the transient), and one
-        member of a run that is not periodic (no interval, a round-off-chosen sample).
+        member of a run that is not periodic: an unresolved regime (a transient or a cycle
+        longer than the window), or an irregular one (no interval, a round-off-chosen sample).
     """
     out = []
     if scene.stats.discard <= 0.0:
@@ -41,11 +42,18 @@ def window_warnings(scene: Scene, regimes: Iterable[str | None]) -> list[str]:
             "averages include the start-up transient; discard it, e.g. --set stats.discard=2000"
         )
     unsettled = sorted({r for r in regimes if r is not None and r not in SETTLED})
-    if scene.ensemble.members == 1 and unsettled:
+    if scene.ensemble.members == 1 and unsettled == ["unresolved"]:
         out.append(
-            f"bouncedisk: warning: {scene.source}: ensemble.members: one member of a "
-            f"{'/'.join(unsettled)} run is one round-off-chosen sample with no interval; use "
-            "an ensemble, e.g. --set 'ensemble={members: 32, seed: 1}' with restitution_noise"
+            f"bouncedisk: warning: {scene.source}: stats.discard: the window shows no period and "
+            "no chaos (unresolved): the run may still be in its transient, or its cycle longer "
+            "than the window; discard more or run longer (stats.discard, stop.time)"
+        )
+    elif scene.ensemble.members == 1 and unsettled:
+        out.append(
+            f"bouncedisk: warning: {scene.source}: ensemble.members: one member of an "
+            f"irregular run ({'/'.join(unsettled)}) is one round-off-chosen sample with no "
+            "interval; use an ensemble, e.g. --set 'ensemble={members: 32, seed: 1}' with "
+            "restitution_noise"
         )
     return out
 

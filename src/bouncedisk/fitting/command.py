@@ -59,8 +59,8 @@ def run_fit(
     read, seen = [], {}
     for path in curves:
         first_time(path, seen, "", "give each run-up once")
-        say(f"reading {path}")
         read.append(read_curve(path, sidecar))
+        say(f"read {path}")  # after the reading: a bad file's error is the only line
     c = read[0]
     runs = f"{len(read)} run-ups of " if len(read) > 1 else ""
     say(f"{runs}{len(c.time)} samples over {c.time[-1] - c.time[0]:.6g} s")
@@ -79,8 +79,8 @@ def read_loads(paths: list[str], seen: dict, progress) -> list:
     out = []
     for path in paths:
         first_time(path, seen, "--load", "give each curve once")
-        progress(f"reading load curve {path}")
         out.append(read_load_curve(path))
+        progress(f"read load curve {path}")
     return out
 
 

@@ -448,7 +448,8 @@ def summary_text(ds: xr.Dataset) -> str:
                 if np.isfinite(v["ci_low"])
                 else "no interval (inadequate fit)"
             )
-            lines.append(f"  {name:>12} = {float(ds[name]):.5g}   {ci} {v['units']}{flag}")
+            unit = "" if v["units"] == "1" else f" {v['units']}"  # "1": dimensionless (CF)
+            lines.append(f"  {name:>12} = {float(ds[name]):.5g}   {ci}{unit}{flag}")
     s_ci, t_ci = a["steady_speed_ci_rad_s"], a["time_constant_ci_s"]
     lines.append(
         f"  trend of the data: steady speed {a['steady_speed_rad_s']:.5g} rad/s "

@@ -88,7 +88,7 @@ def synthetic_from_spec(spec: dict, spec_path: str = "") -> tuple[pd.DataFrame, 
         },
         "generator": "workflow/scripts/make_synthetic_curve.py ("
         + (spec_path or "workflow/config/synthetic_motor.yaml")
-        + "); the fit's model uses the same stated e_sigma (README, 'Fitting')",
+        + "); the fit estimates e_sigma with the other parameters (docs/user_guide/fitting.md)",
     }
     return df, sidecar
 

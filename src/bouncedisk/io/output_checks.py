@@ -83,10 +83,17 @@ def check_output_path(
     InputError
         One line naming the path and the option.
     """
-    out = Path(path)
-    src = str(path)
     if str(path).strip() == "":
         raise InputError("<arguments>", option, "is empty; give a file name such as out.nc")
+    try:
+        return _checked_output(Path(path), str(path), option, inputs)
+    except OSError as ex:  # a name too long, a loop of links: what the system says of the path
+        reason = ex.strerror or type(ex).__name__
+        raise InputError(str(path), option, f"cannot be written: {reason}") from None
+
+
+def _checked_output(out: Path, src: str, option: str, inputs: Iterable[str | Path]) -> Path:
+    """:func:`check_output_path` after the empty name; an ``OSError`` is the caller's to word."""
     if out.is_dir():
         raise InputError(src, option, "is a directory; give a file name such as out.nc")
     for inp in inputs:
@@ -115,6 +122,10 @@ def check_output_path(
         parent = parent.parent
     if not parent.is_dir():
         raise InputError(src, option, f"{str(parent)!r} is a file, not a folder")
+    longest = os.pathconf(parent, "PC_NAME_MAX")
+    for part in dest.relative_to(parent).parts:  # the folders to create, then the file
+        if len(os.fsencode(part)) > longest:  # the system says so only once the folder exists
+            raise InputError(src, option, f"cannot be written: a name longer than {longest} bytes")
     try:
         fd, probe = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".probe", dir=parent)
     except OSError as ex:

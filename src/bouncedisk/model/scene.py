@@ -321,7 +321,7 @@ def scene_from_mapping(raw: dict, source: str = "<scene>") -> Scene:
     stop = _stop(src, raw.get("stop"), initial, params)
     outputs = _outputs(src, raw.get("outputs"), initial, stop, params)
     solver = _solver(src, raw.get("solver"))
-    model = _model(src, raw.get("model", "bouncing"), stop, solver)
+    model = _model(src, raw.get("model", "bouncing"), stop, solver, effects)
     ensemble = _ensemble(src, raw.get("ensemble"), effects, params)
     stats = _stats(src, raw.get("stats"), stop, initial)
     return Scene(
@@ -510,11 +510,20 @@ def _solver(src: str, v: Any) -> Solver:
     return Solver(method=method, tol=tol, step=step)
 
 
-def _model(src: str, model: Any, stop: Stop, solver: Solver) -> str:
-    """``model``: ``bouncing`` or ``clipped`` (time stop and exact solver only)."""
+def _model(
+    src: str, model: Any, stop: Stop, solver: Solver, effects: frozenset[str] = frozenset()
+) -> str:
+    """``model``: ``bouncing`` or ``clipped`` (the ``contact`` effect, a time stop and the exact
+    solver only)."""
     if model not in MODELS:
         raise InputError(src, "model", f"unknown model {model!r} (known: {', '.join(MODELS)})")
     if model == "clipped":
+        if "contact" not in effects:
+            raise InputError(
+                src,
+                "effects",
+                "the clipped model is a contact that never opens: add the 'contact' effect",
+            )
         if stop.time is None:
             raise InputError(
                 src, "stop", "the clipped model has no impacts: stop on time or periods"
@@ -582,7 +591,8 @@ def _stats(src: str, v: Any, stop: Stop, initial: InitialState) -> StatsSettings
         raise InputError(
             src,
             "stats.discard",
-            f"must be shorter than the run ({stop.time - initial.t:g} time units), got {discard:g}",
+            f"must be shorter than the run (stop.time - initial.t = {stop.time - initial.t:g} "
+            f"time units), got {discard:g}: lower stats.discard or raise stop.time",
         )
     return StatsSettings(discard=discard)
 
