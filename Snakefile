@@ -5,6 +5,7 @@ from pathlib import Path
 
 from snakemake.utils import min_version, validate
 
+from bouncedisk.io.schema_check import schema_error
 from bouncedisk.model.errors import InputError
 from bouncedisk.studies.sensitivity_settings import study_settings
 
@@ -14,13 +15,19 @@ min_version("8.0")
 configfile: "workflow/config/config.yaml"
 
 
-# the sensitivity study's ranges and sizes: one line naming the field, exit 2, before the schema
+# beside this file, whatever the working directory (snakemake -d)
+CONFIG_SCHEMA = str(Path(workflow.basedir) / "workflow" / "schemas" / "config.schema.yaml")
+
+# the sensitivity study's ranges and sizes, then the schema: one line naming the field, exit 2
 try:
     SENSITIVITY = study_settings(config)
 except InputError as _ex:
     print(f"bouncedisk: error: {_ex.line()}", file=sys.stderr)
     sys.exit(2)
-validate(config, "workflow/schemas/config.schema.yaml")
+if (_line := schema_error(config, CONFIG_SCHEMA)) is not None:
+    print(f"bouncedisk: error: pipeline config: {_line}", file=sys.stderr)
+    sys.exit(2)
+validate(config, CONFIG_SCHEMA)  # and the schema's defaults filled in
 
 
 include: "workflow/rules/common.smk"

@@ -392,3 +392,8 @@ def test_a_window_from_switch_on_is_warned_of(scene_file, capsys):
     assert main(["basins", str(scene_file(TWO)), "--phases", "1", "--set", "stats={}"]) == 0
     (line,) = capsys.readouterr().err.strip().splitlines()
     assert line.startswith("bouncedisk: warning: ") and "stats.discard: 0" in line
+    # a bad option is the one line: the warning waits for the options
+    args = ["--phases", "1", "--speeds", "abc", "--set", "stats={}"]
+    assert main(["basins", str(scene_file(TWO)), *args]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert line.startswith("bouncedisk: error: ") and "--speeds" in line

@@ -54,7 +54,8 @@ def files(tmp_path_factory):
 def test_closed_stdout_is_one_line_and_no_output(files, command):
     """Before: AttributeError ('NoneType' object has no attribute 'write'), exit 1."""
     r = _closed([a.format(d=files) for a in command])
-    lines = r.stderr.strip().splitlines()
+    # the short scene's window resolves no regime: its warning may come first
+    lines = [x for x in r.stderr.strip().splitlines() if not x.startswith("bouncedisk: warning: ")]
     assert r.returncode == 2, r.stderr
     assert lines == ["bouncedisk: error: <stdout>: standard output is closed"]
     assert not (files / "out.nc").exists()

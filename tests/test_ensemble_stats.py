@@ -317,18 +317,15 @@ def test_a_statistic_some_members_lack_says_over_how_many_it_is():
         dataclasses.replace(_member(k, "chaotic"), chatter_interval=x)
         for k, x in enumerate((math.nan, 100.0, 140.0))
     ]
-    stats = EnsembleStats(members, 0.0, 1.0)
-    s = stats.summary()
-    s["members_with_value"] = counted = stats.members_with_value()
+    s = EnsembleStats(members, 0.0, 1.0).summary()
+    counted = s["members_with_value"]
     assert counted["chatter_interval"] == 2 and "lyapunov" not in counted
     assert s["chatter_interval"] == 120.0
     table = format_summary(s)
     assert "chatter_interval: 120  95% CI [" in table and "(2 of 3 members)" in table
     assert "lyapunov: 0.5  95% CI [0.5, 0.5]\n" in table  # every member: no count
     members[1] = dataclasses.replace(members[1], chatter_interval=math.nan)
-    stats = EnsembleStats(members, 0.0, 1.0)
-    s = stats.summary()
-    s["members_with_value"] = stats.members_with_value()
+    s = EnsembleStats(members, 0.0, 1.0).summary()
     assert "chatter_interval: 140  (1 of 3 members: no interval)" in format_summary(s)
 
 

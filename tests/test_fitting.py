@@ -115,6 +115,22 @@ def test_bad_option_exits_2_before_work(periodic_csv, tmp_path, capsys, monkeypa
     assert calls == []
 
 
+def test_a_bad_second_file_is_the_only_line(periodic_csv, tmp_path, capsys):
+    """Progress starts once every file is read: a bad run-up after a good one, or a bad
+    --e-sigma, is the command's one line, which says what the option takes."""
+    bad = tmp_path / "bad.csv"
+    bad.write_text("time_s,speed\n0,1\n1,2\n")
+    out = tmp_path / "fit.nc"
+    code, err, _ = _run([str(periodic_csv), str(bad), "-o", str(out)], capsys)
+    assert code == 2 and len(err) == 1 and err[0].startswith("bouncedisk: error: ")
+    assert str(bad.with_suffix("")) in err[0] and not out.exists()
+    code, err, _ = _run([str(periodic_csv), "-o", str(out), "--e-sigma", "lots"], capsys)
+    assert code == 2 and err == [
+        "bouncedisk: error: <arguments>: --e-sigma: must be a number or 'fit' (the default), "
+        "got 'lots'"
+    ]
+
+
 def test_good_options_do_reach_the_fit(periodic_csv, tmp_path, capsys, monkeypatch):
     """The counterpart: with valid options the (patched) fit is reached, so the test above can fail."""
     import bouncedisk.fitting.core as core

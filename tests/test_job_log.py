@@ -53,3 +53,37 @@ def test_log_to_writes_the_log_and_freezes_the_heap_at_start_and_end(tmp_path):
     assert inside > 1000  # the imports' objects
     assert after >= inside + 5000  # and those made inside the block, alive at its end
     assert "made 5000 lists" in log.read_text(encoding="utf-8")
+
+
+#: A job whose scene is bad, as the simulate job meets it (a scene edited after Snakemake
+#: planned the run), and one whose code fails.
+BAD_JOB = """
+import sys
+from bouncedisk.io.job_log import log_to
+from bouncedisk.model.scene import load_scene
+
+with log_to(sys.argv[1]):
+    if sys.argv[2] == "scene":
+        load_scene(sys.argv[3])
+    raise ZeroDivisionError("a bug")
+"""
+
+
+def test_a_bad_scene_in_a_job_is_one_line_and_status_2(tmp_path):
+    """The user's error: one line on stderr and in the log, exit 2, no traceback; a bug keeps
+    its traceback (and its status 1)."""
+    scene = tmp_path / "bad.yaml"
+    scene.write_text("parameters: {e: 1.7, omega_s: 1.5}\nstop: {impacts: 5}\n")
+    log = tmp_path / "job.log"
+    run = subprocess.run(
+        [sys.executable, "-c", BAD_JOB, str(log), "scene", str(scene)],
+        capture_output=True,
+        text=True,
+    )
+    line = f"{scene}: parameters.e: must be in [0, 1], got 1.7"
+    assert run.returncode == 2 and run.stderr == f"bouncedisk: error: {line}\n"
+    assert log.read_text().rstrip().endswith(f"ERROR {line}")
+    bug = subprocess.run(
+        [sys.executable, "-c", BAD_JOB, str(log), "bug", ""], capture_output=True, text=True
+    )
+    assert bug.returncode == 1 and "ZeroDivisionError: a bug" in bug.stderr

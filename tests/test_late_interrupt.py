@@ -35,8 +35,10 @@ def test_sigint_after_the_output_is_written(tmp_path, delay):
     time.sleep(delay)
     p.send_signal(signal.SIGINT)
     _, err = p.communicate(timeout=120)
+    # the short scene's window resolves no regime: its warning is not an error
+    errors = [x for x in err.splitlines() if not x.startswith("bouncedisk: warning: ")]
     if p.returncode == 0:
-        assert out.exists() and err == ""
+        assert out.exists() and errors == []
     else:
         assert p.returncode == 130, (p.returncode, err)
         assert "interrupted" in err and not out.exists()

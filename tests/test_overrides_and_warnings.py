@@ -67,10 +67,15 @@ def test_window_warnings_name_the_transient_and_the_single_member(scene_file):
     # no period and no chaos in the window: a transient or a long cycle, not a sample to repeat
     assert unresolved.startswith(f"bouncedisk: warning: {f}: stats.discard: ")
     assert "unresolved" in unresolved and "ensemble" not in unresolved
-    (mixed,) = window_warnings(settled, ["chaotic", "unresolved"])
-    assert "ensemble.members: one member of an irregular run (chaotic/unresolved)" in mixed
+    # loads of a curve: one unresolved, one chaotic: each gets its own advice
+    both = window_warnings(settled, ["chaotic", "unresolved"])
+    assert [line.split(": ")[3] for line in both] == ["stats.discard", "ensemble.members"]
+    assert "unresolved" in both[0] and "irregular run (chaotic)" in both[1]
     many = load_scene(f, ["ensemble={members: 4, seed: 1}", "stats.discard=100"])
     assert window_warnings(many, ["chaotic"]) == []
+    # an ensemble in an unresolved regime is still told its window shows none
+    (line,) = window_warnings(many, ["unresolved"])
+    assert "unresolved" in line and "stats.discard" in line
 
 
 def test_stats_command_prints_the_warnings_on_stderr(scene_file, capsys):

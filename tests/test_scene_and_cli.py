@@ -81,6 +81,27 @@ stop: {impacts: 10}
     assert s.scales is not None
 
 
+def test_a_physical_window_in_seconds_is_told_its_unit(scene_file, capsys):
+    """A physical scene's times are in t_c, not seconds: a stop of 0.02 "seconds" leaves less
+    than a period, and the one line names the field at fault and t_c in seconds."""
+    text = """
+name: phys
+physical: {m_r: 0.01, r_g: 0.004, r_c: 0.001, mu: 0.2, e: 0.5, g: 9.81, f: 1000.0, U0: 1.0e-6,
+           Phi0: 1.0e-3}
+stop: {time: 0.02}
+"""
+    f = scene_file(text)
+    assert main(["stats", str(f), "-q"]) == 2
+    (err,) = capsys.readouterr().err.strip().splitlines()
+    t_c = math.sqrt(1e-6 / 9.81)
+    assert f"{f}: stop.time: leaves 0.02 time units" in err
+    assert err.endswith(f"(a scene's times are in units of t_c = {t_c:.4g} s, not seconds)")
+    assert main(["stats", str(f), "-q", "--set", "stop.time=10", "--set", "stats.discard=9.9"]) == 2
+    assert ": stats.discard (from --set stats.discard): leaves 0.1 time units" in (
+        capsys.readouterr().err
+    )
+
+
 @pytest.mark.parametrize(
     "override,field",
     [

@@ -176,6 +176,25 @@ def test_unknown_schemes_are_refused(tmp_path, capsys, monkeypatch, uri):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.yaml"]
 
 
+def test_an_unknown_scheme_lists_only_the_schemes_that_work(tmp_path, capsys):
+    """file:// stores are refused later: the list a user is offered leaves them out."""
+    argv = ["simulate", write_scene(tmp_path), "-o", str(tmp_path / "o.nc"), "-q", "--track"]
+    assert main([*argv, "--tracking-uri", "ftp://x/y"]) == 2
+    line = one_line(capsys)
+    assert "unknown scheme 'ftp://'; use one of sqlite://" in line and "file://" not in line
+
+
+def test_runs_names_an_unknown_action_and_a_short_prefix(tracked_store, capsys):
+    assert main(["runs", "frobnicate", "--tracking-uri", str(tracked_store)]) == 2
+    assert one_line(capsys).endswith(
+        "runs: frobnicate: unknown action (known: list, show, diff, ui)"
+    )
+    assert main(["runs", "show", "ab", "--tracking-uri", str(tracked_store)]) == 2
+    assert one_line(capsys).endswith(
+        "ab: no run with this id (a prefix needs at least 4 characters)"
+    )
+
+
 def test_missing_parent_folders_are_refused(tmp_path, capsys):
     root = tmp_path / "no"
     argv = ["simulate", write_scene(tmp_path), "-o", str(tmp_path / "o.nc"), "-q", "--track"]

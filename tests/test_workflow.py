@@ -1,5 +1,7 @@
 """The Snakemake pipeline: lint, bad config, interrupted runs, determinism across core counts."""
 
+import contextlib
+import io
 import shutil
 import signal
 import subprocess
@@ -111,14 +113,18 @@ def parse_error(config: Path, res: Path, monkeypatch, cwd: Path = ROOT) -> str:
     from snakemake.settings.types import ConfigSettings, OutputSettings, ResourceSettings
 
     monkeypatch.chdir(cwd)  # Snakemake changes into the workdir; pytest changes back
+    err = io.StringIO()
     try:
-        with SnakemakeApi(OutputSettings()) as api:
+        with SnakemakeApi(OutputSettings()) as api, contextlib.redirect_stderr(err):
             api.workflow(
                 resource_settings=ResourceSettings(cores=1),
                 config_settings=ConfigSettings(configfiles=[config], config={"results": str(res)}),
                 snakefile=cwd / "Snakefile",
                 workdir=cwd,
             ).dag()
+    except SystemExit as ex:  # the pipeline's own one line (exit status 2)
+        assert ex.code == 2 and len(err.getvalue().strip().splitlines()) == 1, err.getvalue()
+        return err.getvalue()
     except Exception as ex:  # noqa: BLE001 - any error is the answer
         return str(ex)
     return ""
@@ -136,9 +142,22 @@ def test_bad_config_fails_before_any_job(tmp_path, monkeypatch):
         ("shards: 3", "shards: -1", "shards"),
         ("per_omega: 50000", "per_omega: -1", "per_omega"),
         ("scan: 32", "scan: 4", "scan"),
+        ("results: results-small", "results: results-small\ntrackin: true", "trackin"),
     ):
         bad.write_text(SMALL.read_text().replace(old, new))
         assert key in parse_error(bad, tmp_path / "r", monkeypatch), key
+    # a scene file the config names is read before any job: its own one line
+    scenes = tmp_path / "scenes"
+    shutil.copytree(ROOT / "workflow" / "config" / "scenes", scenes)
+    (scenes / "fig3.yaml").write_text(
+        (scenes / "fig3.yaml").read_text().replace("e: 0.3", "e: 1.7")
+    )
+    bad.write_text(SMALL.read_text() + f"\nscenes: {scenes}\n")
+    line = parse_error(bad, tmp_path / "r", monkeypatch)
+    assert (
+        line.strip()
+        == f"bouncedisk: error: {scenes}/fig3.yaml: parameters.e: must be in [0, 1], got 1.7"
+    )
     assert not (tmp_path / "r").exists()
 
 

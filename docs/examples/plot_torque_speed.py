@@ -6,7 +6,8 @@ A motor is read from its load characteristic (:doc:`/user_guide/load`). The effe
 constant load torque ``τ_L`` on the rotor; :func:`bouncedisk.studies.torque_speed.torque_speed` runs the
 scene's ensemble at each load, up and then down by continuation, and reduces it to the mean rotor
 speed and output power with 95 % intervals. A small ensemble here (6 members, 7 loads, short
-window) so that it runs in seconds; the pipeline's ``torque_speed_fig3`` uses 32 members and 20 loads.
+window) so that it runs in seconds; the pipeline's ``torque_speed_fig3`` uses 32 members and 18 loads
+up to ``τ_L = 1.02``, past the momentum bound.
 """
 
 import time
@@ -31,6 +32,9 @@ ds = to_dataset(scene, curve, time.perf_counter() - start)
 derived = curve.summary()
 for key in ("no_load_speed", "stall_torque", "max_power", "max_power_load"):
     print(f"{key:>15}: {derived.get(key)}")
+# the loads here end at 0.9, before the speed reaches 0: the stall torque and the power's
+# maximum lie past the largest load, and are None (their state says why)
+print(f"{'state':>15}: {derived['stall_torque_state']}, {derived['max_power_state']}")
 
 # %%
 # At the parameters of Fig. 3 (the period-2 orbit) the speed falls steeply under the first small

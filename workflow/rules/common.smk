@@ -2,6 +2,7 @@
 import math
 import os
 
+from bouncedisk.model.scene import load_scene
 from bouncedisk.studies import reproduction_files as _checked
 
 RES = config["results"]
@@ -46,6 +47,11 @@ def _check_config():
                 f"workflow/config/config.yaml: {key}: unknown scene {name!r} "
                 f"(no file {scene_path(name)})"
             )
+    for name in sorted(set(wanted.values())):  # each scene file valid before any job starts
+        try:
+            load_scene(scene_path(name))
+        except InputError as ex:
+            raise ValueError(ex.line()) from None
     for key in config["poincare"]:
         if key not in config["simulations"]:
             raise ValueError(
@@ -91,7 +97,11 @@ def _check_config():
 # bouncedisk.studies.reproduction_files (standard library only, cheap to import here)
 CHECKED_STATS = list(_checked.STATS_SCENES)
 CHECKED_LOAD_CURVES = list(_checked.LOAD_CURVES)
-_check_config()
+try:  # one line naming the file and the key, exit 2, as the package's commands
+    _check_config()
+except ValueError as _ex:
+    print(f"bouncedisk: error: {_ex}", file=sys.stderr)
+    sys.exit(2)
 
 
 def sweep_shards(wildcards):

@@ -60,15 +60,15 @@ def tracking_start():
         cores = workflow.cores
     except Exception:
         cores = None
-    tracker = _pipeline.PipelineTracker(
-        TRACKING,
-        RES,
-        config,
-        cores=cores,
-        snakemake_version=_snakemake.__version__,
-        command=" ".join(sys.argv),
-    )
-    try:
+    try:  # the store named (an unknown scheme), then reached: one report, no traceback
+        tracker = _pipeline.PipelineTracker(
+            TRACKING,
+            RES,
+            config,
+            cores=cores,
+            snakemake_version=_snakemake.__version__,
+            command=" ".join(sys.argv),
+        )
         tracker.start(_tracking_jobs())
     except _store.TrackingError as ex:
         print(_store.error_report(ex), file=sys.stderr, flush=True)

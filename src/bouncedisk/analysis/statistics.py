@@ -142,24 +142,26 @@ class EnsembleStats:
         return tied if len(tied) > 1 else []
 
     def summary(self) -> dict:
-        """The JSON object of ``bouncedisk stats --json`` (non-finite numbers as ``null``)."""
+        """The JSON object of ``bouncedisk stats --json`` (non-finite numbers as ``null``).
+
+        Each quantity's mean and Student interval are over the members that have a (finite)
+        value of it; ``members_with_value`` names the quantities some members lack, with the
+        number that have one (docs/formats.md "Statistics").
+        """
         out: dict = {
             "members": len(self.members),
             "discard": self.discard,
             "duration": self.duration,
+            "members_with_value": {},
         }
         for name in QUANTITIES:
             if name in LOAD_ONLY and not self.load:
                 continue
-            mean, low, high = confidence_interval(self.column(name))
-            if name in NONNEGATIVE and low < 0.0:
-                low = 0.0
-            out[name] = _finite_or_none(mean)
-            out[f"{name}_ci95"] = [_finite_or_none(low), _finite_or_none(high)]
+            _put_interval(out, name, self.column(name), nonnegative=name in NONNEGATIVE)
         for name in AUDIT:
             out[name] = _finite_or_none(float(np.nanmax(self.column(name), initial=-np.inf)))
         if self.scales is not None:
-            out.update(self._physical_powers())
+            self._physical_powers(out)
         lam = self.column("lyapunov")
         reset = float(np.mean(np.isneginf(lam)))
         out["lyapunov_reset_fraction"] = reset
@@ -170,38 +172,35 @@ class EnsembleStats:
         out["period"] = period
         return out
 
-    def members_with_value(self) -> dict[str, int]:
-        """The quantities some members have no (finite) value of, each with the number of
-        members that have one: its mean and interval in :meth:`summary` are over those only."""
-        out = {}
-        for name in QUANTITIES:
-            if name in LOAD_ONLY and not self.load:
-                continue
-            finite = int(np.isfinite(self.column(name)).sum())
-            if finite < len(self.members):
-                out[name] = finite
-        return out
-
-    def _physical_powers(self) -> dict:
-        """Powers in W and the motor's mechanical efficiency ``η = P_out / (P_ax + P_t)``
-        (docs/model.md "The motor under load"), each with its interval across members."""
+    def _physical_powers(self, out: dict) -> None:
+        """Into ``out``: the powers in W and the motor's mechanical efficiency
+        ``η = P_out / (P_ax + P_t)`` (docs/model.md "The motor under load"), each with its
+        interval across members."""
         sc = self.scales
-        out: dict = {}
         watts = {}
         for name, unit in POWER_UNITS.items():
             if name in LOAD_ONLY and not self.load:
                 continue
             watts[name] = self.column(name) * getattr(sc, unit)
-            mean, low, high = confidence_interval(watts[name])
-            out[f"{name}_W"] = _finite_or_none(mean)
-            out[f"{name}_W_ci95"] = [_finite_or_none(low), _finite_or_none(high)]
+            _put_interval(out, f"{name}_W", watts[name])
         if self.load:
             with np.errstate(invalid="ignore", divide="ignore"):
                 eta = watts["power_out"] / (watts["power_axial_in"] + watts["power_torsion_in"])
-            mean, low, high = confidence_interval(eta)
-            out["efficiency"] = _finite_or_none(mean)
-            out["efficiency_ci95"] = [_finite_or_none(low), _finite_or_none(high)]
-        return out
+            _put_interval(out, "efficiency", eta)
+
+
+def _put_interval(out: dict, name: str, values: np.ndarray, nonnegative: bool = False) -> None:
+    """``out[name]``, ``out[name + "_ci95"]``: the mean and Student interval of the finite
+    ``values`` (the low end raised to 0 for a ``nonnegative`` quantity), and their count in
+    ``out["members_with_value"]`` when some values are not finite."""
+    mean, low, high = confidence_interval(values)
+    if nonnegative and low < 0.0:
+        low = 0.0
+    out[name] = _finite_or_none(mean)
+    out[f"{name}_ci95"] = [_finite_or_none(low), _finite_or_none(high)]
+    finite = int(np.isfinite(values).sum())
+    if finite < len(values):
+        out["members_with_value"][name] = finite
 
 
 def _finite_or_none(x: float) -> float | None:
@@ -225,9 +224,11 @@ def ensemble_window(scene: Scene) -> tuple[float, float]:
     t_from, t_end = scene.initial.t + scene.stats.discard, scene.stop.time
     period = 2.0 * math.pi / scene.params.omega_s
     if t_end - t_from < period:
+        # the field at fault: the discard that eats the run, else the run itself
+        field = "stats.discard" if scene.stats.discard > 0 else "stop.time"
         raise InputError(
             scene.source,
-            "stats.discard",
+            field,
             f"leaves {t_end - t_from:.3g} time units to average over, less than one stator "
             f"period ({period:.4g}): too short to hold an impact or a cycle, so no regime or rate "
             f"can be measured; lower stats.discard or raise stop.time{_unit_note(scene)}",
@@ -317,6 +318,10 @@ def to_dataset(scene: Scene, result: EnsembleStats, wall_time_s: float) -> xr.Da
     ds.attrs.update(base_attrs(f"bouncedisk ensemble statistics of scene '{scene.name}'"))
     ds.attrs.update(scene_attrs(scene))
     summary = result.summary()
+    counted = summary.pop("members_with_value")
+    ds.attrs["stats_members_with_value"] = (
+        ",".join(f"{k}:{n}" for k, n in counted.items()) or "all"
+    )  # "chatter_interval:24": its mean is over 24 members
     for k, v in summary.items():
         if isinstance(v, list) and v and isinstance(v[0], str):
             v = ",".join(v)  # regime_tie: names of the tied regimes

@@ -9,7 +9,7 @@ from ..io.history import write_with_history
 from ..model.errors import InputError
 from ..model.limits import SETTLE_RANGE
 from ..run.cores import available_cores
-from .common import _add_set_option, command_line, named_override, print_result
+from .common import _add_set_option, command_line, naming_overrides, print_result
 from .tracking_options import _add_track_options, _track, _tracking_store
 from .window_warnings import print_window_warnings
 
@@ -70,14 +70,12 @@ def basins_command(args: argparse.Namespace) -> dict:
     if args.output is not None:
         check_output_path(args.output, "-o", inputs=[args.scene])
     scene = load_scene(args.scene, args.set or [])
-    try:
+    with naming_overrides(args.set):
         check_scene(scene)
-    except InputError as ex:  # name the --set that gave the field at fault
-        raise named_override(ex, args.set) from None
-    print_window_warnings(scene, [])  # a window from switch-on holds the start-up transient
     speeds = _values(args.speeds, "--speeds", "speed", [scene.initial.omega])
     heights = _values(args.heights, "--heights", "height", [0.0])
     grid = start_grid(args.phases, speeds, heights)
+    print_window_warnings(scene, [])  # a window from switch-on holds the start-up transient
     cores = args.cores or available_cores()
     start = time.perf_counter()
     with deferred_interrupts() as req:
@@ -86,10 +84,8 @@ def basins_command(args: argparse.Namespace) -> dict:
             if req.signum is not None:
                 raise KeyboardInterrupt
 
-        try:
+        with naming_overrides(args.set):  # a capped start: the --set that set the cap
             ds = basins(scene, grid, cores=cores, settle=settle, progress=progress, extend=extend)
-        except InputError as ex:  # a capped start: name the --set that set the cap
-            raise named_override(ex, args.set) from None
         wall = time.perf_counter() - start
         ds.attrs["wall_time_s"] = round(wall, 6)
         if args.output:

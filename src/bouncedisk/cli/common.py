@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import shlex
 import sys
+from collections.abc import Iterator
 
 from ..model.errors import InputError
 
@@ -39,6 +41,16 @@ def named_override(ex: InputError, overrides: list[str] | None) -> InputError:
     if key is None or "(from --set" in ex.field:
         return ex
     return InputError(ex.source, f"{ex.field} (from --set {key})", ex.message)
+
+
+@contextlib.contextmanager
+def naming_overrides(overrides: list[str] | None) -> Iterator[None]:
+    """Re-raise an :class:`InputError` of the block naming the ``--set`` option that gave its
+    field (:func:`named_override`): a check or a run after the scene was read."""
+    try:
+        yield
+    except InputError as ex:
+        raise named_override(ex, overrides) from None
 
 
 def flush_stdout() -> None:

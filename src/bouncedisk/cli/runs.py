@@ -19,6 +19,9 @@ def _cmd_runs(args: argparse.Namespace) -> int:
     from ..tracking import reading as registry
 
     words = list(args.words)
+    if len(words) == 1 and words[0] not in RUNS_ACTIONS:  # `runs frobnicate`: not a run id
+        known = ", ".join(RUNS_ACTIONS)
+        raise InputError("runs", words[0], f"unknown action (known: {known})")
     action = words.pop(0) if words and words[0] in RUNS_ACTIONS else "list"
     lo, hi = RUNS_ACTIONS[action]
     if not lo <= len(words) <= hi:

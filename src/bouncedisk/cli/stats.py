@@ -9,7 +9,7 @@ import time
 from ..io.history import write_with_history
 from ..model.errors import InputError
 from ..run.cores import available_cores
-from .common import _add_set_option, command_line, named_override, print_result
+from .common import _add_set_option, command_line, naming_overrides, print_result
 from .tracking_options import _add_track_options, _track, _tracking_store
 from .window_warnings import print_window_warnings
 
@@ -54,7 +54,7 @@ def format_summary(summary: dict) -> str:
             lines.append(_row(summary, name))
     for name in ("power_out_W", "power_torsion_in_W", "power_axial_in_W", "efficiency"):
         if name in summary:
-            lines.append(_row(summary, name, counted=name.removesuffix("_W")))
+            lines.append(_row(summary, name))
     lines.append(
         f"{'energy audit':>18}: largest relative residual {_g(summary['audit_residual_axial'])} "
         f"(axial), {_g(summary['audit_residual_torsion'])} (torsional)"
@@ -75,20 +75,19 @@ def _g(x: float | None) -> str:
     return "n/a" if x is None else f"{x:.2g}"
 
 
-def _row(summary: dict, name: str, counted: str | None = None) -> str:
+def _row(summary: dict, name: str) -> str:
     """One quantity's line: its mean and interval, and how many members have a value when
-    some have none (``members_with_value``; ``counted`` names the quantity counted, the
-    nondimensional one of a power in W)."""
+    some have none (``members_with_value``)."""
     value, ci = summary[name], summary[f"{name}_ci95"]
     if value is None:
         return f"{name:>18}: n/a"
-    n = summary.get("members_with_value", {}).get(counted or name, summary["members"])
-    fewer = n < summary["members"]
-    of = f"{n} of {summary['members']} members" if fewer else "one member"
+    n = summary.get("members_with_value", {}).get(name, summary["members"])
+    some = n < summary["members"]
+    of = f"{n} of {summary['members']} members" if some else "one member"
     if ci[0] is None:
         return f"{name:>18}: {value:.6g}  ({of}: no interval)"
-    fewer = f"  ({of})" if fewer else ""
-    return f"{name:>18}: {value:.6g}  95% CI [{ci[0]:.6g}, {ci[1]:.6g}]{fewer}"
+    count = f"  ({of})" if some else ""
+    return f"{name:>18}: {value:.6g}  95% CI [{ci[0]:.6g}, {ci[1]:.6g}]{count}"
 
 
 def stats_command(args: argparse.Namespace) -> dict:
@@ -103,24 +102,22 @@ def stats_command(args: argparse.Namespace) -> dict:
     if args.output is not None:
         check_output_path(args.output, "-o", inputs=[args.scene])
     scene = load_scene(args.scene, args.set or [])
-    ensemble_window(scene)
+    with naming_overrides(args.set):
+        ensemble_window(scene)
     cores = args.cores or available_cores()
     start = time.perf_counter()
     with deferred_interrupts() as req:
-        try:
+        with naming_overrides(args.set):  # a capped member: the --set that set the cap
             result = run_stats(
                 scene,
                 cores=cores,
                 on_member=_progress(args.quiet, scene.name),
                 should_stop=lambda: req.signum is not None,
             )
-        except InputError as ex:  # a capped member: name the --set that set the cap
-            raise named_override(ex, args.set) from None
         wall = time.perf_counter() - start
         if args.output:
             write_with_history(to_dataset(scene, result, wall), args.output, command_line(args))
     summary = result.summary()
-    summary["members_with_value"] = result.members_with_value()
     print_window_warnings(scene, [summary["regime"]])
     saved = f"per-member values ({wall:.2f} s on {cores} cores)"
     print_result(args, summary, format_summary(summary), saved)

@@ -9,7 +9,7 @@ import time
 from ..io.history import write_with_history
 from ..model.errors import InputError
 from ..run.cores import available_cores
-from .common import _add_set_option, command_line, named_override, print_result
+from .common import _add_set_option, command_line, naming_overrides, print_result
 from .stats import _progress
 from .tracking_options import _add_track_options, _track, _tracking_store
 from .window_warnings import print_window_warnings
@@ -114,12 +114,13 @@ def torque_speed_command(args: argparse.Namespace) -> dict:
     if args.output is not None:
         check_output_path(args.output, "-o", inputs=[args.scene])
     scene = with_load(_scene(args.scene, list(args.set or [])))
-    ensemble_window(scene)
+    with naming_overrides(args.set):
+        ensemble_window(scene)
     loads = scene_loads(scene, args.loads)
     cores = args.cores or available_cores()
     start = time.perf_counter()
     with deferred_interrupts() as req:
-        try:
+        with naming_overrides(args.set):  # a capped member: the --set that set the cap
             curve = refined_torque_speed(
                 scene,
                 loads,
@@ -129,8 +130,6 @@ def torque_speed_command(args: argparse.Namespace) -> dict:
                 on_member=_progress(args.quiet, f"{scene.name} (torque-speed)"),
                 should_stop=lambda: req.signum is not None,
             )
-        except InputError as ex:  # a capped member: name the --set that set the cap
-            raise named_override(ex, args.set) from None
         wall = time.perf_counter() - start
         summary = finite_json(curve.summary())
         if args.output:

@@ -9,6 +9,7 @@ failing.
 
 from __future__ import annotations
 
+import math
 import sys
 from collections.abc import Iterable
 
@@ -31,31 +32,44 @@ def window_warnings(scene: Scene, regimes: Iterable[str | None]) -> list[str]:
     Returns
     -------
     list of str
-        At most two lines: no ``stats.discard`` (the average includes the transient), and one
-        member of a run that is not periodic: an unresolved regime (a transient or a cycle
-        longer than the window), or an irregular one (no interval, a round-off-chosen sample).
+        At most three lines: no ``stats.discard`` (the average includes the transient); an
+        unresolved regime at some point (a transient or a cycle longer than the window,
+        whatever the ensemble); one member of an irregular run (no interval, a round-off-chosen
+        sample).
     """
     out = []
     if scene.stats.discard <= 0.0:
         out.append(
             f"bouncedisk: warning: {scene.source}: stats.discard: 0 (or not given), so the "
-            "averages include the start-up transient; discard it, e.g. --set stats.discard=2000"
+            "averages include the start-up transient; discard it, e.g. --set "
+            f"stats.discard={_example_discard(scene):g}"
         )
-    unsettled = sorted({r for r in regimes if r is not None and r not in SETTLED})
-    if scene.ensemble.members == 1 and unsettled == ["unresolved"]:
+    seen = {r for r in regimes if r is not None}
+    if "unresolved" in seen:
         out.append(
             f"bouncedisk: warning: {scene.source}: stats.discard: the window shows no period and "
             "no chaos (unresolved): the run may still be in its transient, or its cycle longer "
             "than the window; discard more or run longer (stats.discard, stop.time)"
         )
-    elif scene.ensemble.members == 1 and unsettled:
+    irregular = sorted(seen - SETTLED - {"unresolved"})
+    if scene.ensemble.members == 1 and irregular:
         out.append(
             f"bouncedisk: warning: {scene.source}: ensemble.members: one member of an "
-            f"irregular run ({'/'.join(unsettled)}) is one round-off-chosen sample with no "
+            f"irregular run ({'/'.join(irregular)}) is one round-off-chosen sample with no "
             "interval; use an ensemble, e.g. --set 'ensemble={members: 32, seed: 1}' with "
             "restitution_noise"
         )
     return out
+
+
+def _example_discard(scene: Scene) -> float:
+    """A discard to suggest: 2000 time units (a run-up at ``R_φ = 0.01``), or two fifths of a
+    shorter run, one significant figure."""
+    run = (scene.stop.time or math.inf) - scene.initial.t
+    if run > 5000.0:
+        return 2000.0
+    x = 0.4 * run
+    return float(f"{x:.1g}")
 
 
 def print_window_warnings(scene: Scene, regimes: Iterable[str | None]) -> None:

@@ -60,18 +60,19 @@ def run_fit(
     for path in curves:
         first_time(path, seen, "", "give each run-up once")
         read.append(read_curve(path, sidecar))
-        say(f"read {path}")  # after the reading: a bad file's error is the only line
+    load_data = read_loads(list(loads), seen)
+    # every file read and checked: a bad one's error is the command's only line
     c = read[0]
     runs = f"{len(read)} run-ups of " if len(read) > 1 else ""
+    say(f"read {', '.join(map(str, [*curves, *loads]))}")
     say(f"{runs}{len(c.time)} samples over {c.time[-1] - c.time[0]:.6g} s")
-    load_data = read_loads(list(loads), seen, say)
     fit = core.fit_curve(read, settings, progress, load=load_data)
     ds = fit_dataset(fit)
     write_dataset(ds, output)
     return ds
 
 
-def read_loads(paths: list[str], seen: dict, progress) -> list:
+def read_loads(paths: list[str], seen: dict) -> list:
     """Read and check the load curves (:func:`bouncedisk.io.load_curves.read_load_curve`): each file
     once, none of them a run-up."""
     from ..io.load_curves import read_load_curve
@@ -80,7 +81,6 @@ def read_loads(paths: list[str], seen: dict, progress) -> list:
     for path in paths:
         first_time(path, seen, "--load", "give each curve once")
         out.append(read_load_curve(path))
-        progress(f"read load curve {path}")
     return out
 
 

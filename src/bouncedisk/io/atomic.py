@@ -102,6 +102,20 @@ def write_target(path: str | Path) -> Path:
     return Path(os.path.realpath(p)) if p.is_symlink() else p
 
 
+def temporary_affixes(target: Path, suffix: str | None = None) -> tuple[str, str]:
+    """The prefix and suffix of the temporary name :func:`atomic_path` writes ``target`` under
+    (``tempfile`` puts 8 random characters between them): hidden, beside ``target``, naming
+    the host and the process (:func:`clean_stale_temporaries` reads them)."""
+    sfx = suffix if suffix is not None else "".join(target.suffixes[-1:])
+    return f".{target.name}.{_host()}-{os.getpid()}.", f".tmp{sfx}"
+
+
+def temporary_name_bytes(target: Path) -> int:
+    """Length in bytes of the temporary name :func:`atomic_path` gives ``target``."""
+    prefix, end = temporary_affixes(target)
+    return len(os.fsencode(prefix)) + 8 + len(os.fsencode(end))
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | Path, suffix: str | None = None) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; rename it over ``path`` only on success.
@@ -114,10 +128,9 @@ def atomic_path(path: str | Path, suffix: str | None = None) -> Iterator[Path]:
     target = write_target(path)
     target.parent.mkdir(parents=True, exist_ok=True)
     clean_stale_temporaries(target)
-    sfx = suffix if suffix is not None else "".join(target.suffixes[-1:])
-    prefix = f".{target.name}.{_host()}-{os.getpid()}."
+    prefix, end = temporary_affixes(target, suffix)
     try:
-        fd, tmp = tempfile.mkstemp(prefix=prefix, suffix=f".tmp{sfx}", dir=target.parent)
+        fd, tmp = tempfile.mkstemp(prefix=prefix, suffix=end, dir=target.parent)
     except OSError as ex:
         raise write_error(target, ex) from None
     os.close(fd)

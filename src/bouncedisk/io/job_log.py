@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import gc
 import logging
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -29,10 +30,17 @@ def log_to(path: str | Path) -> Iterator[logging.Logger]:
     ------
     logging.Logger
         The ``bouncedisk.job`` logger, writing to the log file.
+
+    Raises
+    ------
+    SystemExit
+        Status 2 when the block raised an error the user can fix (a bad scene): its one line
+        is in the log and on stderr, with no traceback, as the package's commands do.
     """
     gc.freeze()
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
+    user_error = None
     with (
         open(p, "w", encoding="utf-8") as fh,
         contextlib.redirect_stdout(fh),
@@ -46,6 +54,21 @@ def log_to(path: str | Path) -> Iterator[logging.Logger]:
         logger.setLevel(logging.INFO)
         try:
             yield logger
+        except Exception as ex:
+            user_error = _user_error_line(ex)
+            if user_error is None:
+                raise
+            logger.error("%s", user_error)
         finally:
             logger.removeHandler(handler)
             gc.freeze()
+    if user_error is not None:  # one line on the job's stderr, no traceback, exit status 2
+        print(f"bouncedisk: error: {user_error}", file=sys.stderr)
+        raise SystemExit(2)
+
+
+def _user_error_line(ex: Exception) -> str | None:
+    """The one line of an error the user can fix (the package's ``InputError``, known by its
+    ``line()``: importing it would import the engine, and numba, into every light job)."""
+    line = getattr(ex, "line", None)
+    return line() if callable(line) and type(ex).__name__ == "InputError" else None

@@ -19,6 +19,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from ..model.errors import InputError
+from .atomic import temporary_name_bytes
 
 #: Default limit on the size of one simulation file (uncompressed bytes of its variables).
 DEFAULT_MAX_OUTPUT = 4 * 1024**3
@@ -87,9 +88,11 @@ def check_output_path(
         raise InputError("<arguments>", option, "is empty; give a file name such as out.nc")
     try:
         return _checked_output(Path(path), str(path), option, inputs)
-    except OSError as ex:  # a name too long, a loop of links: what the system says of the path
+    except OSError as ex:  # what the system says of the path (a folder's name too long)
         reason = ex.strerror or type(ex).__name__
         raise InputError(str(path), option, f"cannot be written: {reason}") from None
+    except RuntimeError:  # pathlib's resolve() on a loop of symbolic links
+        raise InputError(str(path), option, "cannot be written: a loop of symbolic links") from None
 
 
 def _checked_output(out: Path, src: str, option: str, inputs: Iterable[str | Path]) -> Path:
@@ -122,12 +125,9 @@ def _checked_output(out: Path, src: str, option: str, inputs: Iterable[str | Pat
         parent = parent.parent
     if not parent.is_dir():
         raise InputError(src, option, f"{str(parent)!r} is a file, not a folder")
-    longest = os.pathconf(parent, "PC_NAME_MAX")
-    for part in dest.relative_to(parent).parts:  # the folders to create, then the file
-        if len(os.fsencode(part)) > longest:  # the system says so only once the folder exists
-            raise InputError(src, option, f"cannot be written: a name longer than {longest} bytes")
+    _check_name_lengths(dest, parent, src, option)
     try:
-        fd, probe = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".probe", dir=parent)
+        fd, probe = tempfile.mkstemp(prefix=".bouncedisk-", suffix=".probe", dir=parent)
     except OSError as ex:
         reason = ex.strerror or type(ex).__name__
         raise InputError(
@@ -137,6 +137,29 @@ def _checked_output(out: Path, src: str, option: str, inputs: Iterable[str | Pat
     with contextlib.suppress(OSError):
         os.unlink(probe)
     return out
+
+
+def _check_name_lengths(dest: Path, parent: Path, src: str, option: str) -> None:
+    """The folders to create below ``parent`` and the temporary name the file is written under
+    (:func:`~.atomic.temporary_name_bytes`) within the file system's longest name, before any
+    work: the system says so only once the folder exists and the run is done."""
+    longest = os.pathconf(parent, "PC_NAME_MAX")
+    if longest <= 0:  # no limit stated
+        return
+    for part in dest.relative_to(parent).parts[:-1]:
+        if len(os.fsencode(part)) > longest:
+            raise InputError(
+                src, option, f"cannot be written: a folder name of more than {longest} bytes"
+            )
+    extra = temporary_name_bytes(dest) - len(os.fsencode(dest.name))
+    if len(os.fsencode(dest.name)) + extra > longest:
+        raise InputError(
+            src,
+            option,
+            f"cannot be written: its name is {len(os.fsencode(dest.name))} bytes, at most "
+            f"{longest - extra} here (the file is written under a name {extra} bytes longer "
+            "first, and renamed)",
+        )
 
 
 def sidecar_of(path: str | Path, option: str = "") -> Path:

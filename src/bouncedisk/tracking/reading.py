@@ -79,7 +79,8 @@ class Runs:
             )
         ]
         if not hits:
-            raise InputError(f"tracking store {self.store.uri}", key, "no run with this id")
+            short = " (a prefix needs at least 4 characters)" if len(key) < 4 else ""
+            raise InputError(f"tracking store {self.store.uri}", key, f"no run with this id{short}")
         if len(hits) > 1:
             raise InputError(
                 f"tracking store {self.store.uri}",

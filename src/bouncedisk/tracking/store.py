@@ -110,7 +110,7 @@ def resolve_store(
         raise TrackingError(
             uri,
             f"unknown scheme {scheme + '://'!r}; use one of "
-            + ", ".join(f"{s}://" for s in SCHEMES),
+            + ", ".join(f"{s}://" for s in SCHEMES if s != "file"),
         )
     store = Store(uri, None, experiment or EXPERIMENT)
     db = store.sqlite_path
