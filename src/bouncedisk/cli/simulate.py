@@ -21,9 +21,11 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         scene, out, progress=not args.quiet, command=command_line(args), max_output_bytes=limit
     )
     if not args.quiet:
+        members = scene.ensemble.members
+        which = f", member 0 of {members} (stats runs them all)" if members > 1 else ""
         print(
             f"{out}: {summary.n_impacts} impacts, {summary.n_chatter} chattering tails, "
-            f"status {summary.status!r}, {summary.wall_time_s:.3f} s (run {summary.run_id})"
+            f"status {summary.status!r}, {summary.wall_time_s:.3f} s (run {summary.run_id}){which}"
         )
     _track(args, store, "simulate", [out], params={"scene_file": args.scene, "set": args.set or []})
     return 0
