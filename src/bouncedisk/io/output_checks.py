@@ -143,8 +143,11 @@ def _check_name_lengths(dest: Path, parent: Path, src: str, option: str) -> None
     """The folders to create below ``parent`` and the temporary name the file is written under
     (:func:`~.atomic.temporary_name_bytes`) within the file system's longest name, before any
     work: the system says so only once the folder exists and the run is done."""
-    longest = os.pathconf(parent, "PC_NAME_MAX")
-    if longest <= 0:  # no limit stated
+    try:
+        longest = os.pathconf(parent, "PC_NAME_MAX")
+    except (OSError, ValueError):  # a file system that states no limit
+        return
+    if longest <= 0:
         return
     for part in dest.relative_to(parent).parts[:-1]:
         if len(os.fsencode(part)) > longest:
