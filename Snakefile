@@ -27,7 +27,7 @@ except InputError as _ex:
 if (_line := schema_error(config, CONFIG_SCHEMA)) is not None:
     print(f"bouncedisk: error: pipeline config: {_line}", file=sys.stderr)
     sys.exit(2)
-validate(config, CONFIG_SCHEMA)  # and the schema's defaults filled in
+validate(config, CONFIG_SCHEMA)  # Snakemake's own check, which fills in any `default:` of the schema
 
 
 include: "workflow/rules/common.smk"

@@ -65,6 +65,13 @@ from bouncedisk.model.scene import load_scene
 with log_to(sys.argv[1]):
     if sys.argv[2] == "scene":
         load_scene(sys.argv[3])
+    if sys.argv[2] == "subclass":  # as an output too large or a tracking store's error
+        from bouncedisk.model.errors import InputError
+
+        class TooLarge(InputError):
+            pass
+
+        raise TooLarge("out.nc", "--max-output", "the file would be too large")
     raise ZeroDivisionError("a bug")
 """
 
@@ -83,6 +90,11 @@ def test_a_bad_scene_in_a_job_is_one_line_and_status_2(tmp_path):
     line = f"{scene}: parameters.e: must be in [0, 1], got 1.7"
     assert run.returncode == 2 and run.stderr == f"bouncedisk: error: {line}\n"
     assert log.read_text().rstrip().endswith(f"ERROR {line}")
+    sub = subprocess.run(
+        [sys.executable, "-c", BAD_JOB, str(log), "subclass", ""], capture_output=True, text=True
+    )
+    line = "out.nc: --max-output: the file would be too large"
+    assert sub.returncode == 2 and sub.stderr == f"bouncedisk: error: {line}\n"
     bug = subprocess.run(
         [sys.executable, "-c", BAD_JOB, str(log), "bug", ""], capture_output=True, text=True
     )

@@ -69,3 +69,22 @@ def test_a_name_too_long_names_the_option(name, tmp_path, monkeypatch, capsys):
     (err,) = capsys.readouterr().err.strip().splitlines()
     assert ": -o: cannot be written: " in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.yaml"]
+
+
+def test_the_longest_name_accepted_is_one_the_writer_can_use(tmp_path, monkeypatch):
+    """The netCDF and CSV writers name their temporaries with their format's suffix whatever
+    the output's own: the longest name without a suffix that the check accepts is one
+    ``atomic_path`` can write with either."""
+    from bouncedisk.io.atomic import atomic_path, temporary_name_bytes
+
+    monkeypatch.chdir(tmp_path)
+    limit = os.pathconf(tmp_path, "PC_NAME_MAX")
+    extra = max(temporary_name_bytes(Path("x"), s) for s in (".nc", ".csv")) - 1
+    longest = "y" * (limit - extra)
+    with pytest.raises(InputError, match="at most"):
+        check_output_path(longest + "y")
+    assert check_output_path(longest) == Path(longest)
+    for suffix in (".nc", ".csv"):
+        with atomic_path(longest, suffix=suffix) as tmp:
+            tmp.write_bytes(suffix.encode())
+        assert Path(longest).read_bytes() == suffix.encode()

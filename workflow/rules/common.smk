@@ -29,6 +29,10 @@ def scene_path(name):
     return f"{SCENES}/{name}.yaml"
 
 
+class ConfigError(ValueError):
+    """A mistake in the pipeline config or a scene it names: one line, exit 2 (below)."""
+
+
 def _check_config():
     """Fail early, naming the key, when the config refers to something that does not exist."""
     wanted = {f"simulations[{i}]": s for i, s in enumerate(config["simulations"])}
@@ -43,7 +47,7 @@ def _check_config():
     wanted.update({f"load_curves.{k}.scene": v["scene"] for k, v in config["load_curves"].items()})
     for key, name in wanted.items():
         if not Path(scene_path(name)).is_file():
-            raise ValueError(
+            raise ConfigError(
                 f"workflow/config/config.yaml: {key}: unknown scene {name!r} "
                 f"(no file {scene_path(name)})"
             )
@@ -51,44 +55,44 @@ def _check_config():
         try:
             load_scene(scene_path(name))
         except InputError as ex:
-            raise ValueError(ex.line()) from None
+            raise ConfigError(ex.line()) from None
     for key in config["poincare"]:
         if key not in config["simulations"]:
-            raise ValueError(
+            raise ConfigError(
                 f"workflow/config/config.yaml: poincare.{key}: not listed in 'simulations'"
             )
     for name, spec in config["sweeps"].items():
         first = next(iter(spec["axes"].values()))
         n = len(first["values"]) if "values" in first else first["n"]
         if spec["shards"] > n:
-            raise ValueError(
+            raise ConfigError(
                 f"workflow/config/config.yaml: sweeps.{name}.shards: {spec['shards']} shards "
                 f"for only {n} values of the first axis"
             )
     for key in ("fig3", "fig4"):
         if key not in config["bands"]["scenes"]:
-            raise ValueError(
+            raise ConfigError(
                 f"workflow/config/config.yaml: bands.scenes: must include {key!r} (a paper figure)"
             )
     for key in CHECKED_STATS:
         if key not in config["statistics"]:
-            raise ValueError(
+            raise ConfigError(
                 f"workflow/config/config.yaml: statistics: must include {key!r} "
                 "(a reproduction check reads it)"
             )
     for key in ("fig3", "fig4", "fig5"):
         if key not in config["simulations"]:
-            raise ValueError(
+            raise ConfigError(
                 f"workflow/config/config.yaml: simulations: must include {key!r} (a paper figure)"
             )
     for key in CHECKED_LOAD_CURVES:
         if key not in config["load_curves"]:
-            raise ValueError(
+            raise ConfigError(
                 f"workflow/config/config.yaml: load_curves: must include {key!r} "
                 "(a reproduction check reads it)"
             )
     if not Path(config["prototype"]["curve"]).is_file():
-        raise ValueError(
+        raise ConfigError(
             f"workflow/config/config.yaml: prototype.curve: no file {config['prototype']['curve']}"
         )
 
@@ -99,7 +103,7 @@ CHECKED_STATS = list(_checked.STATS_SCENES)
 CHECKED_LOAD_CURVES = list(_checked.LOAD_CURVES)
 try:  # one line naming the file and the key, exit 2, as the package's commands
     _check_config()
-except ValueError as _ex:
+except ConfigError as _ex:
     print(f"bouncedisk: error: {_ex}", file=sys.stderr)
     sys.exit(2)
 

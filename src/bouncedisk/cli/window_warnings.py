@@ -64,12 +64,13 @@ def window_warnings(scene: Scene, regimes: Iterable[str | None]) -> list[str]:
 
 def _example_discard(scene: Scene) -> float:
     """A discard to suggest: 2000 time units (a run-up at ``R_φ = 0.01``), or two fifths of a
-    shorter run, one significant figure."""
+    shorter run, one significant figure, leaving at least two stator periods to average over
+    (0 where the run is shorter than that)."""
     run = (scene.stop.time or math.inf) - scene.initial.t
     if run > 5000.0:
         return 2000.0
-    x = 0.4 * run
-    return float(f"{x:.1g}")
+    room = run - 2.0 * (2.0 * math.pi / scene.params.omega_s)
+    return max(0.0, float(f"{min(0.4 * run, room):.1g}"))
 
 
 def print_window_warnings(scene: Scene, regimes: Iterable[str | None]) -> None:

@@ -110,9 +110,10 @@ def temporary_affixes(target: Path, suffix: str | None = None) -> tuple[str, str
     return f".{target.name}.{_host()}-{os.getpid()}.", f".tmp{sfx}"
 
 
-def temporary_name_bytes(target: Path) -> int:
-    """Length in bytes of the temporary name :func:`atomic_path` gives ``target``."""
-    prefix, end = temporary_affixes(target)
+def temporary_name_bytes(target: Path, suffix: str | None = None) -> int:
+    """Length in bytes of the temporary name :func:`atomic_path` gives ``target`` (with
+    ``suffix``, as :func:`atomic_path` takes it)."""
+    prefix, end = temporary_affixes(target, suffix)
     return len(os.fsencode(prefix)) + 8 + len(os.fsencode(end))
 
 

@@ -68,7 +68,9 @@ def log_to(path: str | Path) -> Iterator[logging.Logger]:
 
 
 def _user_error_line(ex: Exception) -> str | None:
-    """The one line of an error the user can fix (the package's ``InputError``, known by its
-    ``line()``: importing it would import the engine, and numba, into every light job)."""
-    line = getattr(ex, "line", None)
-    return line() if callable(line) and type(ex).__name__ == "InputError" else None
+    """The one line of an error the user can fix: the package's ``InputError`` or a subclass
+    (an output too large, a tracking store). Its module is looked up, not imported: importing
+    it would import the engine, and numba, into every light job, and where it was never
+    imported no such error was raised."""
+    errors = sys.modules.get("bouncedisk.engine.errors")
+    return ex.line() if errors is not None and isinstance(ex, errors.InputError) else None

@@ -154,7 +154,9 @@ def _check_name_lengths(dest: Path, parent: Path, src: str, option: str) -> None
             raise InputError(
                 src, option, f"cannot be written: a folder name of more than {longest} bytes"
             )
-    extra = temporary_name_bytes(dest) - len(os.fsencode(dest.name))
+    # the writers of netCDF and CSV files name their temporaries with their format's suffix
+    extra = max(temporary_name_bytes(dest, s) for s in (None, ".nc", ".csv"))
+    extra -= len(os.fsencode(dest.name))
     if len(os.fsencode(dest.name)) + extra > longest:
         raise InputError(
             src,
