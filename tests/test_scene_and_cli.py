@@ -227,6 +227,17 @@ def test_console_script_prints_no_traceback(tmp_path):
     assert "Traceback" not in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
 
 
+def test_simulate_says_which_member_of_an_ensemble_it_ran(scene_file, tmp_path, capsys):
+    """An ensemble scene's simulation file holds one run: the command says it is member 0."""
+    overrides = ["--set", "effects=impacts,contact,torsion,restitution_noise"]
+    overrides += ["--set", "parameters.e_sigma=1e-9", "--set", "ensemble={members: 4, seed: 1}"]
+    out = tmp_path / "e.nc"
+    assert main(["simulate", str(scene_file(GOOD)), "-o", str(out), *overrides]) == 0
+    assert capsys.readouterr().out.rstrip().endswith(", member 0 of 4 (stats runs them all)")
+    assert main(["simulate", str(scene_file(GOOD)), "-o", str(out)]) == 0
+    assert "member" not in capsys.readouterr().out
+
+
 def test_simulate_writes_interfaces_names_and_is_deterministic(scene_file, tmp_path):
     f = scene_file(GOOD)
     a, b = tmp_path / "a.nc", tmp_path / "b.nc"
