@@ -155,15 +155,15 @@ def _check_name_lengths(dest: Path, parent: Path, src: str, option: str) -> None
                 src, option, f"cannot be written: a folder name of more than {longest} bytes"
             )
     # the writers of netCDF and CSV files name their temporaries with their format's suffix
-    extra = max(temporary_name_bytes(dest, s) for s in (None, ".nc", ".csv"))
-    extra -= len(os.fsencode(dest.name))
-    if len(os.fsencode(dest.name)) + extra > longest:
+    temporary = max(temporary_name_bytes(dest, s) for s in (None, ".nc", ".csv"))
+    if temporary > longest:
+        name = len(os.fsencode(dest.name))
+        extra = temporary - name
         raise InputError(
             src,
             option,
-            f"cannot be written: its name is {len(os.fsencode(dest.name))} bytes, at most "
-            f"{longest - extra} here (the file is written under a name {extra} bytes longer "
-            "first, and renamed)",
+            f"cannot be written: its name is {name} bytes, at most {longest - extra} here (the "
+            f"file is written under a name {extra} bytes longer first, and renamed)",
         )
 
 

@@ -14,11 +14,23 @@ import yaml
 
 
 def schema_error(data: Mapping, schema_path: str | Path) -> str | None:
-    """``"key.sub: what is wrong"`` for the most relevant violation of the schema in
-    ``schema_path`` (YAML), or ``None`` when ``data`` is valid.
+    """The most relevant violation of a JSON schema by ``data``, as one line.
 
     ``jsonschema`` comes with Snakemake, the only caller's; it is imported here, not by the
     package.
+
+    Parameters
+    ----------
+    data : Mapping
+        The mapping checked (the pipeline's config).
+    schema_path : str or Path
+        The schema, a YAML file (``workflow/schemas/config.schema.yaml``).
+
+    Returns
+    -------
+    str or None
+        ``"key.sub: what is wrong"`` (``(top level)`` for the mapping itself), or ``None`` when
+        ``data`` is valid.
     """
     import jsonschema
 

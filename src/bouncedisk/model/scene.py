@@ -510,9 +510,7 @@ def _solver(src: str, v: Any) -> Solver:
     return Solver(method=method, tol=tol, step=step)
 
 
-def _model(
-    src: str, model: Any, stop: Stop, solver: Solver, effects: frozenset[str] = frozenset()
-) -> str:
+def _model(src: str, model: Any, stop: Stop, solver: Solver, effects: frozenset[str]) -> str:
     """``model``: ``bouncing`` or ``clipped`` (the ``contact`` effect, a time stop and the exact
     solver only)."""
     if model not in MODELS:
