@@ -1,10 +1,10 @@
 # bouncedisk pipeline: every figure of the paper, and the studies around it, from raw outputs.
 # Run from the project root:  snakemake --cores 2     (see README.md, "Rebuilding the figures")
-import sys
 from pathlib import Path
 
 from snakemake.utils import min_version, validate
 
+from bouncedisk.io.job_log import exit_with_error
 from bouncedisk.io.schema_check import schema_error
 from bouncedisk.model.errors import InputError
 from bouncedisk.studies.sensitivity_settings import study_settings
@@ -22,11 +22,9 @@ CONFIG_SCHEMA = str(Path(workflow.basedir) / "workflow" / "schemas" / "config.sc
 try:
     SENSITIVITY = study_settings(config)
 except InputError as _ex:
-    print(f"bouncedisk: error: {_ex.line()}", file=sys.stderr)
-    sys.exit(2)
+    exit_with_error(_ex.line())
 if (_line := schema_error(config, CONFIG_SCHEMA)) is not None:
-    print(f"bouncedisk: error: pipeline config: {_line}", file=sys.stderr)
-    sys.exit(2)
+    exit_with_error(f"pipeline config: {_line}")
 validate(config, CONFIG_SCHEMA)  # Snakemake's own check, which fills in any `default:` of the schema
 
 

@@ -100,6 +100,11 @@ stop: {time: 0.02}
     assert ": stats.discard (from --set stats.discard): leaves 0.1 time units" in (
         capsys.readouterr().err
     )
+    # a transient "in seconds" longer than the run is refused as the scene is read, with t_c too
+    assert main(["stats", str(f), "-q", "--set", "stop.time=0.5", "--set", "stats.discard=2"]) == 2
+    (err,) = capsys.readouterr().err.strip().splitlines()
+    assert ": stats.discard (from --set stats.discard): must be shorter than the run" in err
+    assert err.endswith(f"(a scene's times are in units of t_c = {t_c:.4g} s, not seconds)")
 
 
 @pytest.mark.parametrize(

@@ -477,3 +477,15 @@ def test_the_figure_table_is_checked_against_the_registry(tmp_path, monkeypatch)
         out = parse_error(SMALL, tmp_path / "r", monkeypatch, cwd=copy)
         assert f"figures.yaml: {message}" in out, out[-2000:]
     assert not (tmp_path / "r").exists()
+
+
+def test_an_edited_package_reruns_the_fit():
+    """The fit starts beside ``compile_engine``, not after its flag: its own inputs name every
+    source file of the package, so that an edited package reruns it as it reruns the others."""
+    out = subprocess.run(
+        ["snakemake", "--filegraph", "results/fit/prototype.nc", "--forceall"],
+        cwd=ROOT, capture_output=True, text=True, timeout=300, check=True,
+    ).stdout  # fmt: skip
+    sources = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "src/bouncedisk").rglob("*.py"))
+    assert "fit_prototype" in out and "compile_engine" not in out
+    assert [s for s in sources if s not in out] == []

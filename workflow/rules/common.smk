@@ -104,8 +104,7 @@ CHECKED_LOAD_CURVES = list(_checked.LOAD_CURVES)
 try:  # one line naming the file and the key, exit 2, as the package's commands
     _check_config()
 except ConfigError as _ex:
-    print(f"bouncedisk: error: {_ex}", file=sys.stderr)
-    sys.exit(2)
+    exit_with_error(str(_ex))
 
 
 def sweep_shards(wildcards):

@@ -55,6 +55,7 @@ rule continuation:
         f"{RES}/benchmarks/continuation/{{direction}}.tsv"
     params:
         spec=config["continuation"],
+    priority: 3  # several seconds: before the 1-s jobs, which then fill the cores at the end
     wildcard_constraints:
         direction="up|down",
     script:

@@ -25,8 +25,10 @@ rule synthetic_curve:
 LOAD_CURVE = config["prototype"].get("load_curve")
 LOAD_INPUTS = [LOAD_CURVE, str(Path(LOAD_CURVE).with_suffix(".yaml"))] if LOAD_CURVE else []
 # threads of the fit (its result does not depend on them): at least this many, more if a profile
-# sets more (--set-threads fit_prototype=N)
-FIT_THREADS = 2
+# sets more (--set-threads fit_prototype=N, as the Slurm profile does). One locally: a second
+# thread shortens the fit's own wall time by a fifth but costs a quarter more CPU (its threads
+# wait on each other), and on two cores the other jobs want that CPU (docs/user_guide/performance.md)
+FIT_THREADS = 1
 
 
 rule fit_prototype:
@@ -34,16 +36,14 @@ rule fit_prototype:
     input:
         curve=config["prototype"]["curve"],
         load=LOAD_INPUTS,
-        compiled=rules.compile_engine.output,
+        code=CODE,  # instead of compile_engine's flag: an edited package reruns the fit
     output:
         f"{RES}/fit/prototype.nc",
-    # The fit runs FIT_THREADS threads, but they wait on each other (the search's serial steps)
-    # and keep 1.7 cores busy on average: it holds one of the scheduler's slots, so that the job
-    # in the other slot fills those gaps instead of a core standing idle for most of a minute
-    # (docs/user_guide/performance.md). The Slurm profile gives it FIT_THREADS CPUs (set-threads).
-    threads: 1
+    threads: FIT_THREADS
     # the pipeline's longest job and the head of its longest chain (the fit's figures, the
-    # prototype's load curve, the checks): started as soon as the engine is compiled
+    # prototype's load curve, the checks): started first, beside compile_engine, not after it. It
+    # compiles the engine kernel itself on the core that would otherwise wait for compile_engine
+    # (numba's cache takes both writes: each file is written whole, then renamed).
     priority: 100
     conda:
         "../envs/bouncedisk.yaml"

@@ -20,6 +20,7 @@ rule torque_speed:
         f"{RES}/benchmarks/load/{{curve}}.tsv"
     params:
         spec=lambda wildcards: config["load_curves"][wildcards.curve],
+    priority: 3  # several seconds: before the 1-s jobs, which then fill the cores at the end
     threads: 1
     script:
         "../scripts/torque_speed.py"

@@ -16,6 +16,7 @@ rule sweep_shard:
         f"{RES}/benchmarks/sweep/{{sweep}}-shard-{{shard}}.tsv"
     params:
         spec=lambda wc: config["sweeps"][wc.sweep],
+    priority: 3  # several seconds: before the 1-s jobs, which then fill the cores at the end
     wildcard_constraints:
         shard=r"\d+",
     script:

@@ -21,7 +21,7 @@ from ..io.provenance import base_attrs, new_run_id
 from ..model.engine_config import engine_config
 from ..model.errors import InputError
 from ..model.params import Scales
-from ..model.scene import Scene
+from ..model.scene import Scene, time_unit_note
 from ..run.runner import scene_attrs
 from . import observables as ob
 from .ensembles import CappedRun, MemberStats, run_ensemble
@@ -231,16 +231,9 @@ def ensemble_window(scene: Scene) -> tuple[float, float]:
             field,
             f"leaves {t_end - t_from:.3g} time units to average over, less than one stator "
             f"period ({period:.4g}): too short to hold an impact or a cycle, so no regime or rate "
-            f"can be measured; lower stats.discard or raise stop.time{_unit_note(scene)}",
+            f"can be measured; lower stats.discard or raise stop.time{time_unit_note(scene.physical)}",
         )
     return t_from, t_end
-
-
-def _unit_note(scene: Scene) -> str:
-    """For a physical scene: its times are in units of ``t_c``, not seconds (docs/formats.md)."""
-    if scene.scales is None:
-        return ""
-    return f" (a scene's times are in units of t_c = {scene.scales.t_c:.4g} s, not seconds)"
 
 
 def capped_error(scene: Scene, ex: CappedRun, where: str = "") -> InputError:

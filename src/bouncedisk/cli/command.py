@@ -17,7 +17,7 @@ import signal
 import sys
 
 from .. import __version__
-from ..model.errors import InputError
+from ..model.errors import InputError, error_line
 from .basins import _add_basins
 from .check import _add_check
 from .common import EXIT_FAIL, EXIT_INTERRUPT, EXIT_USER, flush_stdout
@@ -38,9 +38,7 @@ class OneLineParser(argparse.ArgumentParser):
     def error(self, message: str):
         """Print one line naming the command and the problem, then exit 2."""
         message = " ".join(message.split())
-        self.exit(
-            EXIT_USER, f"bouncedisk: error: {self.prog}: {message} (see {self.prog} --help)\n"
-        )
+        self.exit(EXIT_USER, error_line(f"{self.prog}: {message} (see {self.prog} --help)") + "\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -136,7 +134,7 @@ def main(argv: list[str] | None = None) -> int:
     if extra and args.command == "runs":  # run ids after options: `runs diff A --json B`
         bad = [x for x in extra if x.startswith("-")]
         if bad:
-            print(f"bouncedisk: error: runs: unknown option {bad[0]}", file=sys.stderr)
+            print(error_line(f"runs: unknown option {bad[0]}"), file=sys.stderr)
             return EXIT_USER
         args.words += extra
     elif extra:
@@ -228,7 +226,7 @@ def _report(exc: BaseException) -> int:
     try:
         raise exc
     except InputError as ex:
-        print(f"bouncedisk: error: {ex.line()}", file=sys.stderr)
+        print(error_line(ex.line()), file=sys.stderr)
         return EXIT_USER
     except KeyboardInterrupt as ex:
         if getattr(ex, "kept_outputs", None):
@@ -241,8 +239,10 @@ def _report(exc: BaseException) -> int:
         return 0
     except MemoryError:
         print(
-            "bouncedisk: error: out of memory: the request needs more memory than this machine "
-            "has; ask for less (fewer impacts, a larger outputs.trajectory.dt)",
+            error_line(
+                "out of memory: the request needs more memory than this machine has; ask for "
+                "less (fewer impacts, a larger outputs.trajectory.dt)"
+            ),
             file=sys.stderr,
         )
         return EXIT_USER
@@ -251,12 +251,12 @@ def _report(exc: BaseException) -> int:
             _discard_stdout()
         where = f"{ex.filename}: " if ex.filename else ""
         reason = ex.strerror or " ".join(str(ex).split()) or type(ex).__name__
-        print(f"bouncedisk: error: {where}{reason}", file=sys.stderr)
+        print(error_line(f"{where}{reason}"), file=sys.stderr)
         return EXIT_USER
     except Exception as ex:  # engine failures: one line, no traceback
         from ..engine import EngineError
 
         if isinstance(ex, EngineError):
-            print(f"bouncedisk: error: {ex}", file=sys.stderr)
+            print(error_line(str(ex)), file=sys.stderr)
             return EXIT_FAIL
         raise

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..model.errors import InputError
+from ..model.errors import InputError, error_line
 from .common import EXIT_USER
 
 # --- experiment tracking (bouncedisk.tracking; `runs` reads it back through bouncedisk.tracking.reading)
@@ -104,7 +104,7 @@ def _one_line_error(prefix: str):
     """An argparse ``error`` that prints one line and exits 2 (no usage block)."""
 
     def error(message: str):
-        print(f"bouncedisk: error: {prefix}: {message}", file=sys.stderr)
+        print(error_line(f"{prefix}: {message}"), file=sys.stderr)
         sys.exit(EXIT_USER)
 
     return error

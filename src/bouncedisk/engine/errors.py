@@ -39,6 +39,12 @@ class InputError(ValueError):
         return f"{where}{fld}{self.message}"
 
 
+def error_line(text: str) -> str:
+    """The line every error a user can cause prints on stderr: ``bouncedisk: error: TEXT``
+    (docs/formats.md), for the commands, the pipeline's jobs and the Snakefile alike."""
+    return f"bouncedisk: error: {text}"
+
+
 def plain(value: object) -> str:
     """``value`` as a message shows it: a number as the user would write it (``8e-05``, ``3``,
     ``1e+13``, ``nan``, ``True``; every digit when ``:g`` would round it), not its numpy type

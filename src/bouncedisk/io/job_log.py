@@ -8,6 +8,7 @@ import logging
 import sys
 from collections.abc import Iterator
 from pathlib import Path
+from typing import NoReturn
 
 
 @contextlib.contextmanager
@@ -63,8 +64,16 @@ def log_to(path: str | Path) -> Iterator[logging.Logger]:
             logger.removeHandler(handler)
             gc.freeze()
     if user_error is not None:  # one line on the job's stderr, no traceback, exit status 2
-        print(f"bouncedisk: error: {user_error}", file=sys.stderr)
-        raise SystemExit(2)
+        exit_with_error(user_error)
+
+
+def exit_with_error(text: str) -> NoReturn:
+    """Print :func:`~bouncedisk.model.errors.error_line` of ``text`` on stderr and exit with
+    status 2: a job's, or the Snakefile's, error a user can cause, with no traceback."""
+    from ..model.errors import error_line
+
+    print(error_line(text), file=sys.stderr)
+    raise SystemExit(2)
 
 
 def _user_error_line(ex: Exception) -> str | None:

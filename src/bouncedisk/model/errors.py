@@ -6,6 +6,6 @@ points refuse bad input with it too; this is the name the rest of the package us
 
 from __future__ import annotations
 
-from ..engine.errors import InputError, plain
+from ..engine.errors import InputError, error_line, plain
 
-__all__ = ["InputError", "plain"]
+__all__ = ["InputError", "error_line", "plain"]

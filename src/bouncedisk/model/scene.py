@@ -323,7 +323,7 @@ def scene_from_mapping(raw: dict, source: str = "<scene>") -> Scene:
     solver = _solver(src, raw.get("solver"))
     model = _model(src, raw.get("model", "bouncing"), stop, solver, effects)
     ensemble = _ensemble(src, raw.get("ensemble"), effects, params)
-    stats = _stats(src, raw.get("stats"), stop, initial)
+    stats = _stats(src, raw.get("stats"), stop, initial, physical)
     return Scene(
         name=name,
         model=model,
@@ -581,7 +581,9 @@ def _ensemble(src: str, v: Any, effects: frozenset[str], params: Parameters) -> 
     return Ensemble(members=members, seed=seed)
 
 
-def _stats(src: str, v: Any, stop: Stop, initial: InitialState) -> StatsSettings:
+def _stats(
+    src: str, v: Any, stop: Stop, initial: InitialState, physical: PhysicalParameters | None
+) -> StatsSettings:
     """Validate ``stats: {discard}``: a transient shorter than the run."""
     sm = _mapping(src, "stats", v, ("discard",))
     discard = number(src, "stats.discard", sm.get("discard", 0.0), nonneg=True)
@@ -590,9 +592,18 @@ def _stats(src: str, v: Any, stop: Stop, initial: InitialState) -> StatsSettings
             src,
             "stats.discard",
             f"must be shorter than the run (stop.time - initial.t = {stop.time - initial.t:g} "
-            f"time units), got {discard:g}: lower stats.discard or raise stop.time",
+            f"time units), got {discard:g}: lower stats.discard or raise stop.time"
+            f"{time_unit_note(physical)}",
         )
     return StatsSettings(discard=discard)
+
+
+def time_unit_note(physical: PhysicalParameters | None) -> str:
+    """For a physical scene, the note that its times are in units of ``t_c``, not seconds
+    (docs/formats.md, "Scenes"); empty for a nondimensional one. Ends an error's line."""
+    if physical is None:
+        return ""
+    return f" (a scene's times are in units of t_c = {physical.scales().t_c:.4g} s, not seconds)"
 
 
 def load_scene(path: str | Path, overrides: list[str] | str | None = None) -> Scene:

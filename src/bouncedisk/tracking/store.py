@@ -19,7 +19,7 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
-from ..model.errors import InputError
+from ..model.errors import InputError, error_line
 
 ENV_URI = "MLFLOW_TRACKING_URI"
 DB_NAME = "mlflow.db"
@@ -342,4 +342,4 @@ def error_report(ex: BaseException) -> str:
     """The one-line report of a tracking error (``bouncedisk: error: ...``), which the
     Snakefile's handlers print."""
     line = ex.line() if isinstance(ex, InputError) else one_line(ex)
-    return f"bouncedisk: error: {line}"
+    return error_line(line)
