@@ -600,7 +600,7 @@ def _stats(
 
 def time_unit_note(physical: PhysicalParameters | None) -> str:
     """For a physical scene, the note that its times are in units of ``t_c``, not seconds
-    (docs/formats.md, "Scenes"); empty for a nondimensional one. Ends an error's line."""
+    (docs/formats.md, "Physical parameters"); empty for a nondimensional one. Ends an error's line."""
     if physical is None:
         return ""
     return f" (a scene's times are in units of t_c = {physical.scales().t_c:.4g} s, not seconds)"
