@@ -320,3 +320,19 @@ def test_run_ups_at_different_stated_amplitudes_are_refused(tmp_path, frame, cap
         assert ex.value.line().startswith(str(bad)) and "\n" not in ex.value.line()
     _fails(capsys, [str(a), str(other), "-o", str(tmp_path / "f.nc")], "motor.U0_m", other)
     assert not (tmp_path / "f.nc").exists()
+
+
+def test_two_load_curves_after_one_load_option_are_told_to_repeat_it(tmp_path, frame, capsys):
+    """``--load A.csv B.csv`` (one option, two files): one line saying that each load curve takes
+    a ``--load`` of its own; the help and the pages say the same."""
+    from bouncedisk.cli.command import build_parser
+
+    run = _curve(tmp_path, frame)
+    with pytest.raises(SystemExit) as ex:
+        main(["fit", str(run), "--load", "a.csv", "b.csv", "-o", str(tmp_path / "f.nc")])
+    assert ex.value.code == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert "unrecognized arguments: b.csv" in line
+    assert "each load curve after a --load of its own" in line
+    fit = build_parser()._subparsers._group_actions[0].choices["fit"]
+    assert "--load A.csv --load B.csv" in " ".join(fit.format_help().split())

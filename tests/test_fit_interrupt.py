@@ -111,3 +111,30 @@ def test_sigterm_stops_a_running_fit_promptly(tmp_path):
     assert waited < 30.0, waited
     assert rest.strip().splitlines()[-1] == "bouncedisk: interrupted; no output written"
     assert not out.exists()
+
+
+def test_a_burst_of_interrupts_is_one_line(tmp_path):
+    """Ctrl-C pressed again while the fit stops (or ``timeout``, which signals the command and
+    then its process group): the first SIGINT stops it, the others are ignored, and stderr
+    holds the one line after the progress, no traceback; exit 130, no fit file."""
+    import signal
+    import subprocess
+    import sys
+
+    out = tmp_path / "fit.nc"
+    cmd = [sys.executable, "-m", "bouncedisk.cli", "fit", "data/prototype/synthetic_motor.csv",
+           "--scan", "8", "--zoom", "0", "--cores", "2", "-o", str(out)]  # fmt: skip
+    p = subprocess.Popen(cmd, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
+    lines = []
+    while not any("scan" in ln for ln in lines):  # in the search, its members on two threads
+        line = p.stderr.readline()
+        assert line, "".join(lines)
+        lines.append(line)
+    for _ in range(6):
+        p.send_signal(signal.SIGINT)
+        time.sleep(0.03)
+    rest = p.stderr.read()
+    assert p.wait(timeout=120) == 130, rest
+    assert rest.strip().splitlines()[-1:] == ["bouncedisk: interrupted; no output written"], rest
+    assert "Traceback" not in rest and "Exception ignored" not in rest, rest
+    assert not out.exists()

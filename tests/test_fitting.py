@@ -368,6 +368,9 @@ def _rows(n, bad_row=None, bad="x"):
         (_rows(30), sidecar() | {"units": {"time": "s", "omega": "rpm"}}, "units.omega"),
         (_rows(30), sidecar() | {"units": {"time": "ms", "omega": "rad/s"}}, "units.time"),
         (_rows(30), {"source": "x", "units": {"time": "s", "omega": "rad/s"}}, "motor"),
+        # a row is the file's line, comment and blank lines counted: sample 7 is on line 11
+        ("# rig 2\n\n" + _rows(30, 7, "nan"), None, "omega_rad_s: row 11:"),
+        ("# rig 2\n" + _rows(30).replace("\n0.007,", "\n0.001,"), None, "time_s: row 10:"),
     ],
 )
 def test_bad_curves_exit_2_with_one_line(tmp_path, capsys, text, side, field):

@@ -123,7 +123,7 @@ def test_a_curve_at_another_stated_amplitude_is_read_at_its_condition():
     """Where the curves state different axial amplitudes (``motor.U0_m``), a curve's ``U0`` is
     the reference's times the ratio (``ω_s ∝ √U0``, ``R_φ ∝ U0``: four times the amplitude is
     twice ``ω_s`` and four times ``R_φ``); where they state one amplitude or none, ``U0`` is
-    held; where they differ, a curve that states none is one line naming it."""
+    held; where some state one and some do not, a curve that states none is one line naming it."""
     import dataclasses
     from types import SimpleNamespace
 
@@ -140,13 +140,16 @@ def test_a_curve_at_another_stated_amplitude_is_read_at_its_condition():
     assert part.condition(theta, base) == pytest.approx(theta, rel=1e-12)
     held = lp.LoadPart([base, big], 0.03, 5, drive_hz=F_HZ, phi0_rad=PHI0)  # no u0: held
     assert held.condition(theta, big) == pytest.approx(theta, rel=1e-12)
-    # which: amplitudes that differ are conditions; one or none is held; a gap is one line
+    # which: amplitudes that differ are conditions; one for all, or none, is held; a gap is one
+    # line, also where the one amplitude stated would be held (it is stated for one curve only)
+    silent = dataclasses.replace(base, sidecar={})
     assert lp.amplitudes([base, big], 1e-6, "run.yaml") is True
     assert lp.amplitudes([base, base], 1e-6, "run.yaml") is False
-    assert lp.amplitudes([base, dataclasses.replace(base, sidecar={})], None, "run.yaml") is False
-    with pytest.raises(InputError, match=r"^run.yaml: motor.U0_m: is required") as ex:
-        lp.amplitudes([base, big], None, "run.yaml")
-    assert "\n" not in ex.value.line()
+    assert lp.amplitudes([silent, silent], None, "run.yaml") is False
+    for curves in ([base, big], [base, base], [silent, base]):
+        with pytest.raises(InputError, match=r"^run.yaml: motor.U0_m: is required") as ex:
+            lp.amplitudes(curves, None, "run.yaml")
+        assert "\n" not in ex.value.line()
     with pytest.raises(InputError, match=r"^gap.yaml: motor.U0_m: is required"):
         lp.amplitudes([big, dataclasses.replace(base, sidecar={}, path="gap.csv")], 1e-6, "r.yaml")
     # the run-ups' stated amplitude is the reference's only where the amplitudes are conditions
@@ -563,6 +566,7 @@ def test_an_inadequate_fit_reports_no_interval(tiny_fit, tmp_path):
     assert all("no interval: inadequate fit" in t for t in titles), titles
     assert falls.get_title().startswith("waterfall: ")
     assert "NO INTERVALS" in FIGURES["fit_identifiability"].draw(ds).axes[0].get_title()
+    assert "FIT INADEQUATE" in FIGURES["fit_load"].draw(ds).axes[0].get_title()
 
 
 @pytest.mark.xdist_group("tiny_joint_fit")  # one worker fits, not both
@@ -668,7 +672,7 @@ def test_the_waterfall_panel_draws_each_start_above_the_best_and_counts_those_th
     assert list(points.get_ydata()) == [2.0, 4.0, 20.0, 102.0]
     (line,) = [ln for ln in falls.get_lines() if ln.get_linestyle() == "--"]
     assert line.get_ydata()[0] == 8.0
-    assert falls.get_title() == "waterfall: 3 of 4 starts end where the intervals accept"
+    assert falls.get_title() == "waterfall: 3 of 4 starts end\nwhere the intervals accept"
     assert falls.get_ylim()[1] >= 102.0
 
 

@@ -466,6 +466,14 @@ window_s: [0.06, 0.12]
         (LOAD_CSV, LOAD_YAML.replace("[0.06, 0.12]", "[0.12, 0.06]"), "window_s"),
         (LOAD_CSV, LOAD_YAML.replace("rotor:", "rotr:"), "rotr"),
         (LOAD_CSV.replace("0,20,0.3", "0,20,-0.3"), LOAD_YAML, "speed_sd_rad_s: row 2"),
+        # a row is the file's line: comment and blank lines above it counted
+        (
+            "# brake run\n" + LOAD_CSV.replace("1e-4,14", "1e-4,nan"),
+            LOAD_YAML,
+            "speed_rad_s: row 4",
+        ),
+        (LOAD_CSV.replace("\n1e-4,14", "\n\n# x\n-1e-4,14"), LOAD_YAML, "torque_Nm: row 5"),
+        (LOAD_CSV.replace("\n2e-4", "\n# x\n1e-4"), LOAD_YAML, "torque_Nm: row 5"),
     ],
 )
 def test_bad_load_curve_names_file_row_and_column(csv, yaml_text, field, tmp_path):

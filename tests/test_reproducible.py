@@ -1,5 +1,5 @@
 """The same answer on every machine: reductions without kernel-dependent bits, and a
-fit whose estimate round-off cannot move (README, "Reproducible")."""
+fit whose estimate round-off cannot move (docs/user_guide/reproducible.md)."""
 
 from __future__ import annotations
 

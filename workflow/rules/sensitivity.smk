@@ -1,5 +1,5 @@
-# Stage 6: global sensitivity of the motor's figures of merit (SALib Sobol'; README "Sensitivity of
-# the motor"). The sample is split into shard jobs (contiguous blocks of points) that join
+# Stage 6: global sensitivity of the motor's figures of merit (SALib Sobol';
+# docs/user_guide/sensitivity.md). The sample is split into shard jobs (contiguous blocks of points) that join
 # bit-identically to a one-job run; the design maps are one job per e. SENSITIVITY: the checked
 # settings of the size the config asks for (bouncedisk.studies.sensitivity_settings, checked in the Snakefile).
 import dataclasses

@@ -348,7 +348,7 @@ def _line_fits(
     ``ym`` and ``dy`` are ``y``'s mean and centred values (the same for every row). Centred sums
     (stable when ``x`` barely varies), each a fixed-order ``np.add.reduce`` of elementwise
     products along the row: no BLAS call, so the result does not depend on which kernel a CPU
-    picks or on the thread count (README, "Reproducible"), and a row gives the same bits alone
+    picks or on the thread count (docs/user_guide/reproducible.md), and a row gives the same bits alone
     or stacked with others. A constant row gives ``b = 0``.
     """
     n = x.shape[-1]

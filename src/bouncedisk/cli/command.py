@@ -110,24 +110,41 @@ def _interrupt(signum, frame):
     raise KeyboardInterrupt
 
 
-def _install_signal_handlers() -> None:
-    """Ctrl-C (SIGINT) and SIGTERM stop a run cleanly: temporaries removed, no output written.
+def _stop_once(signum, frame):
+    """The console script's first SIGINT or SIGTERM stops the command (``KeyboardInterrupt``);
+    a second one while it stops (an impatient Ctrl-C, or ``timeout``, which signals the command
+    and then its process group) is ignored: the stop's one line is never followed by a
+    traceback."""
+    _ignore_stop_signals()
+    raise KeyboardInterrupt
+
+
+def _install_signal_handlers(console: bool) -> None:
+    """Ctrl-C (SIGINT) and SIGTERM stop a run cleanly: temporaries removed, no output written;
+    in the console script, whose process ends with the command, only the first of them.
 
     SIGINT is set explicitly because a process started in the background by a non-interactive
     shell inherits it ignored, and Python then installs no handler of its own.
     """
     try:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
-        signal.signal(signal.SIGTERM, _interrupt)
+        signal.signal(signal.SIGINT, _stop_once if console else signal.default_int_handler)
+        signal.signal(signal.SIGTERM, _stop_once if console else _interrupt)
     except ValueError:  # not the main thread (embedded use): leave the host's handlers alone
         pass
 
 
+def _ignore_stop_signals() -> None:
+    """Ignore SIGINT and SIGTERM from now on (in the main thread; elsewhere the host's stay)."""
+    with contextlib.suppress(ValueError):
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, signal.SIG_IGN)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the console script."""
-    _install_signal_handlers()
-    parser = build_parser()
     console = argv is None  # the console script: this process ends with the command
+    _install_signal_handlers(console)
+    parser = build_parser()
     argv = sys.argv[1:] if argv is None else list(argv)
     args, extra = parser.parse_known_args(attach_negative_values(parser, argv))
     args.argv = argv
@@ -138,7 +155,12 @@ def main(argv: list[str] | None = None) -> int:
             return EXIT_USER
         args.words += extra
     elif extra:
-        parser.error(f"unrecognized arguments: {' '.join(extra)}")
+        hint = ""
+        if args.command == "fit" and any(x.lower().endswith(".csv") for x in extra):
+            hint = (
+                "; the run-ups go before the options, and each load curve after a --load of its own"
+            )
+        parser.error(f"unrecognized arguments: {' '.join(extra)}{hint}")
     from ..io import atomic
 
     stdout, sys.stdout = sys.stdout, _NamedStdout(sys.stdout)
@@ -159,9 +181,7 @@ def _finished() -> None:
     """The command is done (outputs final, standard output flushed): a Ctrl-C or SIGTERM while
     the interpreter shuts down (about half a second) is ignored, so it cannot turn a finished
     command's status into 130."""
-    with contextlib.suppress(ValueError):  # not the main thread: the host's handlers stay
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            signal.signal(sig, signal.SIG_IGN)
+    _ignore_stop_signals()
 
 
 def _discard_stdout() -> None:

@@ -118,11 +118,15 @@ def _add_fit(sub) -> None:
         action="append",
         default=[],
         metavar="LOAD.csv",
-        help="load curves of the same motor (torque_Nm, speed_rad_s[, speed_sd_rad_s] and a "
-        "sidecar with the rotor and window_s), fitted jointly with the run-ups; repeatable: "
-        "every curve given is fitted",
+        help="a load curve of the same motor (torque_Nm, speed_rad_s[, speed_sd_rad_s] and a "
+        "sidecar with the rotor and window_s), fitted jointly with the run-ups; one file per "
+        "--load, repeated for several: --load A.csv --load B.csv",
     )
-    p.add_argument("--sidecar", help="YAML sidecar of every curve (default: CURVE with .yaml)")
+    p.add_argument(
+        "--sidecar",
+        help="YAML sidecar of every run-up (default: each CURVE with .yaml; a load curve's is "
+        "always its CSV with .yaml)",
+    )
     p.add_argument("--seed", default="12345", help="random seed, >= 0 (default: %(default)s)")
     p.add_argument(
         "--bootstrap",

@@ -55,3 +55,14 @@ def _title(ds: xr.Dataset) -> str:
         f"e = {a.get('e'):.3g}, $\\omega_s$ = {a.get('omega_s'):.3g}, "
         f"$R_\\phi$ = {a.get('r_phi'):.3g}, $\\psi$ = {a.get('psi'):.3g}"
     )
+
+
+def inadequate_note(attrs: dict) -> str:
+    """A fit figure's title line for an inadequate fit (its ``fit_adequate`` 0: the best point
+    does not reproduce the data, docs/fitting_method.md), else empty."""
+    if attrs.get("fit_adequate", 1):
+        return ""
+    return (
+        f"\nFIT INADEQUATE: χ² {attrs.get('chi2', float('nan')):.4g} on "
+        f"{attrs.get('n_statistics', '?')} statistics (p = {attrs.get('chi2_p_value', float('nan')):.2g})"
+    )

@@ -10,7 +10,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from .common import shade
+from .common import inadequate_note, shade
 
 #: Colours and labels of the data sets in the identifiability figure (file's ``data_set`` order).
 DATA_SET_STYLE = {"run-ups": "C0", "load curve": "C1", "both": "k"}
@@ -64,7 +64,7 @@ def fig_fit_load(fit: xr.Dataset) -> Figure:
     a = fit.attrs
     ax.set_title(
         f"load curve: χ² {a.get('chi2_load', math.nan):.3g} on "
-        f"{a.get('n_load_readings', len(which))} readings (joint fit)",
+        f"{a.get('n_load_readings', len(which))} readings (joint fit)" + inadequate_note(a),
         fontsize=9,
     )
     rax.axhline(0.0, color="0.6", lw=1.0)

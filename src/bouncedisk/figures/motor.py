@@ -8,7 +8,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.ticker import FixedLocator, FormatStrFormatter, NullLocator
 
-from .common import COLORS, shade
+from .common import COLORS, inadequate_note, shade
 from .joint_fit import data_word
 
 
@@ -130,13 +130,7 @@ def _fig5_fitted(ax, axr, fitted: xr.Dataset) -> None:
         f"τ = {a.get('time_constant_s', float('nan')):.3g} s; fitted model: "
         f"S = {a.get('model_steady_speed_rad_s', float('nan')):.4g} rad/s, "
         f"τ = {a.get('model_time_constant_s', float('nan')):.3g} s; "
-        f"not identified: {a.get('not_identified', '?')}"
-        + (
-            f"\nFIT INADEQUATE: χ² {a.get('chi2', float('nan')):.4g} on "
-            f"{a.get('n_statistics', '?')} statistics (p = {a.get('chi2_p_value', float('nan')):.2g})"
-            if not a.get("fit_adequate", 1)
-            else ""
-        ),
+        f"not identified: {a.get('not_identified', '?')}" + inadequate_note(a),
         fontsize=8,
         color="black" if a.get("fit_adequate", 1) else "darkred",
     )
@@ -268,7 +262,7 @@ def _waterfall_panel(ax, fitted: xr.Dataset) -> None:
     ax.set_ylabel("χ² at its end − best χ²")
     a = fitted.attrs
     ax.set_title(
-        f"waterfall: {a['starts_accepted']} of {a['starts']} starts end where the intervals accept",
+        f"waterfall: {a['starts_accepted']} of {a['starts']} starts end\nwhere the intervals accept",
         fontsize=8,
     )
 

@@ -61,6 +61,7 @@ def run_fit(
         first_time(path, seen, "", "give each run-up once")
         read.append(read_curve(path, sidecar))
     load_data = read_loads(list(loads), seen)
+    core.check_fit_inputs(read, load_data)  # together too (one motor, one set-up)
     # every file read and checked: a bad one's error is the command's only line
     c = read[0]
     runs = f"{len(read)} run-ups of " if len(read) > 1 else ""

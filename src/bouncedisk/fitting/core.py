@@ -311,6 +311,17 @@ def prepare_runs(
     return fitted, mean_curve(fitted), prepared[0][1]
 
 
+def check_fit_inputs(
+    curve: MotorCurve | Sequence[MotorCurve], load: Sequence[LoadCurveData] = ()
+) -> None:
+    """Refuse what :func:`pose_fit` would refuse of the run-ups and load curves, with no
+    statistic or simulation computed: the checks of :func:`prepare_runs` and of the load
+    curves' part (:func:`.joint.load_part`: windows, ``Φ0``, amplitudes, rotors), so that a
+    command can say a defect before its first progress line."""
+    _, fitted, _ = prepare_runs(curve)
+    load_part(list(load), fitted, EnsembleSpec())
+
+
 def fit_basins(obj: Objective, members: int, thr: float) -> list[Basin]:
     """Every basin of evaluated points (``members`` members, current metric) within ``thr`` of
     the best ``χ²`` (:func:`.likelihood_basins.list_basins`), the reported one first."""

@@ -2,7 +2,7 @@
 
 A synthetic likelihood of a chaotic model is rugged (periodic windows): several separate regions
 of the parameter space may reproduce the data about equally well. Which of them a search reports
-must not hang on the last bits of a sum (README, "Reproducible"):
+must not hang on the last bits of a sum (docs/user_guide/reproducible.md):
 
 * every candidate ranking uses :func:`rank_key`: ``χ²`` rounded to :data:`CHI2_DIGITS`
   significant digits, ties going to the smaller point in coordinate order — a total order that

@@ -35,8 +35,8 @@ rotor and preload of the load curves run at them (:func:`reference_setup`; docs/
 where the curves state different axial amplitudes (sidecar ``motor.U0_m``, the run-ups' and
 every load curve's, :func:`amplitudes`), a curve's ``U0`` is the reference's times the ratio of
 the stated amplitudes (``ω_s ∝ √U0``, ``R_φ ∝ U0``); the absolute ``U0`` stays the fit's (its
-``ω_s`` at the reference drive). Where they state none or one amplitude, ``U0`` is held across
-conditions, which assumes the lab holds the stator's amplitude (a driver with amplitude feedback);
+``ω_s`` at the reference drive). Where they all state one amplitude, or none does, ``U0`` is held
+across conditions (some stating it and some not is one line naming the first that does not), which assumes the lab holds the stator's amplitude (a driver with amplitude feedback);
 ``ψ`` is held, which assumes the stator's phase does not move.
 """
 
@@ -112,10 +112,12 @@ class Setup(NamedTuple):
 def amplitudes(curves: list[LoadCurveData], runups_u0: float | None, runups: str) -> bool:
     """Whether the amplitudes are conditions (module docstring): ``True`` when the run-ups
     (``runups_u0``, stated in the sidecar of ``runups``) and the load curves state different
-    ``U0_m``, each then stating one (one line naming the first that does not, otherwise);
-    ``False`` when they state one amplitude or none (``U0`` held across conditions)."""
+    ``U0_m``; ``False`` when they all state one amplitude, or none does (``U0`` held across
+    conditions). Where some state it and some do not, one line names the first that does not: an
+    amplitude stated for one curve only would otherwise be held without a word."""
     stated = [runups_u0] + [stated_u0(d.sidecar) for d in curves]
-    if len({u for u in stated if u is not None}) <= 1:
+    given = {u for u in stated if u is not None}
+    if not given:
         return False
     paths = [runups] + [str(Path(d.path).with_suffix(".yaml")) for d in curves]
     for path, u in zip(paths, stated, strict=True):
@@ -123,10 +125,11 @@ def amplitudes(curves: list[LoadCurveData], runups_u0: float | None, runups: str
             raise InputError(
                 path,
                 "motor.U0_m",
-                "is required: the motor's curves state different axial amplitudes, and each "
-                "amplitude is a condition of the motor (docs/user_guide/fitting.md, Conditions)",
+                "is required: another of the motor's curves states its axial amplitude, and "
+                "each curve's amplitude is a condition of the motor; state it in every sidecar, "
+                "or in none to hold it (docs/user_guide/fitting.md, Conditions)",
             )
-    return True
+    return len(given) > 1
 
 
 def setup(d: LoadCurveData, with_u0: bool = False) -> Setup:

@@ -19,7 +19,7 @@ which data the objective sees — ``"runup"``, ``"load"`` or ``"both"`` — fixe
 :meth:`Objective.seeing` gives a view of another part on the same cached evaluations, so the
 intervals from each data set alone come from them (:func:`.joint.identifiability`).
 
-Round-off cannot move it (README, "Reproducible"): every point is first put on a lattice of
+Round-off cannot move it (docs/user_guide/reproducible.md): every point is first put on a lattice of
 :data:`SNAP_DECIMALS` decimals (:func:`snap`; an optimizer's step that differs in the last bits
 between BLAS kernels lands on the same lattice point), the members' statistics are reduced in a
 fixed order, and the whitening and ``χ²`` use :mod:`.detlinalg` (no BLAS).

@@ -443,13 +443,15 @@ def summary_text(ds: xr.Dataset) -> str:
         if name in ds and "ci_low" in ds[name].attrs:
             v = ds[name].attrs
             flag = "" if v["identified"] else "   <- not identified"
+            unit = "" if v["units"] == "1" else f" {v['units']}"  # "1": dimensionless (CF)
             ci = (
-                f"95% [{v['ci_low']:.5g}, {v['ci_high']:.5g}]"
+                f"95% [{v['ci_low']:.5g}, {v['ci_high']:.5g}]{unit}"
                 if np.isfinite(v["ci_low"])
                 else "no interval (inadequate fit)"
             )
-            unit = "" if v["units"] == "1" else f" {v['units']}"  # "1": dimensionless (CF)
-            lines.append(f"  {name:>12} = {float(ds[name]):.5g}   {ci}{unit}{flag}")
+            lines.append(f"  {name:>12} = {float(ds[name]):.5g}{unit}   {ci}{flag}")
+    if not a.get("e_sigma_fitted", 1):
+        lines.append(f"  {'e_sigma':>12} = {a['e_sigma']:.5g}   stated (--e-sigma), not fitted")
     s_ci, t_ci = a["steady_speed_ci_rad_s"], a["time_constant_ci_s"]
     lines.append(
         f"  trend of the data: steady speed {a['steady_speed_rad_s']:.5g} rad/s "

@@ -28,7 +28,7 @@
 Every evaluation is logged, and the result is the best logged point at the final ensemble size
 under the final metric: the search never returns a point worse than one it evaluated.
 
-Round-off chooses nothing (README, "Reproducible"): the objective evaluates on a lattice
+Round-off chooses nothing (docs/user_guide/reproducible.md): the objective evaluates on a lattice
 (:func:`.objective.snap`) with BLAS-free reductions, and every ranking of candidates (scan, zoom,
 re-ranking, starts, the result) uses the total order :func:`.likelihood_basins.rank_key`, the same whatever
 order the threads logged the points in.

@@ -91,22 +91,38 @@ def read_table(path: Path, columns: tuple[str, ...]) -> pd.DataFrame:
         df = pd.read_csv(path, comment="#", skipinitialspace=True)
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as ex:
         raise InputError(src, "", f"not a readable CSV: {str(ex).splitlines()[0]}") from None
-    names = _header(path)
+    names, lines = _layout(path)
     for name in columns:
         if names.count(name) > 1:
             raise InputError(src, name, "the column appears more than once; keep one")
     df.columns = [str(c).strip() for c in df.columns]
+    if len(lines) == len(df):
+        df.attrs["lines"] = lines
     return df
 
 
-def _header(path: Path) -> list[str]:
-    """The column names of a CSV's first line that is not blank or a comment, as written."""
+def _layout(path: Path) -> tuple[list[str], list[int]]:
+    """The column names of a CSV's first line that is not blank or a comment, as written, and
+    the file's line numbers (from 1) of the rows after it that are not blank or a comment."""
+    names: list[str] | None = None
+    lines = []
     with open(path, encoding="utf-8", newline="") as fh:
-        for line in fh:
+        for number, line in enumerate(fh, start=1):
             text = line.split("#", 1)[0]
-            if text.strip():
-                return [c.strip() for c in next(csv.reader([text]))]
-    return []
+            if not text.strip():
+                continue
+            if names is None:
+                names = [c.strip() for c in next(csv.reader([text]))]
+            else:
+                lines.append(number)
+    return names or [], lines
+
+
+def row_line(df: pd.DataFrame, row: int) -> int:
+    """The file's line number of data row ``row`` (from 0) of a table of :func:`read_table`:
+    what an error calls "row", comment and blank lines counted."""
+    lines = df.attrs.get("lines")
+    return lines[row] if lines is not None else row + 2
 
 
 def column(
@@ -118,20 +134,20 @@ def column(
     is_bool = raw.map(lambda x: isinstance(x, bool)).to_numpy()
     if raw.dtype == bool or is_bool.any():
         row = int(np.argmax(is_bool))
-        raise InputError(src, col, f"row {row + 2}: not a number: {plain(raw.iloc[row])}")
+        raise InputError(src, col, f"row {row_line(df, row)}: not a number: {plain(raw.iloc[row])}")
     values = pd.to_numeric(raw, errors="coerce")
     bad = values.isna() & raw.notna()
     if bad.any():
         row = int(np.argmax(bad.values))
-        raise InputError(src, col, f"row {row + 2}: not a number: {plain(raw.iloc[row])}")
+        raise InputError(src, col, f"row {row_line(df, row)}: not a number: {plain(raw.iloc[row])}")
     x = values.to_numpy(dtype=float)
     finite = np.isfinite(x)
     if not finite.all():
         row = int(np.argmax(~finite))
-        raise InputError(src, col, f"row {row + 2}: missing or non-finite value")
+        raise InputError(src, col, f"row {row_line(df, row)}: missing or non-finite value")
     if largest is not None and np.any(np.abs(x) > largest[0]):
         row = int(np.argmax(np.abs(x) > largest[0]))
-        message = f"row {row + 2}: {x[row]:g} exceeds {largest[0]:.4g} ({largest[1]})"
+        message = f"row {row_line(df, row)}: {x[row]:g} exceeds {largest[0]:.4g} ({largest[1]})"
         raise InputError(src, col, message + "; check the units")
     return x
 

@@ -29,7 +29,7 @@ from ..model import limits
 from ..model.errors import InputError
 from ..model.params import number
 from ..model.scene import read_yaml
-from .curve_files import check_units, column, read_motor, read_table
+from .curve_files import check_units, column, read_motor, read_table, row_line
 from .output_checks import sidecar_of
 
 #: Fewest rows of a run-up: as many as the fit's statistics need.
@@ -146,7 +146,7 @@ def read_curve(path: str | Path, sidecar: str | Path | None = None) -> MotorCurv
     dt = np.diff(t)
     if np.any(dt <= 0):
         row = int(np.argmax(dt <= 0))
-        raise InputError(src, "time_s", f"row {row + 3}: time must increase strictly")
+        raise InputError(src, "time_s", f"row {row_line(df, row + 1)}: time must increase strictly")
     if len(t) < MIN_ROWS:
         raise InputError(src, "time_s", f"has {len(t)} rows; the fit needs at least {MIN_ROWS}")
     sigma = 0.0

@@ -1,6 +1,6 @@
 """Global sensitivity of the motor's figures of merit: SALib Sobol' sampling and analysis.
 
-The study (README "Sensitivity of the motor") samples ``(e, omega_s, log10_r_phi, psi)`` over the
+The study (docs/user_guide/sensitivity.md) samples ``(e, omega_s, log10_r_phi, psi)`` over the
 configured ranges with SALib's Sobol' sequence (Saltelli's scheme, first-order and total indices,
 ``N (D + 2)`` points), evaluates the figures of merit at every point, and lets SALib estimate the
 indices with their bootstrap intervals. Every figure of merit is an ensemble statistic with a 95 %
