@@ -317,9 +317,22 @@ def test_run_ups_at_different_stated_amplitudes_are_refused(tmp_path, frame, cap
     for bad in (other, unstated):
         with pytest.raises(InputError, match=r"motor\.U0_m: is .*, but 1e-06 in ") as ex:
             core.check_runs([read_curve(a), read_curve(bad)])
-        assert ex.value.line().startswith(str(bad)) and "\n" not in ex.value.line()
-    _fails(capsys, [str(a), str(other), "-o", str(tmp_path / "f.nc")], "motor.U0_m", other)
+        # a sidecar's field names the sidecar, the other run's too
+        assert ex.value.line().startswith(str(bad.with_suffix(".yaml"))), ex.value.line()
+        assert f"in {a.with_suffix('.yaml')}:" in ex.value.line() and "\n" not in ex.value.line()
+    _fails(capsys, [str(a), str(other), "-o", str(tmp_path / "f.nc")], "motor.U0_m",
+           other.with_suffix(".yaml"))  # fmt: skip
     assert not (tmp_path / "f.nc").exists()
+
+
+def test_run_ups_that_disagree_are_the_only_line_with_progress_on(tmp_path, frame, capsys):
+    """Two run-ups of different lengths, without ``-q``: the command's one line is the error,
+    before any progress line (the run-ups are checked together before the fit starts)."""
+    a = _curve(tmp_path, frame, name="a.csv")
+    short = _curve(tmp_path, frame.iloc[:-40], name="short.csv")
+    assert main(["fit", str(a), str(short), "-o", str(tmp_path / "f.nc")]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert line.startswith(f"bouncedisk: error: {short}: time_s: has ") and "samples" in line
 
 
 def test_two_load_curves_after_one_load_option_are_told_to_repeat_it(tmp_path, frame, capsys):

@@ -120,13 +120,15 @@ def test_a_burst_of_interrupts_is_one_line(tmp_path):
     import signal
     import subprocess
     import sys
+    from pathlib import Path
 
     out = tmp_path / "fit.nc"
-    cmd = [sys.executable, "-m", "bouncedisk.cli", "fit", "data/prototype/synthetic_motor.csv",
+    curve = Path(__file__).resolve().parents[1] / "data/prototype/synthetic_motor.csv"
+    cmd = [sys.executable, "-m", "bouncedisk.cli", "fit", str(curve),
            "--scan", "8", "--zoom", "0", "--cores", "2", "-o", str(out)]  # fmt: skip
     p = subprocess.Popen(cmd, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
     lines = []
-    while not any("scan" in ln for ln in lines):  # in the search, its members on two threads
+    while len(lines) < 3:  # in the search (after the two lines that say what was read)
         line = p.stderr.readline()
         assert line, "".join(lines)
         lines.append(line)
@@ -138,3 +140,26 @@ def test_a_burst_of_interrupts_is_one_line(tmp_path):
     assert rest.strip().splitlines()[-1:] == ["bouncedisk: interrupted; no output written"], rest
     assert "Traceback" not in rest and "Exception ignored" not in rest, rest
     assert not out.exists()
+
+
+def test_a_deferred_interrupt_reaches_the_command_handler_that_ignores_the_next():
+    """A signal deferred by a run's block (``deferred_interrupts``: no stop inside a file
+    write) is handed, when the block ends, to the handler it replaced: the console script's
+    stops the command and ignores a second signal, so the stop's one line stays the only one."""
+    import os
+    import signal
+
+    from bouncedisk.cli.command import _install_signal_handlers
+    from bouncedisk.run.runner import deferred_interrupts
+
+    saved = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        _install_signal_handlers(console=True)
+        with pytest.raises(KeyboardInterrupt), deferred_interrupts():
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.05)  # the handler runs in the main thread, at the next bytecode
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+        assert signal.getsignal(signal.SIGTERM) is signal.SIG_IGN
+    finally:
+        for s, h in saved.items():
+            signal.signal(s, h)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -396,6 +397,9 @@ def test_the_fit_file_holds_the_load_curves_and_the_identifiability_table(tiny_f
     ]
     text = summary_text(back)
     assert "load curve: chi2" in text and "95% intervals by data set" in text
+    # a unit follows its value and its interval; a stated noise is shown as stated
+    assert re.search(r"\n +psi = \S+ rad   95% \[\S+, \S+\] rad\n", text), text
+    assert f"e_sigma = {MODEL_E_SIGMA:.5g}   stated, not fitted" in text
     # the chi2 at the generating point, under the fit's final metric: the parts add up; the
     # summary says whether the generating point is more likely, by each point's own likelihood
     at = {k: back.attrs[f"chi2_generating_{k}"] for k in ("runup", "load", "both")}

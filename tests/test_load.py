@@ -474,6 +474,13 @@ window_s: [0.06, 0.12]
         ),
         (LOAD_CSV.replace("\n1e-4,14", "\n\n# x\n-1e-4,14"), LOAD_YAML, "torque_Nm: row 5"),
         (LOAD_CSV.replace("\n2e-4", "\n# x\n1e-4"), LOAD_YAML, "torque_Nm: row 5"),
+        (
+            "\ufeff# rig\n" + LOAD_CSV.replace("1e-4,14", "1e-4,nan"),
+            LOAD_YAML,
+            "speed_rad_s: row 4",
+        ),
+        # an indented comment is a row of pandas' own, with no numbers: the line to mend
+        (LOAD_CSV.replace("\n1e-4,14", "\n  # x\n1e-4,14"), LOAD_YAML, "torque_Nm: row 3: missing"),
     ],
 )
 def test_bad_load_curve_names_file_row_and_column(csv, yaml_text, field, tmp_path):

@@ -15,8 +15,9 @@ for _key, _value in (config.get("metadata") or {}).items():
 SCENES = config.get("scenes", "workflow/config/scenes")
 # every result depends on the code that made it: rule compile_engine takes every source file as
 # input and every other job its flag (results/logs/engine_compiled.flag), so editing the package
-# recompiles and reruns what it affects. One input a job instead of 94: the DAG of a dry run is
-# built in a third of the time (each input file is matched against every rule's outputs).
+# recompiles and reruns what it affects. One input a job instead of every source file: the DAG of
+# a dry run is built in a third of the time (each input file is matched against every rule's
+# outputs). The fit alone takes the files themselves (it starts beside compile_engine, fit.smk).
 CODE = sorted(str(p) for p in Path("src/bouncedisk").rglob("*.py"))
 
 

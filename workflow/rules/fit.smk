@@ -25,9 +25,10 @@ rule synthetic_curve:
 LOAD_CURVE = config["prototype"].get("load_curve")
 LOAD_INPUTS = [LOAD_CURVE, str(Path(LOAD_CURVE).with_suffix(".yaml"))] if LOAD_CURVE else []
 # threads of the fit (its result does not depend on them): at least this many, more if a profile
-# sets more (--set-threads fit_prototype=N, as the Slurm profile does). One locally: a second
+# sets more (--set-threads fit_prototype=N, as the Slurm profile does). One by default: a second
 # thread shortens the fit's own wall time by a fifth but costs a quarter more CPU (its threads
-# wait on each other), and on two cores the other jobs want that CPU (docs/user_guide/performance.md)
+# wait on each other), which the other jobs want on two cores; with four or more, the fit, at the
+# head of the longest chain, gains from two (docs/user_guide/performance.md)
 FIT_THREADS = 1
 
 
@@ -42,8 +43,9 @@ rule fit_prototype:
     threads: FIT_THREADS
     # the pipeline's longest job and the head of its longest chain (the fit's figures, the
     # prototype's load curve, the checks): started first, beside compile_engine, not after it. It
-    # compiles the engine kernel itself on the core that would otherwise wait for compile_engine
-    # (numba's cache takes both writes: each file is written whole, then renamed).
+    # compiles the engine kernel itself on the core that would otherwise wait for compile_engine.
+    # numba writes each cache file whole and then renames it; both jobs compile the same
+    # functions, so whichever index is written last names files that exist.
     priority: 100
     conda:
         "../envs/bouncedisk.yaml"

@@ -172,16 +172,9 @@ def main(argv: list[str] | None = None) -> int:
     if kept:  # interrupted or failed while recording the run: the outputs stay
         names = ", ".join(str(p) for p in kept)
         print(f"bouncedisk: the outputs were written and kept: {names}", file=sys.stderr)
-    if console and code == 0:
-        _finished()
+    if console and code == 0:  # done: a signal while the interpreter shuts down (about half
+        _ignore_stop_signals()  # a second) cannot turn a finished command's status into 130
     return code
-
-
-def _finished() -> None:
-    """The command is done (outputs final, standard output flushed): a Ctrl-C or SIGTERM while
-    the interpreter shuts down (about half a second) is ignored, so it cannot turn a finished
-    command's status into 130."""
-    _ignore_stop_signals()
 
 
 def _discard_stdout() -> None:

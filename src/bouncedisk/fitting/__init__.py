@@ -7,8 +7,8 @@ model's across-member spread (:mod:`.objective`), searched globally then locally
 (:mod:`.search`), and profiled for every parameter (:mod:`.uncertainty`). :mod:`.members` holds the
 physical conversion (docs/model.md "Physical conversion"), :mod:`.output` the fit file, and
 :mod:`.command` the fit as one call on values (``bouncedisk fit`` parses its options in
-:mod:`bouncedisk.cli.fit`). Round-off chooses nothing (README,
-"Reproducible"): :mod:`.detlinalg` does the small linear algebra in a fixed order (no BLAS), and
+:mod:`bouncedisk.cli.fit`). Round-off chooses nothing
+(docs/user_guide/reproducible.md): :mod:`.detlinalg` does the small linear algebra in a fixed order (no BLAS), and
 :mod:`.likelihood_basins` lists the acceptable basins and holds the rule that picks the reported one.
 """
 

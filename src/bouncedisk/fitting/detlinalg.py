@@ -2,8 +2,8 @@
 
 LAPACK and BLAS (``np.linalg``, ``@``) sum in an order that depends on the kernel OpenBLAS picks
 for a CPU (AVX-512, AVX2, …) and on its thread count, so their results differ in the last bits
-between machines; in a fit a last-bit difference can choose another basin (README,
-"Reproducible"). The fit's matrices are tiny (the statistics' covariance, 11 × 11; the Jacobian,
+between machines; in a fit a last-bit difference can choose another basin
+(docs/user_guide/reproducible.md). The fit's matrices are tiny (the statistics' covariance, 11 × 11; the Jacobian,
 11 × 5), so everything here is plain Python arithmetic on IEEE doubles with exactly rounded sums
 (:func:`math.fsum`): correctly rounded, hence independent of summation order, vectorization and
 threads. Used by the objective (:mod:`.objective`), the profiles (:mod:`.uncertainty`) and any

@@ -36,7 +36,8 @@ where the curves state different axial amplitudes (sidecar ``motor.U0_m``, the r
 every load curve's, :func:`amplitudes`), a curve's ``U0`` is the reference's times the ratio of
 the stated amplitudes (``ω_s ∝ √U0``, ``R_φ ∝ U0``); the absolute ``U0`` stays the fit's (its
 ``ω_s`` at the reference drive). Where they all state one amplitude, or none does, ``U0`` is held
-across conditions (some stating it and some not is one line naming the first that does not), which assumes the lab holds the stator's amplitude (a driver with amplitude feedback);
+across conditions (some stating it and some not is one line naming the first that does not),
+which assumes the lab holds the stator's amplitude (a driver with amplitude feedback);
 ``ψ`` is held, which assumes the stator's phase does not move.
 """
 

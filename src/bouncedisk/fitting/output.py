@@ -451,7 +451,7 @@ def summary_text(ds: xr.Dataset) -> str:
             )
             lines.append(f"  {name:>12} = {float(ds[name]):.5g}{unit}   {ci}{flag}")
     if not a.get("e_sigma_fitted", 1):
-        lines.append(f"  {'e_sigma':>12} = {a['e_sigma']:.5g}   stated (--e-sigma), not fitted")
+        lines.append(f"  {'e_sigma':>12} = {a['e_sigma']:.5g}   stated, not fitted")
     s_ci, t_ci = a["steady_speed_ci_rad_s"], a["time_constant_ci_s"]
     lines.append(
         f"  trend of the data: steady speed {a['steady_speed_rad_s']:.5g} rad/s "

@@ -36,12 +36,17 @@ def _text(v: float | None) -> str:
 
 
 def check_runs(curves: Sequence[MotorCurve]) -> None:
-    """Raise :class:`InputError` naming the first run that differs from the first run.
+    """Raise :class:`InputError` naming the first run that differs from the first run (its
+    sidecar for a ``motor`` field, its CSV otherwise).
 
     Compared: ``drive_frequency_hz``, ``Phi0_rad`` and ``U0_m`` (the sidecar's ``motor``), the measurement
     noise ``sigma``, the sampling interval, the number of samples and the start time.
     """
     first = curves[0]
+
+    def where(c: MotorCurve, name: str) -> str:
+        return (c.sidecar_path or c.path) if name.startswith("motor.") else c.path
+
     for c in curves[1:]:
         checks = (
             ("motor.drive_frequency_hz", first.drive_frequency_hz, c.drive_frequency_hz),
@@ -54,9 +59,9 @@ def check_runs(curves: Sequence[MotorCurve]) -> None:
         for name, want, got in checks:
             if not _same(want, got):
                 raise InputError(
-                    c.path,
+                    where(c, name),
                     name,
-                    f"is {_text(got)}, but {_text(want)} in {first.path}: "
+                    f"is {_text(got)}, but {_text(want)} in {where(first, name)}: "
                     "the run-ups of one fit must come from one motor and one "
                     "measurement set-up",
                 )

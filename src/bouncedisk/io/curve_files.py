@@ -91,38 +91,38 @@ def read_table(path: Path, columns: tuple[str, ...]) -> pd.DataFrame:
         df = pd.read_csv(path, comment="#", skipinitialspace=True)
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as ex:
         raise InputError(src, "", f"not a readable CSV: {str(ex).splitlines()[0]}") from None
-    names, lines = _layout(path)
+    names, _ = _layout(path)
     for name in columns:
         if names.count(name) > 1:
             raise InputError(src, name, "the column appears more than once; keep one")
     df.columns = [str(c).strip() for c in df.columns]
-    if len(lines) == len(df):
-        df.attrs["lines"] = lines
     return df
 
 
-def _layout(path: Path) -> tuple[list[str], list[int]]:
-    """The column names of a CSV's first line that is not blank or a comment, as written, and
-    the file's line numbers (from 1) of the rows after it that are not blank or a comment."""
+def _layout(path: str | Path) -> tuple[list[str], list[int]]:
+    """The column names of a CSV's header (its first line that is not blank or a comment), as
+    written, and the file's line numbers (from 1) of the lines after it that pandas reads as
+    rows: every line but a blank one and one that starts with ``#``."""
     names: list[str] | None = None
     lines = []
-    with open(path, encoding="utf-8", newline="") as fh:
+    with open(path, encoding="utf-8-sig", newline="") as fh:
         for number, line in enumerate(fh, start=1):
-            text = line.split("#", 1)[0]
-            if not text.strip():
+            if not line.strip() or line.startswith("#"):
                 continue
             if names is None:
-                names = [c.strip() for c in next(csv.reader([text]))]
+                names = [c.strip() for c in next(csv.reader([line.split("#", 1)[0]]))]
             else:
                 lines.append(number)
     return names or [], lines
 
 
-def row_line(df: pd.DataFrame, row: int) -> int:
-    """The file's line number of data row ``row`` (from 0) of a table of :func:`read_table`:
-    what an error calls "row", comment and blank lines counted."""
-    lines = df.attrs.get("lines")
-    return lines[row] if lines is not None else row + 2
+def row_label(src: str, df: pd.DataFrame, row: int) -> str:
+    """Where data row ``row`` (from 0) of ``df``, the table :func:`read_table` read from
+    ``src``, is, for an error: ``row N``, N the file's line (comment and blank lines counted),
+    or ``data row N`` where the lines cannot be matched to the rows (a quoted field over two
+    lines). Read only when an error is raised."""
+    lines = _layout(src)[1]
+    return f"row {lines[row]}" if len(lines) == len(df) else f"data row {row + 1}"
 
 
 def column(
@@ -134,20 +134,24 @@ def column(
     is_bool = raw.map(lambda x: isinstance(x, bool)).to_numpy()
     if raw.dtype == bool or is_bool.any():
         row = int(np.argmax(is_bool))
-        raise InputError(src, col, f"row {row_line(df, row)}: not a number: {plain(raw.iloc[row])}")
+        raise InputError(
+            src, col, f"{row_label(src, df, row)}: not a number: {plain(raw.iloc[row])}"
+        )
     values = pd.to_numeric(raw, errors="coerce")
     bad = values.isna() & raw.notna()
     if bad.any():
         row = int(np.argmax(bad.values))
-        raise InputError(src, col, f"row {row_line(df, row)}: not a number: {plain(raw.iloc[row])}")
+        raise InputError(
+            src, col, f"{row_label(src, df, row)}: not a number: {plain(raw.iloc[row])}"
+        )
     x = values.to_numpy(dtype=float)
     finite = np.isfinite(x)
     if not finite.all():
         row = int(np.argmax(~finite))
-        raise InputError(src, col, f"row {row_line(df, row)}: missing or non-finite value")
+        raise InputError(src, col, f"{row_label(src, df, row)}: missing or non-finite value")
     if largest is not None and np.any(np.abs(x) > largest[0]):
         row = int(np.argmax(np.abs(x) > largest[0]))
-        message = f"row {row_line(df, row)}: {x[row]:g} exceeds {largest[0]:.4g} ({largest[1]})"
+        message = f"{row_label(src, df, row)}: {x[row]:g} exceeds {largest[0]:.4g} ({largest[1]})"
         raise InputError(src, col, message + "; check the units")
     return x
 

@@ -31,7 +31,7 @@ from ..model import limits
 from ..model.errors import InputError, plain
 from ..model.params import number, whole_number
 from ..model.scene import read_yaml
-from .curve_files import check_units, column, group_keys, read_motor, read_table, row_line
+from .curve_files import check_units, column, group_keys, read_motor, read_table, row_label
 from .output_checks import sidecar_of
 
 COLUMNS = ("torque_Nm", "speed_rad_s")
@@ -197,7 +197,7 @@ def read_load_curve(path: str | Path) -> LoadCurveData:
         if values is not None and np.any(values < 0):
             row = int(np.argmax(values < 0))
             raise InputError(
-                src, name, f"row {row_line(df, row)}: must be >= 0, got {plain(values[row])}"
+                src, name, f"{row_label(src, df, row)}: must be >= 0, got {plain(values[row])}"
             )
     _, first = np.unique(torque, return_index=True)
     if len(first) < len(torque):
@@ -205,7 +205,7 @@ def read_load_curve(path: str | Path) -> LoadCurveData:
         raise InputError(
             src,
             "torque_Nm",
-            f"row {row_line(df, row)}: repeats the load torque {plain(torque[row])}",
+            f"{row_label(src, df, row)}: repeats the load torque {plain(torque[row])}",
         )
     if len(torque) < MIN_LOADS:
         raise InputError(src, "", f"has {len(torque)} loads; at least {MIN_LOADS} are needed")

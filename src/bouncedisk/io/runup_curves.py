@@ -10,7 +10,7 @@ rad/s), optional ``sigma_rad_s`` (measurement standard deviation). The sidecar (
     motor:
       drive_frequency_hz: 20000.0   # required: sets omega_s = 2π f t_c
       Phi0_rad: 2.0e-4              # optional: torsional amplitude; fixes the speed scale
-      U0_m: 1.0e-6                  # optional: axial amplitude
+      U0_m: 1.0e-6                  # optional: axial amplitude (a fit's curves: all or none)
     noise_sigma_rad_s: 0.1          # optional, if the CSV has no sigma_rad_s column
 
 The units, the motor fields and each column are checked as a load curve's
@@ -29,7 +29,7 @@ from ..model import limits
 from ..model.errors import InputError
 from ..model.params import number
 from ..model.scene import read_yaml
-from .curve_files import check_units, column, read_motor, read_table, row_line
+from .curve_files import check_units, column, read_motor, read_table, row_label
 from .output_checks import sidecar_of
 
 #: Fewest rows of a run-up: as many as the fit's statistics need.
@@ -146,7 +146,9 @@ def read_curve(path: str | Path, sidecar: str | Path | None = None) -> MotorCurv
     dt = np.diff(t)
     if np.any(dt <= 0):
         row = int(np.argmax(dt <= 0))
-        raise InputError(src, "time_s", f"row {row_line(df, row + 1)}: time must increase strictly")
+        raise InputError(
+            src, "time_s", f"{row_label(src, df, row + 1)}: time must increase strictly"
+        )
     if len(t) < MIN_ROWS:
         raise InputError(src, "time_s", f"has {len(t)} rows; the fit needs at least {MIN_ROWS}")
     sigma = 0.0

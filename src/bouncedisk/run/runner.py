@@ -15,6 +15,7 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NoReturn
 
 from ..engine import EngineError, RunResult, iterate, simulate_arrays
 from ..engine.driver import Chunk, Returning, audit_balances
@@ -128,7 +129,9 @@ def deferred_interrupts() -> Iterator[StopRequest]:
     the run loop calls :meth:`StopRequest.check` between chunks instead. A request pending when
     an output is about to be renamed into place vetoes the rename
     (:func:`bouncedisk.io.atomic.stop_checks`), and one that arrived during the block raises
-    ``KeyboardInterrupt`` when it ends: an interrupt is never answered by a normal exit.
+    ``KeyboardInterrupt`` when it ends: an interrupt is never answered by a normal exit. The
+    request is then handed to the handler the block replaced (the command's stops the command
+    and ignores a second signal), unless the block failed otherwise.
     """
     req = StopRequest()
     old = {}
@@ -137,14 +140,26 @@ def deferred_interrupts() -> Iterator[StopRequest]:
             old[sig] = signal.signal(sig, req)
     except ValueError:  # not the main thread: the host keeps its handlers
         pass
+    failed: BaseException | None = None
     try:
         with stop_checks(req.check):
             yield req
+    except BaseException as ex:
+        failed = ex
+        raise
     finally:
         for sig, handler in old.items():
             signal.signal(sig, handler)
-    if old and req.signum is not None:
-        raise KeyboardInterrupt
+        if old and req.signum is not None and isinstance(failed, KeyboardInterrupt | None):
+            _deliver(old[req.signum], req.signum)
+
+
+def _deliver(handler, signum: int) -> NoReturn:
+    """Hand a deferred SIGINT or SIGTERM to ``handler``, the one the block replaced, and stop
+    (``KeyboardInterrupt``) whatever it does."""
+    if callable(handler):
+        handler(signum, None)
+    raise KeyboardInterrupt
 
 
 @dataclass
