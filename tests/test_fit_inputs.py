@@ -345,7 +345,7 @@ def test_two_load_curves_after_one_load_option_are_told_to_repeat_it(tmp_path, f
         main(["fit", str(run), "--load", "a.csv", "b.csv", "-o", str(tmp_path / "f.nc")])
     assert ex.value.code == 2
     (line,) = capsys.readouterr().err.strip().splitlines()
-    assert "unrecognized arguments: b.csv" in line
+    assert "unrecognized arguments: b.csv" in line and line.endswith("(see bouncedisk fit --help)")
     assert "each load curve after a --load of its own" in line
     fit = build_parser()._subparsers._group_actions[0].choices["fit"]
     assert "--load A.csv --load B.csv" in " ".join(fit.format_help().split())

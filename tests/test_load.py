@@ -610,3 +610,23 @@ def test_audit_closes_for_any_parameters(e, w, log_r, psi, load, rho):
     res = simulate_arrays(cfg)
     ax, tor = audit_balances(res.final["audit"])
     assert ax <= 1e-9 and tor <= 1e-9, (ax, tor)
+
+
+def test_a_curve_of_the_other_kind_is_told_how_to_give_it(tmp_path, capsys):
+    """A load curve given as a run-up, or a run-up's sidecar key in a load curve's: the one line
+    names the key, says which kind of curve it belongs to and how ``fit`` takes that kind."""
+    from bouncedisk.model.errors import InputError
+
+    (tmp_path / "load.csv").write_text(LOAD_CSV)
+    (tmp_path / "load.yaml").write_text(LOAD_YAML)
+    assert main(["fit", str(tmp_path / "load.csv"), "-o", str(tmp_path / "f.nc"), "-q"]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert "load.yaml: rotor: unknown key" in line
+    assert line.endswith("it is a load curve's key: give that curve after a --load")
+    (tmp_path / "load.yaml").write_text(LOAD_YAML + "noise_sigma_rad_s: 0.1\n")
+    with pytest.raises(InputError, match="it is a run-up's key: give that curve before the op"):
+        read_load_curve(tmp_path / "load.csv")
+    # a key neither kind knows: no hint
+    (tmp_path / "load.yaml").write_text(LOAD_YAML + "rotr: 1\n")
+    with pytest.raises(InputError, match=r"rotr: unknown key \(known: [^)]*\)$"):
+        read_load_curve(tmp_path / "load.csv")

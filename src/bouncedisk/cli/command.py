@@ -160,7 +160,10 @@ def main(argv: list[str] | None = None) -> int:
             hint = (
                 "; the run-ups go before the options, and each load curve after a --load of its own"
             )
-        parser.error(f"unrecognized arguments: {' '.join(extra)}{hint}")
+        sub = next(
+            (q for q in _subparsers(parser) if q.prog == f"{parser.prog} {args.command}"), parser
+        )
+        sub.error(f"unrecognized arguments: {' '.join(extra)}{hint}")  # its --help named
     from ..io import atomic
 
     stdout, sys.stdout = sys.stdout, _NamedStdout(sys.stdout)

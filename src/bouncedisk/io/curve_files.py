@@ -83,6 +83,29 @@ def read_motor(src: str, motor: object, required: tuple[str, ...]) -> dict[str, 
     return out
 
 
+#: The keys of each kind of curve's sidecar (docs/formats.md, "Run-up curves", "Load curves").
+SIDECAR_KEYS = {
+    "run-up": ("source", "synthetic", "units", "motor", "noise_sigma_rad_s", "description",
+               "generating_parameters", "generator"),
+    "load curve": ("source", "synthetic", "units", "motor", "rotor", "preload_N", "window_s",
+                   "protocol", "description", "generating_parameters", "generator", "repeats"),
+}  # fmt: skip
+#: How ``bouncedisk fit`` takes a curve of each kind.
+GIVEN_AS = {"run-up": "before the options", "load curve": "after a --load"}
+
+
+def check_sidecar_keys(src: str, data: dict, kind: str) -> None:
+    """Refuse a key the sidecar of a ``kind`` curve does not know, in one line; a key of the
+    other kind's says which kind the file looks like and how to give it."""
+    known = SIDECAR_KEYS[kind]
+    for k in data:
+        if k in known:
+            continue
+        other = next((o for o, keys in SIDECAR_KEYS.items() if o != kind and k in keys), None)
+        hint = f"; it is a {other}'s key: give that curve {GIVEN_AS[other]}" if other else ""
+        raise InputError(src, str(k), f"unknown key (known: {', '.join(known)}){hint}")
+
+
 def read_table(path: Path, columns: tuple[str, ...]) -> pd.DataFrame:
     """A curve's CSV with its header's names stripped; a column of ``columns`` given twice is
     refused (read from the header itself: ``note.1`` is a column of its own)."""

@@ -31,25 +31,21 @@ from ..model import limits
 from ..model.errors import InputError, plain
 from ..model.params import number, whole_number
 from ..model.scene import read_yaml
-from .curve_files import check_units, column, group_keys, read_motor, read_table, row_label
+from .curve_files import SIDECAR_KEYS as SIDECAR_KINDS
+from .curve_files import (
+    check_sidecar_keys,
+    check_units,
+    column,
+    group_keys,
+    read_motor,
+    read_table,
+    row_label,
+)
 from .output_checks import sidecar_of
 
 COLUMNS = ("torque_Nm", "speed_rad_s")
 OPTIONAL_COLUMNS = ("speed_sd_rad_s",)
-SIDECAR_KEYS = (
-    "source",
-    "synthetic",
-    "units",
-    "motor",
-    "rotor",
-    "preload_N",
-    "window_s",
-    "protocol",
-    "description",
-    "generating_parameters",
-    "generator",
-    "repeats",
-)
+SIDECAR_KEYS = SIDECAR_KINDS["load curve"]
 #: The rotor's fields, each with its bound.
 ROTOR_FIELDS = {
     "m_r_kg": limits.ROTOR_MASS_KG,
@@ -87,9 +83,7 @@ def _sidecar(path: Path) -> dict:
     ``rotor``, ``preload_N`` and ``window_s`` come back as floats."""
     src = str(path)
     data = read_yaml(path, "load curve sidecar")
-    for k in data:
-        if k not in SIDECAR_KEYS:
-            raise InputError(src, str(k), f"unknown key (known: {', '.join(SIDECAR_KEYS)})")
+    check_sidecar_keys(src, data, "load curve")
     check_units(src, data.get("units"), ("torque", "speed"))
     data["motor"] = read_motor(src, data.get("motor"), ("drive_frequency_hz", "Phi0_rad"))
     data["rotor"] = _rotor(src, data.get("rotor"))

@@ -29,7 +29,8 @@ from ..model import limits
 from ..model.errors import InputError
 from ..model.params import number
 from ..model.scene import read_yaml
-from .curve_files import check_units, column, read_motor, read_table, row_label
+from .curve_files import SIDECAR_KEYS as SIDECAR_KINDS
+from .curve_files import check_sidecar_keys, check_units, column, read_motor, read_table, row_label
 from .output_checks import sidecar_of
 
 #: Fewest rows of a run-up: as many as the fit's statistics need.
@@ -38,16 +39,7 @@ MIN_ROWS = limits.MIN_RUNUP_SAMPLES
 #: data are signal plus noise: their variance is at least the noise's).
 MAX_NOISE_OVER_SPREAD = 2.0
 #: The keys a run-up sidecar may hold.
-SIDECAR_KEYS = (
-    "source",
-    "synthetic",
-    "units",
-    "motor",
-    "noise_sigma_rad_s",
-    "description",
-    "generating_parameters",
-    "generator",
-)
+SIDECAR_KEYS = SIDECAR_KINDS["run-up"]
 COLUMNS = ("time_s", "omega_rad_s", "sigma_rad_s")
 
 
@@ -86,10 +78,7 @@ def read_sidecar(path: str | Path) -> dict:
     """Read and validate a curve's YAML sidecar (units, motor and noise within their bounds)."""
     src = str(path)
     data = read_yaml(path, "curve sidecar")
-    for k in data:
-        if k not in SIDECAR_KEYS:
-            known = ", ".join(sorted(SIDECAR_KEYS))
-            raise InputError(src, str(k), f"unknown key (known: {known})")
+    check_sidecar_keys(src, data, "run-up")
     check_units(src, data.get("units"), ("time", "omega"))
     motor = read_motor(src, data.get("motor"), required=("drive_frequency_hz",))
     if data.get("noise_sigma_rad_s") is not None:
