@@ -302,10 +302,7 @@ def prepare_runs(
 
     Returns the runs as fitted, their mean curve and the note on the work bound.
     """
-    runs = [curve] if isinstance(curve, MotorCurve) else list(curve)
-    for c in runs:
-        check_fittable(c)
-    check_runs(runs)
+    runs = _checked_runs(curve)
     prepared = [prepare_curve(c) for c in runs]
     fitted = [c for c, _ in prepared]
     return fitted, mean_curve(fitted), prepared[0][1]
@@ -314,12 +311,22 @@ def prepare_runs(
 def check_fit_inputs(
     curve: MotorCurve | Sequence[MotorCurve], load: Sequence[LoadCurveData] = ()
 ) -> None:
-    """Refuse what :func:`pose_fit` would refuse of the run-ups and load curves, with no
-    statistic or simulation computed: the checks of :func:`prepare_runs` and of the load
-    curves' part (:func:`.joint.load_part`: windows, ``Φ0``, amplitudes, rotors), so that a
+    """Refuse what :func:`pose_fit` would refuse of the run-ups and load curves, with no curve
+    bounded, statistic or simulation computed: the checks of :func:`prepare_runs` and of the
+    load curves' part (:func:`.joint.load_part`: windows, ``Φ0``, amplitudes, rotors), so that a
     command can say a defect before its first progress line."""
-    _, fitted, _ = prepare_runs(curve)
-    load_part(list(load), fitted, EnsembleSpec())
+    runs = _checked_runs(curve)
+    load_part(list(load), runs[0], EnsembleSpec())  # reads the sidecar's constants only
+
+
+def _checked_runs(curve: MotorCurve | Sequence[MotorCurve]) -> list[MotorCurve]:
+    """The run-ups as a list, each fittable (:func:`check_fittable`) and all of one set-up
+    (:func:`.runs.check_runs`)."""
+    runs = [curve] if isinstance(curve, MotorCurve) else list(curve)
+    for c in runs:
+        check_fittable(c)
+    check_runs(runs)
+    return runs
 
 
 def fit_basins(obj: Objective, members: int, thr: float) -> list[Basin]:

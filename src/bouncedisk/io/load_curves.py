@@ -31,7 +31,6 @@ from ..model import limits
 from ..model.errors import InputError, plain
 from ..model.params import number, whole_number
 from ..model.scene import read_yaml
-from .curve_files import SIDECAR_KEYS as SIDECAR_KINDS
 from .curve_files import (
     check_sidecar_keys,
     check_units,
@@ -45,7 +44,6 @@ from .output_checks import sidecar_of
 
 COLUMNS = ("torque_Nm", "speed_rad_s")
 OPTIONAL_COLUMNS = ("speed_sd_rad_s",)
-SIDECAR_KEYS = SIDECAR_KINDS["load curve"]
 #: The rotor's fields, each with its bound.
 ROTOR_FIELDS = {
     "m_r_kg": limits.ROTOR_MASS_KG,

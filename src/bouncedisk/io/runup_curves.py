@@ -29,7 +29,6 @@ from ..model import limits
 from ..model.errors import InputError
 from ..model.params import number
 from ..model.scene import read_yaml
-from .curve_files import SIDECAR_KEYS as SIDECAR_KINDS
 from .curve_files import check_sidecar_keys, check_units, column, read_motor, read_table, row_label
 from .output_checks import sidecar_of
 
@@ -38,8 +37,7 @@ MIN_ROWS = limits.MIN_RUNUP_SAMPLES
 #: The measurement noise may not exceed this multiple of the data's own standard deviation (the
 #: data are signal plus noise: their variance is at least the noise's).
 MAX_NOISE_OVER_SPREAD = 2.0
-#: The keys a run-up sidecar may hold.
-SIDECAR_KEYS = SIDECAR_KINDS["run-up"]
+#: The columns a run-up CSV may hold.
 COLUMNS = ("time_s", "omega_rad_s", "sigma_rad_s")
 
 
