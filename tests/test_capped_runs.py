@@ -45,6 +45,21 @@ def test_the_same_ensemble_with_room_finishes(tmp_path, capsys):
     assert '"mean_omega"' in capsys.readouterr().out
 
 
+def test_info_of_a_load_curve_file_lists_its_variables_with_their_intervals(tmp_path, capsys):
+    """``bouncedisk info`` reads every file the package writes, not only simulations: a load
+    curve's file gives its title and its variables, each interval with its variable."""
+    out = tmp_path / "load.nc"
+    scene = scene_file(tmp_path, time=120.0, discard=20.0)
+    assert main(["torque-speed", scene, "--loads", "0,0.5", "-o", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["info", str(out)]) == 0
+    rows = dict(ln.strip().split(": ", 1) for ln in capsys.readouterr().out.splitlines())
+    assert rows["title"].startswith("bouncedisk load characteristic of scene")
+    assert rows["mean_omega"].startswith("ensemble mean of the time-averaged rotor angular")
+    assert rows["mean_omega"].endswith("[1], with its 95 % interval")
+    assert not any("_ci" in name for name in rows)  # the ends are named with their variable
+
+
 def test_run_member_raises_on_the_cap():
     cfg = dataclasses.replace(
         engine_config(scene_from_mapping(_raw(0.6, 1.5, 120.0))), max_events=5

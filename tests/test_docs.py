@@ -200,33 +200,3 @@ def test_performance_page_shows_every_benchmark_record():
         assert r["title"] in text and f"Measured on {r['date']}" in text, r["title"]
         for row in r["rows"]:
             assert row["result"] in text, (r["title"], row)
-
-
-#: The user-guide pages that teach one task each (their figures and numbers are elsewhere).
-TASK_PAGES = ["getting_started.md"] + [
-    f"user_guide/{p}.md"
-    for p in (
-        "scenes",
-        "ensembles",
-        "fitting",
-        "load",
-        "sensitivity",
-        "basins",
-        "pipeline",
-        "reproducible",
-        "tracking",
-        "cluster",
-        "performance",
-    )
-]
-
-
-@pytest.mark.parametrize("page", TASK_PAGES)
-def test_task_pages_are_short_and_quote_no_dated_measurement(page):
-    """A task page stays under about 1,200 words (1,500 at most) and quotes no date: dated
-    measurements live in benchmarks/out/ and the performance page renders them."""
-    import re
-
-    text = (ROOT / "docs" / page).read_text()
-    assert len(text.split()) <= 1500, len(text.split())
-    assert not re.search(r"\b20\d\d-\d\d-\d\d\b", text), re.search(r"\b20\d\d-\d\d-\d\d\b", text)

@@ -292,6 +292,21 @@ def test_fit_file_has_the_interface(tiny_fit):
     assert a["starts_accepted"] == int(reach.sum())
 
 
+@pytest.mark.xdist_group("tiny_fit")
+@pytest.mark.cost(13)  # the tiny fit
+def test_info_of_a_fit_file_is_the_fit_summary(tiny_fit, capsys):
+    """``bouncedisk info FIT.nc`` prints what ``bouncedisk fit`` printed: the same summary."""
+    from bouncedisk.fitting import summary_text
+
+    _, out, _ = tiny_fit
+    capsys.readouterr()
+    assert main(["info", str(out)]) == 0
+    printed = capsys.readouterr().out
+    with xr.open_dataset(out) as ds:
+        assert printed.strip() == summary_text(ds).strip()
+    assert printed.startswith("fit of ") and "\n             e = " in printed
+
+
 @pytest.mark.slow  # a second fit
 @pytest.mark.xdist_group("tiny_fit")
 def test_fit_is_deterministic_and_never_worse_than_evaluated(periodic_csv, tiny_fit):

@@ -243,5 +243,5 @@ def test_fifo_input_is_refused_at_once(tmp_path, command):
     assert r.returncode == 2
     assert r.stderr.strip().endswith(
         "is not a regular file (a pipe or device?), not a "
-        + ("bouncedisk simulation file" if command == "info" else "scene file")
+        + ("bouncedisk netCDF file" if command == "info" else "scene file")
     )

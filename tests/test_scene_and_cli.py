@@ -297,7 +297,22 @@ def test_info_rejects_foreign_netcdf(tmp_path, capsys):
     other = tmp_path / "other.nc"
     xr.Dataset({"x": ("t", np.arange(3.0))}).to_netcdf(other)
     assert main(["info", str(other)]) == 2
-    assert "t_impact" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "other.nc: bouncedisk_version: missing required attribute" in err
+    assert "not a bouncedisk netCDF file" in err
+
+
+def test_python_dash_m_bouncedisk_is_the_command(tmp_path):
+    """``python -m bouncedisk`` runs the console script's command: same line, same status."""
+    missing = tmp_path / "missing.nc"
+    r = subprocess.run(
+        [sys.executable, "-m", "bouncedisk", "info", str(missing)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert r.returncode == 2 and r.stdout == ""
+    assert r.stderr == f"bouncedisk: error: {missing}: file not found\n"
 
 
 def test_input_error_line_format():

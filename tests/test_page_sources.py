@@ -1,4 +1,5 @@
-"""The code blocks of the guide pages fit the page: no line longer than :data:`WIDTH` characters.
+"""The guide pages' Markdown sources (no build needed): their code blocks fit the page, no line
+longer than :data:`WIDTH` characters, and each task page is short and quotes no date.
 
 The Sphinx theme's text column holds about 90 characters of code at 1280 px; a longer line is
 cut and scrolls sideways, so a reader copying the command misses its end.
@@ -52,3 +53,33 @@ def test_the_check_finds_a_long_line_in_code_only():
     text = "x" * 120 + "\n```bash\nshort\n" + "y" * 91 + "\n```\n```{image} a.png\n"
     text += ":alt: " + "z" * 100 + "\n```\n" + "x" * 120 + "\n"
     assert long_code_lines(text) == [(4, 91)]
+
+
+#: The user-guide pages that teach one task each (their figures and numbers are elsewhere).
+TASK_PAGES = ["getting_started.md"] + [
+    f"user_guide/{p}.md"
+    for p in (
+        "scenes",
+        "ensembles",
+        "fitting",
+        "load",
+        "sensitivity",
+        "basins",
+        "pipeline",
+        "reproducible",
+        "tracking",
+        "cluster",
+        "performance",
+    )
+]
+
+
+@pytest.mark.parametrize("page", TASK_PAGES)
+def test_task_pages_are_short_and_quote_no_dated_measurement(page):
+    """A task page stays under about 1,200 words (1,500 at most) and quotes no date: dated
+    measurements live in benchmarks/out/ and the performance page renders them."""
+    import re
+
+    text = (ROOT / "docs" / page).read_text()
+    assert len(text.split()) <= 1500, len(text.split())
+    assert not re.search(r"\b20\d\d-\d\d-\d\d\b", text), re.search(r"\b20\d\d-\d\d-\d\d\b", text)
