@@ -386,6 +386,15 @@ def _rows(n, bad_row=None, bad="x"):
         # a row is the file's line, comment and blank lines counted: sample 7 is on line 11
         ("# rig 2\n\n" + _rows(30, 7, "nan"), None, "omega_rad_s: row 11:"),
         ("# rig 2\n" + _rows(30).replace("\n0.007,", "\n0.001,"), None, "time_s: row 10:"),
+        # the noise stated twice, differently: the sidecar's field is named, both values given
+        (
+            _rows(250)
+            .replace("time_s,omega_rad_s\n", "time_s,omega_rad_s,sigma_rad_s\n")
+            .replace("\n", ",0.5\n")
+            .replace("sigma_rad_s,0.5\n", "sigma_rad_s\n"),
+            sidecar() | {"noise_sigma_rad_s": 0.1},
+            "c.yaml: noise_sigma_rad_s: 0.1 rad/s disagrees with the mean of",
+        ),
     ],
 )
 def test_bad_curves_exit_2_with_one_line(tmp_path, capsys, text, side, field):

@@ -231,12 +231,15 @@ def test_unusable_store_and_unknown_run_exit_2_with_one_line(tmp_path, capsys):
         (["runs", "diff", "nosuchrun", "other"], "nosuchrun"),
         (["runs", "show", "a", "b"], "runs"),
         (["runs", "list", "extra"], "runs"),
-        (["runs", "--bogus"], "--bogus"),
     ]
     for argv, needle in cases:
         capsys.readouterr()
         assert main([*argv, "--tracking-uri", store]) == 2, argv
         one_error_line(capsys.readouterr().err, needle)
+    with pytest.raises(SystemExit) as ex:  # argparse's refusal, as every subcommand's
+        main(["runs", "--bogus", "--tracking-uri", store])
+    assert ex.value.code == 2
+    one_error_line(capsys.readouterr().err, "runs: unrecognized arguments: --bogus (see")
     capsys.readouterr()
     assert main(["runs", "--results", str(tmp_path / "none")]) == 2
     one_error_line(capsys.readouterr().err, str(tmp_path / "none"))

@@ -149,12 +149,9 @@ def main(argv: list[str] | None = None) -> int:
     args, extra = parser.parse_known_args(attach_negative_values(parser, argv))
     args.argv = argv
     if extra and args.command == "runs":  # run ids after options: `runs diff A --json B`
-        bad = [x for x in extra if x.startswith("-")]
-        if bad:
-            print(error_line(f"runs: unknown option {bad[0]}"), file=sys.stderr)
-            return EXIT_USER
-        args.words += extra
-    elif extra:
+        args.words += [x for x in extra if not x.startswith("-")]
+        extra = [x for x in extra if x.startswith("-")]
+    if extra:
         hint = ""
         if args.command == "fit" and any(x.lower().endswith(".csv") for x in extra):
             hint = (

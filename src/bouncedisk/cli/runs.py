@@ -3,10 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import sys
 
-from ..model.errors import InputError, error_line
-from .common import EXIT_USER
+from ..model.errors import InputError
 
 # --- experiment tracking (bouncedisk.tracking; `runs` reads it back through bouncedisk.tracking.reading)
 
@@ -100,16 +98,6 @@ def _port(text: str) -> int:
     return port
 
 
-def _one_line_error(prefix: str):
-    """An argparse ``error`` that prints one line and exits 2 (no usage block)."""
-
-    def error(message: str):
-        print(error_line(f"{prefix}: {message}"), file=sys.stderr)
-        sys.exit(EXIT_USER)
-
-    return error
-
-
 def _add_runs(sub) -> None:
     """``bouncedisk runs [list | show RUN | diff A B | ui]`` (docs/formats.md "Experiment
     tracking")."""
@@ -133,5 +121,4 @@ def _add_runs(sub) -> None:
         help="tracking store (default: $MLFLOW_TRACKING_URI, else sqlite:///RESULTS/mlflow.db)",
     )
     p.add_argument("--results", default="results", help="results folder (default: %(default)s)")
-    p.error = _one_line_error("runs")
     p.set_defaults(func=_cmd_runs)

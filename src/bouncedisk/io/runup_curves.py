@@ -11,7 +11,7 @@ rad/s), optional ``sigma_rad_s`` (measurement standard deviation). The sidecar (
       drive_frequency_hz: 20000.0   # required: sets omega_s = 2π f t_c
       Phi0_rad: 2.0e-4              # optional: torsional amplitude; fixes the speed scale
       U0_m: 1.0e-6                  # optional: axial amplitude (a fit's curves: all or none)
-    noise_sigma_rad_s: 0.1          # optional, if the CSV has no sigma_rad_s column
+    noise_sigma_rad_s: 0.1          # optional: the noise, if the CSV has no sigma_rad_s column
 
 The units, the motor fields and each column are checked as a load curve's
 (:mod:`bouncedisk.io.curve_files`), within the bounds of :mod:`bouncedisk.model.limits`.
@@ -103,6 +103,25 @@ def _speed_bound(motor: dict[str, float]) -> tuple[float, str]:
     return limits.max_speed(f, phi0), why
 
 
+def _measurement_noise(src: str, side: str, column: np.ndarray | None, stated) -> float:
+    """The curve's one measurement noise (rad/s): the mean of its ``sigma_rad_s`` column, else
+    the sidecar's ``noise_sigma_rad_s``, else 0. Given both, they must agree to 1 %: the noise is
+    one fact, and a sidecar that disagrees with its CSV is refused rather than ignored."""
+    if column is None:
+        return 0.0 if stated is None else float(stated)
+    if np.any(column < 0):
+        raise InputError(src, "sigma_rad_s", "must be >= 0")
+    sigma = float(np.mean(column))
+    if stated is not None and not np.isclose(stated, sigma, rtol=0.01, atol=0.0):
+        raise InputError(
+            side,
+            "noise_sigma_rad_s",
+            f"{stated:g} rad/s disagrees with the mean of {src}'s sigma_rad_s column "
+            f"({sigma:g} rad/s): state the noise once, or the same in both",
+        )
+    return sigma
+
+
 def read_curve(path: str | Path, sidecar: str | Path | None = None) -> MotorCurve:
     """Read and validate a curve CSV and its sidecar.
 
@@ -138,13 +157,7 @@ def read_curve(path: str | Path, sidecar: str | Path | None = None) -> MotorCurv
         )
     if len(t) < MIN_ROWS:
         raise InputError(src, "time_s", f"has {len(t)} rows; the fit needs at least {MIN_ROWS}")
-    sigma = 0.0
-    if s is not None:
-        if np.any(s < 0):
-            raise InputError(src, "sigma_rad_s", "must be >= 0")
-        sigma = float(np.mean(s))
-    elif meta.get("noise_sigma_rad_s") is not None:
-        sigma = float(meta["noise_sigma_rad_s"])
+    sigma = _measurement_noise(src, str(side), s, meta.get("noise_sigma_rad_s"))
     spread = float(np.std(omega))
     if sigma > MAX_NOISE_OVER_SPREAD * spread:
         where = (src, "sigma_rad_s") if s is not None else (str(side), "noise_sigma_rad_s")
