@@ -55,6 +55,11 @@ def test_info_of_a_load_curve_file_lists_its_variables_with_their_intervals(tmp_
     assert main(["info", str(out)]) == 0
     rows = dict(ln.strip().split(": ", 1) for ln in capsys.readouterr().out.splitlines())
     assert rows["title"].startswith("bouncedisk load characteristic of scene")
+    assert rows["scene_sha256"] and float(rows["e"]) == 0.6  # the scene's provenance
+    with netCDF4.Dataset(out) as nc:  # the study's results, each with its interval
+        low, high = nc.getncattr("no_load_speed_ci95")
+        expected = f"{nc.getncattr('no_load_speed'):.6g}  95% CI [{low:.6g}, {high:.6g}]"
+    assert rows["no_load_speed"] == expected
     assert rows["mean_omega"].startswith("ensemble mean of the time-averaged rotor angular")
     assert rows["mean_omega"].endswith("[1], with its 95 % interval")
     assert not any("_ci" in name for name in rows)  # the ends are named with their variable

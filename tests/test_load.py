@@ -567,7 +567,8 @@ def test_simulation_files_carry_the_energy_audit(scene_file, tmp_path):
 
 
 def test_physical_scene_reports_watts_and_the_motor_efficiency():
-    """A physical scene's stats add the powers in W and η = P_out / (P_ax + P_t)."""
+    """A physical scene's stats add the speed in rad/s, the powers in W and
+    η = P_out / (P_ax + P_t), each with its interval."""
     from bouncedisk.analysis.statistics import run_stats
     from bouncedisk.model.params import Parameters
 
@@ -585,6 +586,10 @@ def test_physical_scene_reports_watts_and_the_motor_efficiency():
     scene = scene_from_mapping(raw, "<physical>")
     s = run_stats(scene).summary()
     sc = phys.scales()
+    assert s["mean_omega_rad_s"] == pytest.approx(s["mean_omega"] * sc.omega_scale)
+    low, high = s["mean_omega_rad_s_ci95"]  # the interval in rad/s too, around its mean
+    assert low < s["mean_omega_rad_s"] < high
+    assert low == pytest.approx(s["mean_omega_ci95"][0] * sc.omega_scale)
     assert s["power_out_W"] == pytest.approx(s["power_out"] * sc.torque * sc.omega_scale)
     assert s["power_axial_in_W"] == pytest.approx(s["power_axial_in"] * sc.axial_power)
     eta = s["power_out_W"] / (s["power_out_W"] / s["efficiency_torsion"] + s["power_axial_in_W"])

@@ -81,6 +81,23 @@ stop: {impacts: 10}
     assert s.scales is not None
 
 
+def test_a_derived_parameter_out_of_range_names_the_fields_it_comes_from(scene_file, capsys):
+    """A drive typed in the wrong unit (2e12 Hz) makes omega_s absurd: the one line names
+    ``physical.omega_s`` and the SI fields it is computed from, which are what the user wrote."""
+    text = """
+name: phys
+physical: {m_r: 0.01, r_g: 0.004, r_c: 0.001, mu: 0.2, e: 0.5, g: 9.81, f: 2.0e+12, U0: 1.0e-6,
+           Phi0: 1.0e-3}
+stop: {impacts: 10}
+"""
+    f = scene_file(text)
+    assert main(["simulate", str(f), "-o", str(f.with_suffix(".nc")), "-q"]) == 2
+    (err,) = capsys.readouterr().err.strip().splitlines()
+    assert f"{f}: physical.omega_s: must be a number in" in err
+    assert err.endswith("from physical.f, U0, g, F_preload and m_r)")
+    assert not f.with_suffix(".nc").exists()
+
+
 def test_a_physical_window_in_seconds_is_told_its_unit(scene_file, capsys):
     """A physical scene's times are in t_c, not seconds: a stop of 0.02 "seconds" leaves less
     than a period, and the one line names the field at fault and t_c in seconds."""

@@ -161,7 +161,7 @@ class EnsembleStats:
         for name in AUDIT:
             out[name] = _finite_or_none(float(np.nanmax(self.column(name), initial=-np.inf)))
         if self.scales is not None:
-            self._physical_powers(out)
+            self._physical_values(out)
         lam = self.column("lyapunov")
         reset = float(np.mean(np.isneginf(lam)))
         out["lyapunov_reset_fraction"] = reset
@@ -172,11 +172,12 @@ class EnsembleStats:
         out["period"] = period
         return out
 
-    def _physical_powers(self, out: dict) -> None:
-        """Into ``out``: the powers in W and the motor's mechanical efficiency
-        ``η = P_out / (P_ax + P_t)`` (docs/model.md "The motor under load"), each with its
-        interval across members."""
+    def _physical_values(self, out: dict) -> None:
+        """Into ``out``: the mean speed in rad/s, the powers in W and the motor's mechanical
+        efficiency ``η = P_out / (P_ax + P_t)`` (docs/model.md "The motor under load"), each with
+        its interval across members."""
         sc = self.scales
+        _put_interval(out, "mean_omega_rad_s", self.column("mean_omega") * sc.omega_scale)
         watts = {}
         for name, unit in POWER_UNITS.items():
             if name in LOAD_ONLY and not self.load:

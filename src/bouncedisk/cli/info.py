@@ -11,6 +11,8 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 if TYPE_CHECKING:  # the parser stays light: xarray is imported when the command runs
     import xarray as xr
 
@@ -61,8 +63,14 @@ def _simulation_rows(ds: xr.Dataset) -> list[tuple[str, object]]:
 
 def _product_rows(ds: xr.Dataset) -> list[tuple[str, object]]:
     """Any other file's title, provenance, dimensions and variables (with their units)."""
-    keys = ("title", "id", "bouncedisk_version", "git_commit", "date_created")
-    rows: list[tuple[str, object]] = [(k, ds.attrs[k]) for k in keys if k in ds.attrs]
+    from ..io.provenance import SCENE_ATTRS
+
+    a = ds.attrs
+    keys = ("title", "id", *SCENE_ATTRS, "bouncedisk_version", "git_commit", "date_created")
+    rows: list[tuple[str, object]] = [(k, a[k]) for k in dict.fromkeys(keys) if k in a]
+    for k in (k for k in a if f"{k}_ci95" in a):  # the study's results, with their intervals
+        low, high = np.ravel(a[f"{k}_ci95"])[:2]
+        rows.append((k, f"{a[k]:.6g}  95% CI [{low:.6g}, {high:.6g}]"))
     rows.append(("dimensions", ", ".join(f"{d} {n}" for d, n in ds.sizes.items())))
     ends = {
         n for n in ds.data_vars for s in INTERVAL_SUFFIXES if n.endswith(s) and n[: -len(s)] in ds

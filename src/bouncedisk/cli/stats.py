@@ -52,7 +52,8 @@ def format_summary(summary: dict) -> str:
     for name in ("power_out", "power_torsion_in", "power_axial_in", "efficiency_torsion"):
         if name in summary:
             lines.append(_row(summary, name))
-    for name in ("power_out_W", "power_torsion_in_W", "power_axial_in_W", "efficiency"):
+    physical = ("mean_omega_rad_s", "power_out_W", "power_torsion_in_W", "power_axial_in_W")
+    for name in (*physical, "efficiency"):  # a physical scene's, in SI units
         if name in summary:
             lines.append(_row(summary, name))
     lines.append(

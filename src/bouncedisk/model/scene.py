@@ -356,6 +356,18 @@ def _name(src: str, raw: dict) -> tuple[str, str]:
     return name, description
 
 
+#: How a physical scene's nondimensional parameters follow from its SI fields (docs/model.md
+#: "Physical conversion"): an error in one names the fields a user wrote.
+DERIVED_FROM = {
+    "omega_s": "2π f t_c, t_c = sqrt(U0 / g_eff), g_eff = g + F_preload / m_r: from physical.f, "
+    "U0, g, F_preload and m_r",
+    "r_phi": "(r_eff / r_g)² mu U0 / (r_eff Phi0), r_eff = 2 r_c / 3: from physical.r_c, r_g, "
+    "mu, U0 and Phi0",
+    "load_torque": "load_torque / (mu m_r g_eff r_eff): from physical.load_torque, mu, m_r, g, "
+    "F_preload and r_c",
+}
+
+
 def _parameters(src: str, raw: dict) -> tuple[Parameters, PhysicalParameters | None]:
     """``parameters`` (nondimensional) or ``physical`` (SI, converted: docs/model.md eqs. 2, 13–15)."""
     if "parameters" in raw and "physical" in raw:
@@ -368,8 +380,10 @@ def _parameters(src: str, raw: dict) -> tuple[Parameters, PhysicalParameters | N
         try:
             params = physical.to_nondimensional()  # validated as it is made
         except InputError as ex:  # the nondimensional value the SI ones give, named by section
-            field = "physical" + ex.field.removeprefix("Parameters")
-            raise InputError(src, field, ex.message) from None
+            name = ex.field.removeprefix("Parameters.")
+            how = DERIVED_FROM.get(name)
+            message = f"{ex.message} ({name} is {how})" if how else ex.message
+            raise InputError(src, f"physical.{name}", message) from None
         return params, physical
     if "parameters" in raw:
         pm = raw["parameters"]
