@@ -337,3 +337,39 @@ def test_the_regime_fraction_counts_only_members_on_its_period():
     s = EnsembleStats(members, 0.0, 1.0).summary()
     assert s["regime"] == "periodic" and s["period"] == [2, 2]
     assert s["regime_fraction"] == 5 / 8
+
+
+# ------------------------------------------------------------------------------ settled or not
+
+
+def test_a_window_still_running_up_is_not_settled_and_a_long_one_is(capsys):
+    """fig3's rotor runs up for about 2000 time units: a window of 200–600 averages a speed
+    still rising (its second half faster), a window of 2000–5000 the settled speed."""
+    scene = "workflow/config/scenes/fig3.yaml"
+    early = run_stats(load_scene(scene, ["stop.time=600", "stats.discard=200"])).summary()
+    late = run_stats(load_scene(scene, ["stop.time=5000", "stats.discard=2000"])).summary()
+    assert early["settled"] == 0 and early["drift"] > 0.02 * early["mean_omega"]
+    assert late["settled"] == 1 and abs(late["drift"]) < 0.02 * late["mean_omega"]
+    assert late["mean_omega"] > early["mean_omega"]  # the early window read a run-up
+    line = format_summary(early).splitlines()[3]
+    assert line.startswith("           settled: NO, the second half's mean speed is ")
+    assert line.endswith("lengthen stats.discard (and stop.time)")
+
+
+def test_a_cycle_locked_to_the_stator_is_settled_whatever_its_ripple(monkeypatch):
+    """A locked chattering cycle is stationary. Sampled 256 times over the window, a step of
+    7.0003 stator periods here (the planted error), its samples' phases creep slowly through the
+    cycle: each half's mean reads a different part of its ripple, and they differ by several
+    percent. At the settling step's golden fraction of a period they agree."""
+    import bouncedisk.analysis.settling as settling
+
+    scene = load_scene("workflow/config/scenes/stats_locked.yaml", ["ensemble.members=2"])
+    s = run_stats(scene).summary()
+    assert s["settled"] == 1 and abs(s["drift"]) < 1e-3 * s["mean_omega"]
+    step = settling.settle_step(0.0, 10_000.0, scene.params.omega_s)
+    periods = step * scene.params.omega_s / (2 * math.pi)
+    assert periods - math.floor(periods) == pytest.approx(settling.GOLDEN_FRACTION)
+    monkeypatch.setattr(settling, "settle_step", lambda t0, t1, w: (t1 - t0) / 256)
+    aliased = run_stats(scene).summary()
+    assert aliased["settled"] == 0 and abs(aliased["drift"]) > 0.02 * aliased["mean_omega"]
+    assert aliased["mean_omega"] == s["mean_omega"]  # the sampling changes no statistic

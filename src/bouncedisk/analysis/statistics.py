@@ -22,9 +22,11 @@ from ..model.engine_config import engine_config
 from ..model.errors import InputError
 from ..model.params import Scales
 from ..model.scene import Scene, time_unit_note
+from ..run.cores import map_on_threads
 from ..run.runner import scene_attrs
 from . import observables as ob
-from .ensembles import CappedRun, MemberStats, run_ensemble
+from .ensembles import CappedRun, MemberStats
+from .settling import drifting, run_settled
 
 #: Ensemble statistics: field -> (long name, units) in nondimensional units (docs/formats.md).
 QUANTITIES: dict[str, tuple[str, str]] = {
@@ -109,6 +111,9 @@ class EnsembleStats:
     duration: float
     load: bool = False
     scales: Scales | None = None
+    #: Each member's drift: its window's second half's mean speed less the first half's
+    #: (:func:`~bouncedisk.analysis.settling.run_settled`); ``None``: not measured.
+    drift: np.ndarray | None = None
 
     def column(self, name: str) -> np.ndarray:
         """One per-member quantity as an array in member order."""
@@ -160,6 +165,8 @@ class EnsembleStats:
             _put_interval(out, name, self.column(name), nonnegative=name in NONNEGATIVE)
         for name in AUDIT:
             out[name] = _finite_or_none(float(np.nanmax(self.column(name), initial=-np.inf)))
+        if self.drift is not None:
+            self._settling(out)
         if self.scales is not None:
             self._physical_values(out)
         lam = self.column("lyapunov")
@@ -171,6 +178,14 @@ class EnsembleStats:
         out["regime_tie"] = self.regime_tie
         out["period"] = period
         return out
+
+    def _settling(self, out: dict) -> None:
+        """Into ``out``: the members' drift with its interval and whether the ensemble has
+        settled (1) or its window still drifts (0): :func:`~.settling.drifting` with the mean
+        speed's magnitude as the scale."""
+        _put_interval(out, "drift", self.drift)
+        scale = abs(float(np.nanmean(self.column("mean_omega"))))
+        out["settled"] = int(not drifting(self.drift, scale)[0])
 
     def _physical_values(self, out: dict) -> None:
         """Into ``out``: the mean speed in rad/s, the powers in W and the motor's mechanical
@@ -268,20 +283,19 @@ def run_stats(
             scene.source, "solver.method", "statistics run the exact bouncing model only"
         )
     cfg = engine_config(scene)
+
+    def one(m: int) -> tuple[MemberStats, float]:
+        stats, _final, drift = run_settled(cfg, scene.initial, m, t_from, should_stop)
+        return stats, drift
+
     try:
-        members = run_ensemble(
-            cfg,
-            scene.initial,
-            scene.ensemble.members,
-            t_from,
-            cores=cores,
-            on_member=on_member,
-            should_stop=should_stop,
-        )
+        got = map_on_threads(one, range(scene.ensemble.members), cores, on_member)
     except CappedRun as ex:
         raise capped_error(scene, ex) from None
+    members = [stats for stats, _ in got]
+    drift = np.array([d for _, d in got], dtype=float)
     return EnsembleStats(
-        members, scene.stats.discard, t_end - t_from, "load" in scene.effects, scene.scales
+        members, scene.stats.discard, t_end - t_from, "load" in scene.effects, scene.scales, drift
     )
 
 

@@ -35,8 +35,10 @@ def format_summary(summary: dict) -> str:
         f"{'members':>18}: {summary['members']}",
         f"{'averaged over':>18}: {summary['duration']:g} time units after {summary['discard']:g}",
     ]
+    lines.append(_row(summary, "mean_omega"))
+    if "settled" in summary:
+        lines.append(_settled_row(summary))
     for name in (
-        "mean_omega",
         "mean_slip",
         "impact_rate",
         "chatter_rate",
@@ -70,6 +72,20 @@ def format_summary(summary: dict) -> str:
     else:
         lines.append(f"{'regime':>18}: {reg}, {100 * frac:.0f}% of members")
     return "\n".join(lines)
+
+
+def _settled_row(summary: dict) -> str:
+    """Whether the window's two halves agree (:mod:`bouncedisk.analysis.settling`): the drift
+    (second half's mean speed less the first's) with its interval, and what to do if not."""
+    d, (low, high) = summary["drift"], summary["drift_ci95"]
+    ci = f" (95% CI [{low:.3g}, {high:.3g}])" if low is not None else ""
+    if summary["settled"]:
+        return f"{'settled':>18}: yes, the halves' mean speeds differ by {d:+.3g}{ci}"
+    side = "above" if d > 0 else "below"
+    return (
+        f"{'settled':>18}: NO, the second half's mean speed is {abs(d):.3g} {side} the first's"
+        f"{ci}: still running up or down; lengthen stats.discard (and stop.time)"
+    )
 
 
 def _g(x: float | None) -> str:

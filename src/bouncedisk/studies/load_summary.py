@@ -56,11 +56,6 @@ ONE_MEMBER = "one member: an interval needs >= 2 members"
 #: Loads added inside a bracket per round of :func:`refine`, and the rounds at most.
 REFINE_POINTS = 3
 REFINE_ROUNDS = 3
-#: A load's runs have settled when the members' mean drift (second half's mean speed less the
-#: first half's) is at most this share of the curve's largest mean speed (or within three
-#: standard errors of 0); each load's window is sampled :data:`SETTLE_SAMPLES` times for it.
-DRIFT_SHARE = 0.02
-SETTLE_SAMPLES = 256
 #: Loads closer than this (relative to the larger, or absolutely below 1) are one load.
 SAME_LOAD = 1e-9
 
@@ -72,7 +67,8 @@ def settled_loads(
     bound: float | None = None,
     scale: float | None = None,
 ) -> np.ndarray:
-    """Which loads' runs have settled (:data:`DRIFT_SHARE`), a boolean per load.
+    """Which loads' runs have settled (:func:`~bouncedisk.analysis.settling.drifting`), a
+    boolean per load.
 
     ``speed`` and ``drift`` are ``(members, loads)``: each member's mean speed over the window
     and its second half's mean speed less its first half's. A load has settled when the members'
@@ -91,17 +87,11 @@ def settled_loads(
             past = (np.asarray(loads) > bound) | ((np.asarray(loads) >= bound) & (_mean(speed) < 0))
     if drift is None:
         return ~past
-    drift = np.atleast_2d(np.asarray(drift, float))
-    d = _mean(drift)
-    finite = np.isfinite(drift)
-    k = finite.sum(axis=0)
-    dev = np.where(finite, drift - np.nan_to_num(d), 0.0)
-    se = np.sqrt((dev**2).sum(axis=0) / np.maximum(k - 1, 1) / np.maximum(k, 1))
+    from ..analysis.settling import drifting
+
     if scale is None:
         scale = speed_scale(loads, speed, bound)
-    with np.errstate(invalid="ignore"):
-        moving = (np.abs(d) > DRIFT_SHARE * scale) & (np.abs(d) > 3.0 * se)
-    return ~moving & ~past
+    return ~drifting(drift, scale) & ~past
 
 
 def speed_scale(loads: np.ndarray, speed: np.ndarray, bound: float | None = None) -> float:

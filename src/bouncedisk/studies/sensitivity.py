@@ -203,7 +203,7 @@ class MotorModel:
 
 def _first_run(cfg, init, member: int, t_from: float) -> tuple:
     """One member's run from rest at the curve's first load
-    (:func:`bouncedisk.studies.torque_speed.run_settled`: its statistics, final state and
+    (:func:`bouncedisk.analysis.settling.run_settled`: its statistics, final state and
     drift), with its ``(t, Ω)`` samples on the scene's trajectory grid, the run-up
     (docs/model.md "The motor under load": at ``τ_L = 0`` the load effect changes nothing).
 
@@ -218,7 +218,7 @@ def _first_run(cfg, init, member: int, t_from: float) -> tuple:
     CappedRun
         The run stopped at its cap on events before the end of its window.
     """
-    from .torque_speed import run_settled
+    from ..analysis.settling import run_settled
 
     samples: list[np.ndarray] = []
     stats, final, drift = run_settled(cfg, init, member, t_from, keep=samples.append)

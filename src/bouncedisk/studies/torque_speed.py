@@ -22,7 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..analysis.ensembles import CappedRun, MemberStats, run_member
+from ..analysis.ensembles import CappedRun, MemberStats
+from ..analysis.settling import run_settled
 from ..analysis.statistics import (
     EnsembleStats,
     capped_error,
@@ -284,45 +285,6 @@ def member_sweep(
         out[branch] = [got[k][0] for k in range(len(loads))]
         out["drift"][branch] = [got[k][1] for k in range(len(loads))]
     return out
-
-
-def run_settled(
-    cfg: EngineConfig,
-    init: InitialState,
-    member: int,
-    t_from: float,
-    should_stop: Callable[[], bool] | None = None,
-    keep: Callable[[np.ndarray], None] | None = None,
-) -> tuple[MemberStats, dict, float]:
-    """:func:`~bouncedisk.analysis.ensembles.run_member` with the rotor speed sampled
-    :data:`~bouncedisk.studies.load_summary.SETTLE_SAMPLES` times over ``[t_from, t_end]``
-    (``cfg.traj_dt`` where that is finer), returning its statistics, final state and drift:
-    the second half's mean sampled speed less the first half's. ``keep`` receives every chunk's
-    ``(t, Ω)`` samples."""
-    from ..io.records import TrajColumn
-    from .load_summary import SETTLE_SAMPLES
-
-    step = (cfg.t_end - t_from) / SETTLE_SAMPLES
-    if keep is None:
-        cfg = dataclasses.replace(cfg, traj_t0=t_from, traj_t1=math.inf)
-    elif cfg.traj_dt > 0.0:
-        step = cfg.traj_dt  # the caller's grid
-    samples: list[np.ndarray] = []
-
-    def take(c) -> None:
-        tw = np.array(c.traj[:, [TrajColumn.T, TrajColumn.OMEGA]])
-        samples.append(tw)
-        if keep is not None:
-            keep(tw)
-
-    run = dataclasses.replace(cfg, traj_dt=step)
-    stats, final, _tail = run_member(run, init, member, t_from, should_stop, on_chunk=take)
-    tw = np.concatenate(samples) if samples else np.empty((0, 2))
-    mid = 0.5 * (t_from + cfg.t_end)
-    first = tw[(tw[:, 0] >= t_from) & (tw[:, 0] < mid), 1]
-    second = tw[tw[:, 0] >= mid, 1]
-    drift = float(second.mean() - first.mean()) if first.size and second.size else math.nan
-    return stats, final, drift
 
 
 def torque_speed(
