@@ -327,6 +327,8 @@ FULL = "impacts, contact, torsion, restitution_noise, load"
         (", load_torque: -0.2", FULL, "parameters.load_torque"),
         (", load_torque: .nan", FULL, "parameters.load_torque"),
         (", load_torque: heavy", FULL, "parameters.load_torque"),
+        # past the bound torque-speed's loads keep (a hundred times tau_L = 1): overflow, not data
+        (", load_torque: 1.0e+6", FULL, "parameters.load_torque: must be in [0, 100] friction"),
         ("", FULL, "parameters.load_torque"),
         (", load_torque: 0.2", "impacts, contact, torsion, restitution_noise", "load_torque"),
         (", load_torque: 0.2", "impacts, contact, restitution_noise, load", "effects.load"),

@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass, fields
 
 from ..engine.bounds import MAX_PSI, check_omega_s
 from .errors import InputError, plain
-from .limits import E_SIGMA
+from .limits import E_SIGMA, MAX_LOAD
 
 #: Restitution noise that samples the natural measure (docs/model.md "Long-run statistics of
 #: chaotic motion"), for ensembles whose scene states none: physically meaningless, a periodic
@@ -167,9 +167,12 @@ class Parameters:
                 source, f"{prefix}.inertia_ratio", f"must be > 0, got {self.inertia_ratio}"
             )
         E_SIGMA.check(source, f"{prefix}.e_sigma", self.e_sigma)
-        if not self.load_torque >= 0.0:
+        if not 0.0 <= self.load_torque <= MAX_LOAD:
             raise InputError(
-                source, f"{prefix}.load_torque", f"must be >= 0, got {self.load_torque}"
+                source,
+                f"{prefix}.load_torque",
+                f"must be in [0, {MAX_LOAD:g}] friction torques (a hundred times the momentum "
+                f"bound tau_L = 1), got {plain(self.load_torque)}",
             )
         if not self.mu_ratio >= 1.0:
             raise InputError(source, f"{prefix}.mu_ratio", f"must be >= 1, got {self.mu_ratio}")

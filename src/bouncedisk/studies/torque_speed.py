@@ -33,6 +33,7 @@ from ..analysis.statistics import (
 from ..engine import EngineConfig, InitialState
 from ..model.engine_config import engine_config
 from ..model.errors import InputError
+from ..model.limits import MAX_LOAD
 from ..model.scene import Scene
 from ..run.cores import map_on_threads
 from .load_summary import (  # first_zero and peak: the summary's API, also from here
@@ -55,10 +56,6 @@ BRANCHES = ("up", "down")
 MATERIAL = 1e-3
 #: Largest number of loads one curve may ask for.
 MAX_LOADS = 1000
-#: Largest load torque ``τ_L`` of a curve: a hundred times the momentum bound ``τ_L = 1``
-#: (docs/model.md "The motor under load"), far past the stall; larger loads only drive the
-#: rotor backwards towards overflow.
-MAX_LOAD = 100.0
 #: Loads of a curve when none are given: from no load to the momentum bound ``τ_L = 1``, in
 #: nondimensional units whether the scene is physical or not.
 DEFAULT_LOADS = "0:1:11"
