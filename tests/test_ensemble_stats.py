@@ -373,3 +373,16 @@ def test_a_cycle_locked_to_the_stator_is_settled_whatever_its_ripple(monkeypatch
     aliased = run_stats(scene).summary()
     assert aliased["settled"] == 0 and abs(aliased["drift"]) > 0.02 * aliased["mean_omega"]
     assert aliased["mean_omega"] == s["mean_omega"]  # the sampling changes no statistic
+
+
+def test_a_rotor_in_flight_through_the_window_is_unresolved_and_one_at_rest_is_rest():
+    """No event in the window is "rest" only with the rotor on the stator: at omega_s = 1000 the
+    rotor's first flight outlasts the window (the helper's "rest" for a rotor in the air), at
+    omega_s = 0.8 (Γ < 1) it never leaves the stator."""
+    scene = "workflow/config/scenes/stats_e03.yaml"
+    window = ["stop.time=1500", "stats.discard=300", "ensemble.members=2"]
+    flight = run_stats(load_scene(scene, [*window, "parameters.omega_s=1000"])).summary()
+    rest = run_stats(load_scene(scene, [*window, "parameters.omega_s=0.8"])).summary()
+    assert flight["impact_rate"] == rest["impact_rate"] == 0.0
+    assert flight["regime"] == "unresolved" and rest["regime"] == "rest"
+    assert flight["audit_residual_axial"] < 1e-12  # round-off of the energies, not 1

@@ -209,6 +209,23 @@ def test_audit_catches_a_wrong_term():
     assert ax > 1e-8 and tor > 1e-8
 
 
+def test_a_window_of_free_flight_audits_to_round_off_not_to_one():
+    """omega_s = 1000 launches the rotor on a flight of about 2000 time units: the window
+    300-1500 holds no impact, no work and no loss, and its energy change is the round-off of
+    two energies near 5e5. Measured against the largest term alone (that round-off), the
+    residual read 1; against the energies too, round-off. A planted error of 1e-6 in the change
+    still shows."""
+    res = simulate_arrays(_cfg(e=0.6, omega_s=1000.0, t_end=1500.0, stats_from=300.0))
+    assert res.ok and not res.final["in_contact"] and len(res.events["t"]) <= 1  # in flight
+    terms = dict(res.final["audit"])
+    assert terms["work_axial"] == terms["loss_axial"] == 0.0
+    assert terms["energy_axial_level"] == pytest.approx(0.5 * 1000.0**2 * 1.0, rel=0.5)
+    ax, tor = audit_balances(terms)
+    assert ax <= 1e-12 and tor == 0.0, (ax, terms)
+    terms["energy_axial_change"] += 1e-6 * terms["energy_axial_level"]
+    assert audit_balances(terms)[0] == pytest.approx(1e-6, rel=1e-3)
+
+
 def test_audit_window_starts_inside_a_segment():
     """An audit from t = 1234.5 (inside some flight or contact) closes as well as from 0."""
     res = simulate_arrays(_cfg(e=0.6, psi=0.0, t_end=20000.0, stats_from=1234.5, load_torque=0.2))

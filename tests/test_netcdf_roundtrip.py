@@ -29,7 +29,7 @@ names = st.from_regex(r"[a-z][a-z0-9_]{0,11}", fullmatch=True)
 def test_write_dataset_round_trips(tmp_path_factory, data, ints, attr):
     d = tmp_path_factory.mktemp("rt")
     ds = xr.Dataset({k: (f"dim_{k}", v) for k, v in data.items()})
-    ds["counts"] = ("n", ints)
+    ds["counts"] = ("N", ints)  # a dimension no generated (lower-case) variable name can be
     ds.attrs["value"] = attr
     path = d / "x.nc"
     write_dataset(ds, path)

@@ -336,6 +336,7 @@ class _Reducer:
             lam,
             self.n_chatter,
             e_sigma=self._noise[1],
+            in_contact=bool(final["in_contact"]),
         )
         if reg.name == "chattering-periodic":
             lam = -math.inf

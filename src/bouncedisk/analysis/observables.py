@@ -554,6 +554,7 @@ def classify(
     chatters: int | None = None,
     max_period: int = 32,
     e_sigma: float = 0.0,
+    in_contact: bool = True,
 ) -> Regime:
     """Classify the tail of a run (docs/model.md "Regimes").
 
@@ -568,17 +569,21 @@ def classify(
         reinjection may fall outside the tail); default: those in the tail.
     e_sigma : float
         The run's restitution noise: a cycle repeats within :func:`cycle_tolerance`.
+    in_contact : bool
+        Whether the run ended with the rotor on the stator: a tail without events is ``rest``
+        only then; a rotor in flight through the whole tail (a flight longer than the window)
+        is ``unresolved``.
 
     Returns
     -------
     Regime
-        ``rest`` (no event), ``periodic`` (``p`` impacts every ``q`` periods, no chatter in the
+        ``rest`` (no event, the rotor on the stator), ``periodic`` (``p`` impacts every ``q`` periods, no chatter in the
         tail), ``chattering-periodic`` (one chatter-to-chatter cycle repeating),
         ``chaotic-reinjection`` (chatters, no repeating cycle), ``chaotic`` (positive exponent),
         else ``unresolved``.
     """
     if len(t) == 0:
-        return Regime("rest")
+        return Regime("rest" if in_contact else "unresolved")
     tol = cycle_tolerance(e_sigma)
     in_tail = bool(np.any(kind == KIND_CHATTER))
     if in_tail:

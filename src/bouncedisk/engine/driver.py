@@ -419,15 +419,19 @@ def _audit_terms(cfg: EngineConfig, st: np.ndarray, ist: np.ndarray, in_contact:
         u, v = st[K.S_U], st[K.S_V]
     started = bool(ist[K.I_AUD_STARTED])
     axial = not cfg.clipped
+    e0, e1 = (float(st[K.S_AUD_E0]), 0.5 * v * v + u) if started and axial else (0.0, 0.0)
+    k0, k1 = (float(st[K.S_AUD_K0]), 0.5 * st[K.S_OMEGA] ** 2) if started else (0.0, 0.0)
     return {
         "work_axial": float(st[K.S_AUD_WAX]) if axial else math.nan,
         "loss_axial": float(st[K.S_AUD_DAX]) if axial else math.nan,
         "chatter_axial": float(st[K.S_AUD_CAX]) if axial else math.nan,
-        "energy_axial_change": (0.5 * v * v + u - st[K.S_AUD_E0]) if started and axial else 0.0,
+        "energy_axial_change": e1 - e0,
+        "energy_axial_level": max(abs(e0), abs(e1)),
         "work_torsion": float(st[K.S_AUD_WT]),
         "loss_friction": float(st[K.S_AUD_DF]),
         "work_load": cfg.load_torque * float(st[K.S_OMEGA_INTEGRAL]),
-        "energy_torsion_change": (0.5 * st[K.S_OMEGA] ** 2 - st[K.S_AUD_K0] if started else 0.0),
+        "energy_torsion_change": k1 - k0,
+        "energy_torsion_level": max(k0, k1),
     }
 
 
@@ -435,20 +439,35 @@ def audit_balances(terms: dict) -> tuple[float, float]:
     """Relative residuals of the two energy balances (docs/model.md "Power and energy audit").
 
     Axial ``W_ax = ΔE_ax + D_ax (+ C_ax)``, torsional ``W_t = Δ(Ω²/2) + D_f + W_L``, each
-    residual divided by the largest of its terms (0 when every term is 0). ``C_ax`` is the
-    axial energy left to summed chattering tails, reported apart (``terms["chatter_axial"]``).
-    The axial residual is ``nan`` for the clipped model (no axial balance).
+    residual divided by the largest of its terms and of the energies at the window's ends
+    (``energy_*_level``: the change is their difference, rounded at their size; a window with
+    no work, a rotor in free flight, then reads round-off, not 1), and 0 when all are 0.
+    ``C_ax`` is the axial energy left to summed chattering tails, reported apart
+    (``terms["chatter_axial"]``). The axial residual is ``nan`` for the clipped model (no axial
+    balance).
     """
 
-    def rel(lhs: float, *rhs: float) -> float:
+    def rel(level: float, lhs: float, *rhs: float) -> float:
         if math.isnan(lhs) or any(math.isnan(x) for x in rhs):
             return math.nan
-        scale = max(abs(lhs), *(abs(x) for x in rhs))
+        scale = max(level, abs(lhs), *(abs(x) for x in rhs))
         return abs(lhs - sum(rhs)) / scale if scale > 0.0 else 0.0
 
     t = terms
-    ax = rel(t["work_axial"], t["energy_axial_change"], t["loss_axial"], t["chatter_axial"])
-    tor = rel(t["work_torsion"], t["energy_torsion_change"], t["loss_friction"], t["work_load"])
+    ax = rel(
+        t["energy_axial_level"],
+        t["work_axial"],
+        t["energy_axial_change"],
+        t["loss_axial"],
+        t["chatter_axial"],
+    )
+    tor = rel(
+        t["energy_torsion_level"],
+        t["work_torsion"],
+        t["energy_torsion_change"],
+        t["loss_friction"],
+        t["work_load"],
+    )
     return ax, tor
 
 
