@@ -114,3 +114,29 @@ def test_torque_speed_keeps_the_effects_a_set_option_gave(scene_file, capsys):
     assert main(args) == 0
     out, err = capsys.readouterr()
     assert err == "" and '"loads": [0.0, 0.5]' in out
+
+
+PHYSICAL = """name: phys
+physical: {m_r: 0.01, r_g: 0.004, r_c: 0.002, mu: 0.3, e: 0.6, g: 9.81, f: 20000.0, U0: 1.0e-6,
+           Phi0: 2.0e-4, psi: 0.0, e_sigma: 1.0e-9}
+effects: [impacts, contact, torsion, restitution_noise]
+stop: {time: 1500}
+stats: {discard: 300.0}
+"""
+
+
+def test_a_physical_unit_typo_is_told_by_what_the_rotor_did(scene_file):
+    """A drive typed in kHz (f: 20) leaves the stator's acceleration below g: the rotor rests,
+    and the warning gives the acceleration and the units to check. An amplitude typed in metres
+    (U0: 1) launches flights longer than the window: the unresolved warning says so. A right
+    physical scene at rest, or unresolved with short flights, gets neither hint."""
+    f = scene_file(PHYSICAL)
+    (khz,) = window_warnings(load_scene(f, ["physical.f=20"]), ["rest"])
+    assert khz.startswith(f"bouncedisk: warning: {f}: physical: the stator's peak acceleration")
+    assert "0.0158 m/s^2 is below g_eff = 9.81 m/s^2" in khz and khz.endswith("U0 in m")
+    (metres,) = window_warnings(load_scene(f, ["physical.U0=1.0"]), ["unresolved"])
+    assert "a flight lasts about 2 omega_s = 8.02e+04 time units, longer than the window" in metres
+    right = load_scene(f)
+    assert window_warnings(right, ["rest"]) == []
+    (unresolved,) = window_warnings(right, ["unresolved"])
+    assert "flight" not in unresolved

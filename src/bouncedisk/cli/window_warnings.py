@@ -50,6 +50,15 @@ def window_warnings(scene: Scene, regimes: Iterable[str | None]) -> list[str]:
             f"bouncedisk: warning: {scene.source}: stats.discard: the window shows no period and "
             "no chaos (unresolved): the run may still be in its transient, or its cycle longer "
             "than the window; discard more or run longer (stats.discard, stop.time)"
+            + _long_flight(scene)
+        )
+    if "rest" in seen and scene.physical is not None and scene.params.omega_s < 1.0:
+        p = scene.physical
+        out.append(
+            f"bouncedisk: warning: {scene.source}: physical: the stator's peak acceleration "
+            f"U0 (2 pi f)^2 = {p.U0 * (2.0 * math.pi * p.f) ** 2:.3g} m/s^2 is below g_eff = "
+            f"{p.scales().g_eff:.3g} m/s^2, so the rotor never leaves it (omega_s = "
+            f"{scene.params.omega_s:.3g} < 1); check the units: f in Hz, U0 in m"
         )
     irregular = sorted(seen - SETTLED - {"unresolved"})
     if scene.ensemble.members == 1 and irregular:
@@ -60,6 +69,19 @@ def window_warnings(scene: Scene, regimes: Iterable[str | None]) -> list[str]:
             "restitution_noise"
         )
     return out
+
+
+def _long_flight(scene: Scene) -> str:
+    """A physical scene's hint when one flight outlasts the window: a rotor launched at the
+    stator's peak speed ``omega_s`` flies about ``2 omega_s`` (docs/model.md, units of t_c)."""
+    window = (scene.stop.time or math.inf) - scene.initial.t - scene.stats.discard
+    flight = 2.0 * scene.params.omega_s
+    if scene.physical is None or not flight > window:
+        return ""
+    return (
+        f"; a flight lasts about 2 omega_s = {flight:.3g} time units, longer than the window "
+        f"({window:.3g}): check the units of physical.f (Hz) and physical.U0 (m)"
+    )
 
 
 def _example_discard(scene: Scene) -> float:
