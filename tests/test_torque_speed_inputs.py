@@ -249,6 +249,19 @@ def test_physical_default_loads_are_nondimensional(tmp_path, capsys):
     assert float(last.split()[0]) == pytest.approx(torque, rel=1e-3)
 
 
+def test_a_physical_curve_names_its_unsettled_loads_in_newton_metres(tmp_path, capsys):
+    """The table is in N·m: so is its "not settled" line (it gave nondimensional tau_L)."""
+    scene = _file(tmp_path, PHYSICAL, "p.yaml")
+    torque = with_load(load_scene(scene)).physical.scales().torque
+    args = ["torque-speed", scene, "--set", "stop.time=30", "--set", "stats.discard=5"]
+    assert main([*args, "--set", "ensemble.members=2", "--loads", "0", "--resolution", "0"]) == 0
+    (line,) = [x for x in capsys.readouterr().out.splitlines() if "not settled" in x]
+    assert line == "        not settled: 0 N m (a finite window's mean, not a speed)"
+    assert main([*args, "--loads", f"0,{0.5 * torque!r}", "--json"]) == 0
+    s = _json(capsys)
+    assert s["unsettled_loads_Nm"] == pytest.approx([torque * x for x in s["unsettled_loads"]])
+
+
 def test_pipeline_script_reads_loads_as_the_command():
     """The pipeline's torque_speed script converts its loads with the command's function."""
     script = Path(__file__).resolve().parents[1] / "workflow" / "scripts" / "torque_speed.py"

@@ -55,12 +55,19 @@ def format_curve(summary: dict, physical: bool = False) -> str:
         value = _why_none(name, summary) if v is None else _g(v)
         lines.append(f"{name:>19}: {value}{ci}")
     if summary.get("unsettled_loads"):
-        at = ", ".join(f"{x:.4g}" for x in summary["unsettled_loads"])
-        lines.append(f"{'not settled':>19}: tau_L = {at} (a finite window's mean, not a speed)")
+        at = _loads(summary, "unsettled_loads", physical)
+        lines.append(f"{'not settled':>19}: {at} (a finite window's mean, not a speed)")
     if summary.get("branches_differ_at"):
-        at = ", ".join(f"{x:.4g}" for x in summary["branches_differ_at"])
-        lines.append(f"{'two speeds':>19}: the up and down branches differ at tau_L = {at}")
+        at = _loads(summary, "branches_differ_at", physical)
+        lines.append(f"{'two speeds':>19}: the up and down branches differ at {at}")
     return "\n".join(lines)
+
+
+def _loads(summary: dict, name: str, physical: bool) -> str:
+    """A list of loads in the table's unit: ``tau_L = ...``, or N·m for a physical scene."""
+    if physical:
+        return ", ".join(f"{x:.4g}" for x in summary[f"{name}_Nm"]) + " N m"
+    return "tau_L = " + ", ".join(f"{x:.4g}" for x in summary[name])
 
 
 def _f(x, spec: str) -> str:

@@ -236,6 +236,9 @@ def _physical(out: dict, sc) -> dict:
         suffix = {sc.omega_scale: "_rad_s", sc.torque: "_Nm", sc.torsion_power: "_W"}[unit]
         si[name + suffix] = conv(out[name], unit)
         si[name + suffix + "_ci95"] = conv(out[name + "_ci95"], unit)
+    for name in ("unsettled_loads", "branches_differ_at"):  # loads too, listed
+        if out.get(name):
+            si[name + "_Nm"] = conv(list(out[name]), sc.torque)
     return si
 
 
