@@ -237,6 +237,13 @@ def test_command_writes_the_file_and_the_json(scene_file, tmp_path, capsys):
     assert all(k in ds.attrs for k in REQUIRED_ATTRS)
     assert ds.attrs["history"].startswith(ds.attrs["created"])  # the command line that made it
     assert ds["regime"].attrs["flag_meanings"].split()[1] == "periodic"
+    from bouncedisk.cli.basins import format_basins
+
+    table = format_basins(js).splitlines()  # each attractor's speed with its interval
+    assert table[1].split()[:4] == ["label", "mean", "speed", "95%"]
+    for a, row in zip(js["attractors"], table[2:], strict=False):
+        lo, hi = a["mean_speed_ci95"]
+        assert lo <= a["mean_speed"] <= hi and f"[{lo:.5g}, {hi:.5g}]" in row
 
 
 def test_the_reproduction_check_reads_the_start_up_file_and_can_fail(scene_file, tmp_path):

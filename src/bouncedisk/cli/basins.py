@@ -27,21 +27,23 @@ def format_basins(summary: dict) -> str:
     lines = [
         f"{summary['starts']} starts, averaged over [{lo:g}, {hi:g}] time units after switch-on "
         f"({again})",
-        f"{'label':>5} {'mean speed':>12} {'regime':>22} {'starts':>7} {'fraction':>9} "
-        f"{'95% CI (Wilson)':>18}",
+        f"{'label':>5} {'mean speed':>12} {'95% CI':>21} {'regime':>22} {'starts':>7} "
+        f"{'fraction':>9} {'95% CI (Wilson)':>18}",
     ]
     for a in summary["attractors"]:
         period = a["period"]
         regime = a["regime"] + (f" {period[0]}/{period[1]}" if period else "")
         f_lo, f_hi = a["fraction_ci95"]
+        s_lo, s_hi = a["mean_speed_ci95"]
+        speed_ci = "n/a" if s_lo is None or s_hi is None else f"[{s_lo:.5g}, {s_hi:.5g}]"
         lines.append(
-            f"{a['label']:>5} {a['mean_speed']:>12.6g} {regime:>22} {a['starts']:>7} "
-            f"{a['fraction']:>9.3f} {f'[{f_lo:.3f}, {f_hi:.3f}]':>18}"
+            f"{a['label']:>5} {a['mean_speed']:>12.6g} {speed_ci:>21} {regime:>22} "
+            f"{a['starts']:>7} {a['fraction']:>9.3f} {f'[{f_lo:.3f}, {f_hi:.3f}]':>18}"
         )
     u = summary["unsettled"]
     f_lo, f_hi = u["fraction_ci95"]
     lines.append(
-        f"{-1:>5} {'not settled':>12} {'':>22} {u['starts']:>7} {u['fraction']:>9.3f} "
+        f"{-1:>5} {'not settled':>12} {'':>21} {'':>22} {u['starts']:>7} {u['fraction']:>9.3f} "
         f"{f'[{f_lo:.3f}, {f_hi:.3f}]':>18}"
     )
     lines.append(f"rule: {summary['rule']} (settle = {summary['settle']:g})")
