@@ -158,6 +158,7 @@ def test_table_says_why_a_derived_value_is_missing():
     assert "stall_torque: n/a (below_smallest_load: the mean speed is <= 0 already" in table
     assert "max_power: n/a (at_smallest_load: the power is largest at the smallest load" in table
     assert "speed stays positive" not in table
+    assert table.splitlines()[0].endswith("eff. drive")  # W_L / W_t, a nondimensional scene's
 
 
 @settings(max_examples=20, deadline=None)
@@ -245,6 +246,7 @@ def test_physical_default_loads_are_nondimensional(tmp_path, capsys):
     assert main(args) == 0
     table = capsys.readouterr().out
     assert table.splitlines()[0].split()[:3] == ["load", "(N", "m)"]
+    assert table.splitlines()[0].endswith("eff. motor")  # P_out / (P_ax + P_t), not W_L / W_t
     last = [line for line in table.splitlines() if line.strip()][11]
     assert float(last.split()[0]) == pytest.approx(torque, rel=1e-3)
 

@@ -23,8 +23,8 @@ _COLUMNS = {
     True: ("loads_Nm", "mean_omega_rad_s", "power_out_W", "efficiency"),
 }
 _HEADS = {
-    False: ("load", "mean speed", "power"),
-    True: ("load (N m)", "speed (rad/s)", "power (W)"),
+    False: ("load", "mean speed", "power", "eff. drive"),
+    True: ("load (N m)", "speed (rad/s)", "power (W)", "eff. motor"),
 }
 _DERIVED = {
     False: ("no_load_speed", "stall_torque", "max_power", "max_power_load"),
@@ -35,13 +35,14 @@ _DERIVED = {
 def format_curve(summary: dict, physical: bool = False) -> str:
     """A human-readable table of :meth:`bouncedisk.studies.torque_speed.LoadCurve.summary`.
 
-    A physical scene's table is in SI units (loads in N·m, as typed), else nondimensional; a
-    value that is unknown or not finite is ``n/a``.
+    A physical scene's table is in SI units (loads in N·m, as typed) and its efficiency the
+    motor's, ``P_out / (P_ax + P_t)`` ("eff. motor"), else nondimensional with the friction
+    drive's ``W_L / W_t`` ("eff. drive"); a value that is unknown or not finite is ``n/a``.
     """
     load, speed, power, eff = (summary[k] for k in _COLUMNS[physical])
     ci95 = summary[f"{_COLUMNS[physical][1]}_ci95"]
-    h_load, h_speed, h_power = _HEADS[physical]
-    lines = [f"{h_load:>10} {h_speed:>13} {'95% CI':>25} {h_power:>10} {'efficiency':>10}"]
+    h_load, h_speed, h_power, h_eff = _HEADS[physical]
+    lines = [f"{h_load:>10} {h_speed:>13} {'95% CI':>25} {h_power:>10} {h_eff:>10}"]
     for k in range(len(load)):
         lo, hi = ci95[k]
         ci = "n/a" if lo is None or hi is None else f"[{lo:.5g}, {hi:.5g}]"
