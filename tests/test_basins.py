@@ -211,6 +211,11 @@ def test_a_negative_value_may_follow_its_option_with_a_space(value):
         (["--phases", "4", "--set", "stats.discard=598"], "stats.discard"),
         (["--phases", "4", "--settle", "0"], "--settle"),
         (["--phases", "2", "--set", "stop.max_events=50"], "stop.max_events (from --set"),
+        # the capped start is named by its place in the grid, not as an ensemble's member
+        (
+            ["--phases", "2", "--speeds", "5", "--set", "stop.max_events=50"],
+            "start 0 of the basins (phase 0 rad, speed 5, height 0) stopped at the safety cap",
+        ),
     ],
 )
 def test_bad_input_is_one_line_exit_2_and_no_file(scene_file, tmp_path, capsys, args, field):

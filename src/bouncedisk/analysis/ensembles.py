@@ -381,15 +381,19 @@ class CappedRun(EngineError):
     averaging window: its time averages would be over a window the run did not reach."""
 
     def __init__(self, member: int, t_reached: float, t_end: float, max_events: int):
-        super().__init__(
-            f"member {member} stopped at the safety cap of {max_events} events at t = "
-            f"{t_reached:.6g}, before the end of its averaging window (t = {t_end:.6g})",
-            ST_EVENTS,
-        )
         self.member = member
         self.t_reached = t_reached
         self.t_end = t_end
         self.max_events = max_events
+        super().__init__(self.said(), ST_EVENTS)
+
+    def said(self, who: str | None = None) -> str:
+        """The message, naming the run as ``who`` (a basin map's start, say), else its member."""
+        return (
+            f"{who or f'member {self.member}'} stopped at the safety cap of {self.max_events} "
+            f"events at t = {self.t_reached:.6g}, before the end of its averaging window "
+            f"(t = {self.t_end:.6g})"
+        )
 
 
 def run_member(

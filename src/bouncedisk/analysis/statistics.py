@@ -252,14 +252,17 @@ def ensemble_window(scene: Scene) -> tuple[float, float]:
     return t_from, t_end
 
 
-def capped_error(scene: Scene, ex: CappedRun, where: str = "") -> InputError:
+def capped_error(
+    scene: Scene, ex: CappedRun, where: str = "", who: str | None = None
+) -> InputError:
     """The one-line error for a member that stopped at ``stop.max_events`` before the end of its
-    averaging window: a statistic over a window the run did not reach is no number."""
+    averaging window: a statistic over a window the run did not reach is no number. ``who``
+    names the run (:meth:`CappedRun.said`)."""
     return InputError(
         scene.source,
         "stop.max_events",
-        f"{ex}{where}: no average over a window the run did not reach; raise stop.max_events "
-        "or shorten stop.time",
+        f"{ex.said(who)}{where}: no average over a window the run did not reach; raise "
+        "stop.max_events or shorten stop.time",
     )
 
 

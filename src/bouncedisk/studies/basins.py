@@ -308,14 +308,19 @@ def _orbit(stats, tail: dict) -> np.ndarray:
     return out
 
 
-def _capped_named(scene: Scene, runs: Iterator) -> Iterator:
+def _capped_named(scene: Scene, grid: StartGrid, runs: Iterator) -> Iterator:
     """``runs``, a start that stops at ``stop.max_events`` before its window ends an input error
-    naming the field (:func:`~bouncedisk.analysis.statistics.capped_error`; "member" is the
-    start's index)."""
+    naming the field and the start: its index, phase, speed and height
+    (:func:`~bouncedisk.analysis.statistics.capped_error`)."""
     try:
         yield from runs
     except CappedRun as ex:
-        raise capped_error(scene, ex, " (a start of the basins)") from None
+        phase, speed, height = (float(a[ex.member]) for a in grid.flat())
+        who = (
+            f"start {ex.member} of the basins (phase {phase:.4g} rad, speed {speed:.4g}, "
+            f"height {height:.4g})"
+        )
+        raise capped_error(scene, ex, who=who) from None
 
 
 class _StartValues:
@@ -454,7 +459,7 @@ def run_starts(
     pool = ThreadPoolExecutor(max_workers=max(1, cores))
     try:
         runs = _capped_named(
-            scene, _ordered_runs(pool, _tasks(scene, grid, index), 4 * max(1, cores))
+            scene, grid, _ordered_runs(pool, _tasks(scene, grid, index), 4 * max(1, cores))
         )
         _, duration = check_scene(scene)
         for j in range(n):
