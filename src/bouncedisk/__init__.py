@@ -47,6 +47,12 @@ PUBLIC = {
     # opening a file
     "open_simulation": "bouncedisk.io.netcdf",
     "open_checked": "bouncedisk.io.netcdf",
+    # the studies of a scene
+    "run_stats": "bouncedisk.analysis.statistics",
+    "poincare_dataset": "bouncedisk.analysis.poincare",
+    "torque_speed": "bouncedisk.studies.torque_speed",
+    "basins": "bouncedisk.studies.basins",
+    "start_grid": "bouncedisk.studies.basins",
 }
 
 __all__ = ["__version__", *PUBLIC]
@@ -58,7 +64,7 @@ def __getattr__(name: str):
     if module is None:
         raise AttributeError(f"module 'bouncedisk' has no attribute {name!r}")
     mod = import_module(module)
-    value = mod if module.endswith("." + name) else getattr(mod, name)
+    value = getattr(mod, name, mod)  # the module itself where it defines no such name (engine)
     globals()[name] = value
     return value
 

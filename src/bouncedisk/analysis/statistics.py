@@ -21,8 +21,8 @@ from ..io.provenance import base_attrs, new_run_id
 from ..model.engine_config import engine_config
 from ..model.errors import InputError
 from ..model.params import Scales
-from ..model.scene import Scene, time_unit_note
-from ..run.cores import map_on_threads
+from ..model.scene import Scene, require_scene, time_unit_note
+from ..run.cores import checked_cores, map_on_threads
 from ..run.runner import scene_attrs
 from . import observables as ob
 from .ensembles import CappedRun, MemberStats
@@ -88,7 +88,14 @@ def t_quantile(dof: int, level: float = LEVEL) -> float:
     docs/model.md "Long-run statistics of chaotic motion". This is ``scipy.stats.t.ppf``'s own
     formula, bit for bit, without the import of ``scipy.stats``, which would weigh on every
     pipeline job that reads an ensemble.
+
+    Raises
+    ------
+    InputError
+        ``level`` not a fraction in (0, 1) (``95`` for 95 % read as nothing, ``nan``, before).
     """
+    if not 0.0 < level < 1.0:
+        raise InputError("<arguments>", "level", f"must be a fraction in (0, 1), got {level!r}")
     return float(stdtrit(dof, 0.5 + level / 2.0))
 
 
@@ -280,6 +287,8 @@ def run_stats(
         When the scene does not stop on time, is not the exact bouncing model, or a member
         stops at ``stop.max_events`` before ``stop.time`` (:func:`capped_error`).
     """
+    scene = require_scene(scene)
+    cores = checked_cores(cores)
     t_from, t_end = ensemble_window(scene)
     if scene.solver.method != "exact" or scene.model != "bouncing":
         raise InputError(

@@ -130,6 +130,12 @@ def flight_length(u: float, v: float) -> float:
     return 2.0 * math.sqrt(v * v + 2.0 * max(u + 1.0, 0.0))
 
 
+#: How far below the stator's surface (units of U0) a start in flight may be: a millionth of the
+#: stator's amplitude, a start on the surface given to a few digits (it lands at once); a start
+#: inside the stator is a mistake.
+SURFACE_TOLERANCE = 1e-6
+
+
 def check_state(
     source: str,
     prefix: str,
@@ -138,7 +144,9 @@ def check_state(
 ) -> None:
     """A state ``(t, omega, u, v)`` (``u, v`` ``None`` for a start in contact) the engine can
     run at ``omega_s = w``: every value finite, ``|t|`` within the phase bound, ``|Ω|``, ``|u|``,
-    ``|v|`` within :data:`MAX_SPEED`, and the flight the rotor's energy allows within it.
+    ``|v|`` within :data:`MAX_SPEED`, a start in flight given both ``u`` and ``v`` with the rotor
+    on or above the stator (``u >= u_s(t) = sin(w t)`` to :data:`SURFACE_TOLERANCE`, eq. 1), and
+    the flight the rotor's energy allows within the phase bound.
 
     ``prefix`` leads the field names (``initial.`` in a scene, empty for the API).
     """
@@ -147,10 +155,16 @@ def check_state(
     finite(source, f"{prefix}omega", omega, MAX_SPEED)
     if u is None and v is None:
         return
-    u = u if u is not None else 0.0
-    v = v if v is not None else 0.0
+    if u is None or v is None:
+        name = "u" if u is None else "v"
+        raise InputError(source, f"{prefix}{name}", "give both u and v to start in flight")
     finite(source, f"{prefix}u", u, MAX_SPEED)
     finite(source, f"{prefix}v", v, MAX_SPEED)
+    us = math.sin(w * t)
+    if u < us - SURFACE_TOLERANCE:
+        raise InputError(
+            source, f"{prefix}u", f"must be >= u_s(t) = {us:.12g} (rotor above the stator)"
+        )
     tau = flight_length(u, v)
     if w * tau > PHASE_MAX:
         half = PHASE_MAX / (2.0 * w)  # the largest sqrt(v**2 + 2(u + 1))

@@ -8,6 +8,7 @@ chunks; :func:`simulate_arrays` collects a whole run in memory.
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Callable, Generator, Iterator
 from dataclasses import dataclass, field
 from typing import Generic, TypeVar
@@ -16,6 +17,7 @@ import numpy as np
 
 from . import kernel as K
 from .bounds import MAX_SPEED, check_config, check_run, finite
+from .errors import InputError
 from .layout import OK_STATUSES, STATUS_TEXT
 
 Y = TypeVar("Y")
@@ -366,7 +368,12 @@ def iterate_views(
     chunk_samples: int = 1 << 16,
 ) -> Iterator[ChunkView]:
     """:func:`iterate` without copies: one :class:`ChunkView` per kernel call, valid until the
-    next. The generator's return value is ``(status_code, final_state)``."""
+    next. The generator's return value is ``(status_code, final_state)``. ``chunk_events`` and
+    ``chunk_samples`` must be whole numbers >= 1 (a buffer of none never fills: no call would
+    end)."""
+    for name, n in (("chunk_events", chunk_events), ("chunk_samples", chunk_samples)):
+        if isinstance(n, bool) or not isinstance(n, numbers.Integral) or n < 1:
+            raise InputError("iterate", name, f"must be a whole number >= 1, got {n!r}")
     # the kernel's event columns are the rows of one block; a view shows them as columns
     block = np.empty((K.EV_COLS, chunk_events))
     buffers = (tuple(block), np.empty(chunk_events, dtype=np.int8))

@@ -10,7 +10,10 @@ amplitude ratio, ``psi`` torsional phase. Physical: ``t_c = sqrt(U0 / g_eff)`` w
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import asdict, dataclass, fields
+
+import numpy as np
 
 from ..engine.bounds import MAX_PSI, check_omega_s
 from .errors import InputError, plain
@@ -28,7 +31,8 @@ def number(
     """The one number validator: a finite float from a YAML number or any text ``float()`` reads.
 
     Accepts ``1e-6``, ``1E300``, ``-2.5e+3`` and ``1_000.5`` whether YAML gave a number or a
-    string; refuses booleans, other text, NaN and infinities.
+    string, and any real number Python code passes (numpy's scalars and 0-d arrays included);
+    refuses booleans, other text, NaN and infinities.
 
     Parameters
     ----------
@@ -44,12 +48,13 @@ def number(
     InputError
         Naming ``source`` and ``name``.
     """
+    value = _scalar(value)
     if isinstance(value, str):
         try:
             x = float(value.strip())
         except ValueError:
             raise InputError(source, name, f"must be a number, got {plain(value)}") from None
-    elif isinstance(value, bool) or not isinstance(value, int | float):
+    elif isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
         raise InputError(source, name, f"must be a number, got {plain(value)}")
     else:
         try:
@@ -65,6 +70,13 @@ def number(
     return x
 
 
+def _scalar(value: object) -> object:
+    """A numpy 0-d array as its one value (what ``np.array(0.4)`` means); anything else as is."""
+    if isinstance(value, np.ndarray) and value.shape == ():
+        return value.item()
+    return value
+
+
 def whole_number(source: str, name: str, value: object, *, minimum: int = 1) -> int:
     """A whole number ``>= minimum`` (``3``, ``3.0``, ``"1e3"``; not ``2.5`` or ``true``).
 
@@ -73,10 +85,13 @@ def whole_number(source: str, name: str, value: object, *, minimum: int = 1) -> 
     InputError
         Naming ``source`` and ``name``.
     """
+    value = _scalar(value)
     if isinstance(value, str):
         value = number(source, name, value)
-    if isinstance(value, float) and value.is_integer():
+    if isinstance(value, numbers.Integral) and not isinstance(value, bool | np.bool_):
         value = int(value)
+    elif isinstance(value, numbers.Real) and not isinstance(value, bool | np.bool_):
+        value = int(value) if math.isfinite(value) and float(value).is_integer() else value
     if isinstance(value, bool) or not isinstance(value, int):
         raise InputError(source, name, f"must be a whole number, got {plain(value)}")
     if value < minimum:

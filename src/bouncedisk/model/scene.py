@@ -11,6 +11,7 @@ import hashlib
 import json
 import math
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -19,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 import yaml
 
 from ..engine.bounds import MAX_EVENTS, check_state, check_time
-from . import stator, yamlio
+from . import yamlio
 from .errors import InputError
 from .params import Parameters, PhysicalParameters, Scales, number, whole_number
 
@@ -310,6 +311,14 @@ def scene_from_mapping(raw: dict, source: str = "<scene>") -> Scene:
         Naming ``source`` and the dotted field at fault.
     """
     src = source
+    if not isinstance(raw, Mapping):
+        how = "load_scene(path) reads a scene file" if isinstance(raw, str | Path) else ""
+        raise InputError(
+            src,
+            "",
+            f"a scene must be a mapping (a dict of its sections), got {type(raw).__name__}"
+            + (f"; {how}" if how else ""),
+        )
     for k in raw:
         if k not in TOP_KEYS:
             raise InputError(src, str(k), f"unknown key (known: {', '.join(TOP_KEYS)})")
@@ -423,19 +432,9 @@ def _initial(src: str, v: Any, params: Parameters) -> InitialState:
     om0 = number(src, "initial.omega", im.get("omega", 0.0))
     u0 = im.get("u")
     v0 = im.get("v")
-    if (u0 is None) != (v0 is None):
-        raise InputError(
-            src, "initial.u" if u0 is None else "initial.v", "give both u and v to start in flight"
-        )
-    if u0 is not None:
-        u0 = number(src, "initial.u", u0)
-        v0 = number(src, "initial.v", v0)
-        us = stator.position(params.omega_s * t0)
-        if u0 < us - 1e-12:
-            raise InputError(
-                src, "initial.u", f"must be >= u_s(t) = {us:.12g} (rotor above the stator)"
-            )
-    check_state(src, "initial.", params.omega_s, (t0, om0, u0, v0))
+    u0 = None if u0 is None else number(src, "initial.u", u0)
+    v0 = None if v0 is None else number(src, "initial.v", v0)
+    check_state(src, "initial.", params.omega_s, (t0, om0, u0, v0))  # in flight: above the stator
     return InitialState(t=t0, omega=om0, u=u0, v=v0)
 
 
@@ -620,6 +619,23 @@ def time_unit_note(physical: PhysicalParameters | None) -> str:
     return f" (a scene's times are in units of t_c = {physical.scales().t_c:.4g} s, not seconds)"
 
 
+def require_scene(scene: object, what: str = "scene") -> Scene:
+    """``scene`` if it is a :class:`Scene`, else one :class:`InputError` that says how to make
+    one: the public functions that run a scene take the validated object, not its file or
+    mapping."""
+    if isinstance(scene, Scene):
+        return scene
+    if isinstance(scene, str | Path):
+        how = "load_scene(path)"
+    elif isinstance(scene, Mapping):
+        how = "scene_from_mapping(mapping)"
+    else:
+        how = "load_scene(path) or scene_from_mapping(mapping)"
+    raise InputError(
+        "<arguments>", what, f"must be a Scene, got {type(scene).__name__}: make one with {how}"
+    )
+
+
 def load_scene(path: str | Path, overrides: list[str] | str | None = None) -> Scene:
     """Read, override and validate a scene file.
 
@@ -632,6 +648,11 @@ def load_scene(path: str | Path, overrides: list[str] | str | None = None) -> Sc
         Naming the file and the field at fault; a field that a ``--set`` option gave (or a
         field inside it) also names the option: ``parameters.e (from --set parameters.e)``.
     """
+    if not isinstance(path, str | Path):
+        how = "; scene_from_mapping(mapping) takes a dict" if isinstance(path, Mapping) else ""
+        raise InputError(
+            "<arguments>", "path", f"must be a file's path, got {type(path).__name__}{how}"
+        )
     raw = read_yaml(path)
     overrides = override_items(overrides)
     if not overrides:

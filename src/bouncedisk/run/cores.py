@@ -19,6 +19,14 @@ def available_cores() -> int:
         return os.cpu_count() or 1
 
 
+def checked_cores(cores: object, field: str = "cores") -> int:
+    """A public function's ``cores``: a whole number >= 1, else one
+    :class:`~bouncedisk.model.errors.InputError` naming the argument."""
+    from ..model.params import whole_number
+
+    return whole_number("<arguments>", field, cores)
+
+
 def map_on_threads(
     fn: Callable[[T], R],
     items: Iterable[T],

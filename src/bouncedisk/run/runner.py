@@ -25,7 +25,7 @@ from ..io.provenance import base_attrs, new_run_id
 from ..io.records import RunStatus
 from ..model.engine_config import engine_config
 from ..model.errors import InputError
-from ..model.scene import Scene
+from ..model.scene import Scene, require_scene
 
 
 def _chunks(scene: Scene) -> Iterator[Chunk]:
@@ -249,6 +249,7 @@ def run_scene(
     """
     from ..io.output_checks import check_output_path, check_output_size, default_max_output
 
+    scene = require_scene(scene)
     out = check_output_path(out, "out")  # a folder or an unwritable place: before the run
     limit = default_max_output() if max_output_bytes is None else max_output_bytes
     check_output_size(scene, out, limit)
@@ -369,6 +370,7 @@ def _raise_missing_effect(scene: Scene, ex: EngineError) -> None:
 
 def run_scene_arrays(scene: Scene) -> RunResult:
     """Run ``scene`` in memory (analysis, sweeps). Raises like :func:`run_scene`."""
+    scene = require_scene(scene)
     try:
         if scene.solver.method == "exact":
             return simulate_arrays(engine_config(scene), scene.initial)

@@ -68,7 +68,8 @@ from ..io.records import json_number as _num
 from ..model import limits
 from ..model.engine_config import engine_config
 from ..model.errors import InputError
-from ..model.scene import Scene
+from ..model.scene import Scene, require_scene
+from ..run.cores import checked_cores
 from ..run.runner import scene_attrs
 from .shards import join_indexed
 
@@ -721,6 +722,14 @@ def basins(
 ) -> xr.Dataset:
     """Every start of ``grid`` run (its window doubled up to ``extend`` times while it has not
     settled) and grouped (:func:`run_starts`, :func:`group`)."""
+    scene = require_scene(scene)
+    if not isinstance(grid, StartGrid):
+        raise InputError(
+            "<arguments>",
+            "grid",
+            f"must be a StartGrid (start_grid(...)), got {type(grid).__name__}",
+        )
+    cores = checked_cores(cores)
     ds = run_starts(scene, grid, cores=cores, progress=progress, extend=extend, settle=settle)
     return group(ds, settle)
 

@@ -34,8 +34,8 @@ from ..engine import EngineConfig, InitialState
 from ..model.engine_config import engine_config
 from ..model.errors import InputError
 from ..model.limits import MAX_LOAD
-from ..model.scene import Scene
-from ..run.cores import map_on_threads
+from ..model.scene import Scene, require_scene
+from ..run.cores import checked_cores, map_on_threads
 from .load_summary import (  # first_zero and peak: the summary's API, also from here
     BOOTSTRAP_RESAMPLES,
     DERIVED,
@@ -147,6 +147,41 @@ def parse_loads(text: str, source: str = "<arguments>", field: str = "--loads") 
     if len(distinct_new(np.empty(0), loads)) != len(loads):
         raise InputError(source, field, f"repeats a load (within {SAME_LOAD:g}): {text!r}")
     return np.sort(loads)
+
+
+def checked_loads(loads: object, source: str = "<arguments>", field: str = "loads") -> np.ndarray:
+    """A Python call's loads, as :func:`parse_loads` checks the command's: text is parsed as
+    ``--loads``; numbers (a sequence, or one) must each be a finite ``τ_L >= 0``, none repeated,
+    at most :data:`MAX_LOADS` of them, none above :data:`~bouncedisk.model.limits.MAX_LOAD`;
+    returned sorted."""
+    from ..model.params import number
+
+    if isinstance(loads, str):
+        out = parse_loads(loads, source, field)
+    else:
+        try:
+            values = np.ravel(np.asarray(loads, dtype=object))
+        except ValueError:  # ragged nesting
+            raise InputError(source, field, "must be a list of numbers") from None
+        if not 1 <= len(values) <= MAX_LOADS:
+            raise InputError(source, field, f"must hold 1 to {MAX_LOADS} loads, got {len(values)}")
+        out = np.sort([number(source, field, x, nonneg=True) for x in values])
+        if len(distinct_new(np.empty(0), out)) != len(out):
+            raise InputError(source, field, f"repeats a load (within {SAME_LOAD:g})")
+    if not out[-1] <= MAX_LOAD:
+        raise InputError(source, field, f"must be at most tau_L = {MAX_LOAD:g}, got {out[-1]:g}")
+    return out
+
+
+def checked_branches(branches: object, field: str = "branches") -> tuple[str, ...]:
+    """The sweeps a call asks for: one or both of :data:`BRANCHES`, each once (one name or
+    several)."""
+    names = (branches,) if isinstance(branches, str) else tuple(branches)
+    if not names or len(set(names)) != len(names) or any(b not in BRANCHES for b in names):
+        raise InputError(
+            "<arguments>", field, f"must be one or both of {BRANCHES}, each once, got {branches!r}"
+        )
+    return names
 
 
 @dataclass(frozen=True)
@@ -304,8 +339,10 @@ def torque_speed(
     scene : Scene
         With ``torsion``, ``stop.time``, ``stats.discard`` and an ensemble: every load runs
         ``stop.time − initial.t`` and averages after ``discard``.
-    loads : sequence of float
-        Load torques ``τ_L >= 0`` in units of ``μ m_r g_eff r_eff``, increasing.
+    loads : sequence of float, or str
+        Load torques ``τ_L >= 0`` in units of ``μ m_r g_eff r_eff`` (sorted into increasing
+        order), or text as ``--loads`` takes it (``"0:0.9:10"``, ``"0,0.3"``):
+        :func:`checked_loads`.
     cores : int
         Threads the members run on.
     branches : sequence of str
@@ -324,12 +361,15 @@ def torque_speed(
         When the scene has no ``torsion`` effect, does not stop on time, is not the exact
         bouncing model, or a member stops at ``stop.max_events`` before the end of a load's run.
     """
+    scene = require_scene(scene)
+    loads = checked_loads(loads)
+    branches = checked_branches(branches)
+    cores = checked_cores(cores)
     t_from, t_end = ensemble_window(scene)
     if "torsion" not in scene.effects:
         raise InputError(scene.source, "effects", "a load curve needs the 'torsion' effect")
     if scene.solver.method != "exact" or scene.model != "bouncing":
         raise InputError(scene.source, "solver.method", "load curves run the exact bouncing model")
-    loads = np.asarray(loads, dtype=float)
     cfg = engine_config(scene)
     discard = scene.stats.discard
     duration = t_end - scene.initial.t
