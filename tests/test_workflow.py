@@ -448,7 +448,7 @@ def test_one_run_is_final_reruns_only_what_a_scene_change_affects_and_cores_do_n
         time.sleep(0.2)
     p.send_signal(signal.SIGINT)
     p.communicate(timeout=300)
-    run(b, 2, "--rerun-incomplete", items=items)
+    run(b, 2, items=items)  # resumed by the default profile alone (rerun-incomplete)
     assert_identical(data_vars(a), data_vars(b))
 
 
@@ -489,3 +489,12 @@ def test_an_edited_package_reruns_the_fit():
     sources = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "src/bouncedisk").rglob("*.py"))
     assert "fit_prototype" in out and "compile_engine" not in out
     assert [s for s in sources if s not in out] == []
+
+
+def test_snakemake_reads_the_default_profile_by_itself(tmp_path):
+    """profiles/default (resume an interrupted run, the greedy scheduler) is Snakemake's workflow
+    profile only next to the Snakefile: in workflow/profiles/ it was never read."""
+    out = run(tmp_path / "res", 1, "--dry-run")
+    assert "Using workflow specific profile profiles/default" in out, out[:500]
+    profile = yaml.safe_load((ROOT / "profiles" / "default" / "config.yaml").read_text())
+    assert profile["rerun-incomplete"] is True and profile["scheduler"] == "greedy"
