@@ -5,7 +5,7 @@ from pathlib import Path
 from snakemake.utils import min_version, validate
 
 from bouncedisk.io.job_log import exit_with_error
-from bouncedisk.io.schema_check import schema_error
+from bouncedisk.io.schema_check import numbers_from_text, schema_error
 from bouncedisk.model.errors import InputError
 from bouncedisk.studies.sensitivity_settings import study_settings
 
@@ -19,6 +19,7 @@ configfile: "workflow/config/config.yaml"
 CONFIG_SCHEMA = str(Path(workflow.basedir) / "workflow" / "schemas" / "config.schema.yaml")
 
 # the sensitivity study's ranges and sizes, then the schema: one line naming the field, exit 2
+numbers_from_text(config, CONFIG_SCHEMA)  # 1e-9 and --config's nested values: numbers
 try:
     SENSITIVITY = study_settings(config)
 except InputError as _ex:

@@ -18,6 +18,8 @@ from bouncedisk.figures import registry as figure_registry
 
 ROOT = Path(__file__).resolve().parents[1]
 SMALL = ROOT / "tests" / "data" / "config_small.yaml"
+#: Snakemake's own line, before any of the pipeline's: the default profile was read.
+PROFILE_LINE = "Using workflow specific profile"
 #: one worker runs every Snakemake in the project root (pytest-xdist ``--dist loadgroup``)
 pytestmark = [
     pytest.mark.skipif(shutil.which("snakemake") is None, reason="snakemake not found"),
@@ -171,7 +173,7 @@ def test_bad_sensitivity_ranges_or_sizes_are_one_line_exit_2_before_any_job(tmp_
         assert old in SMALL.read_text()
         bad.write_text(SMALL.read_text().replace(old, new, 1))
         p = dry_run(bad, tmp_path / "r")
-        lines = p.stderr.strip().splitlines()
+        lines = [ln for ln in p.stderr.strip().splitlines() if not ln.startswith(PROFILE_LINE)]
         assert p.returncode == 2 and len(lines) == 1, p.stdout[-1000:] + p.stderr[-1000:]
         assert lines[0].startswith("bouncedisk: error: pipeline config: " + field), lines
     assert not (tmp_path / "r").exists()
@@ -281,7 +283,8 @@ def test_a_figure_without_a_batch_or_with_a_bad_batch_name_is_refused_before_any
     table.write_text(good.replace(entry, "regime_map:\n  batch: dyn amics\n"))
     p = dry_run(SMALL, tmp_path / "r", cwd=copy)
     lines = [ln for ln in (p.stdout + p.stderr).splitlines() if "figures.yaml" in ln]
-    assert p.returncode != 0 and len(lines) == 1, p.stdout[-2000:] + p.stderr[-2000:]
+    assert p.returncode == 2 and len(lines) == 1, p.stdout[-2000:] + p.stderr[-2000:]
+    assert "Traceback" not in p.stdout + p.stderr and lines[0].startswith("bouncedisk: error: ")
     assert "regime_map.batch: 'dyn amics'" in lines[0]
     assert not (tmp_path / "r").exists()
 
@@ -301,7 +304,14 @@ def planned_jobs(out: str) -> list[tuple[str, list[str]]]:
 
 #: Figures of the joint fit: drawn only when the config names a load curve (figures.yaml ``needs``);
 #: the small config fits the run-up alone.
-JOINT_FIGURES = {"fit_load", "fit_identifiability"}
+#: The figures that need the prototype's load curve (the joint fit's, and the fitted motor's load
+#: characteristic, whose rotor its sidecar gives): the table's `needs`.
+JOINT_FIGURES = {
+    name
+    for name, entry in yaml.safe_load((ROOT / "workflow/config/figures.yaml").read_text()).items()
+    if entry.get("needs") == "prototype.load_curve"
+}
+assert JOINT_FIGURES == {"fit_load", "fit_identifiability", "torque_speed_prototype"}
 
 
 def test_the_figure_batches_draw_exactly_what_rule_all_wants(tmp_path):
@@ -492,9 +502,29 @@ def test_an_edited_package_reruns_the_fit():
 
 
 def test_snakemake_reads_the_default_profile_by_itself(tmp_path):
-    """profiles/default (resume an interrupted run, the greedy scheduler) is Snakemake's workflow
-    profile only next to the Snakefile: in workflow/profiles/ it was never read."""
+    """profiles/default (resume an interrupted run) is Snakemake's workflow profile only next to
+    the Snakefile: in workflow/profiles/ it was never read."""
     out = run(tmp_path / "res", 1, "--dry-run")
     assert "Using workflow specific profile profiles/default" in out, out[:500]
     profile = yaml.safe_load((ROOT / "profiles" / "default" / "config.yaml").read_text())
-    assert profile["rerun-incomplete"] is True and profile["scheduler"] == "greedy"
+    assert profile["rerun-incomplete"] is True
+
+
+def test_numbers_written_as_text_are_numbers_where_the_schema_wants_one():
+    """``1e-9`` is text to YAML 1.1 (Snakemake's reader) and ``--config`` gives nested values as
+    text: where the schema asks for a number they are read as one, as in a scene file; text that
+    is no number, or a fraction where a whole number is wanted, stays a schema error."""
+    from bouncedisk.io.schema_check import numbers_from_text, schema_error
+
+    schema = ROOT / "workflow" / "schemas" / "config.schema.yaml"
+    cfg = yaml.safe_load(SMALL.read_text())
+    assert isinstance(yaml.safe_load("x: 1e-9")["x"], str)  # the reason
+    cfg["bands"].update(e_sigma="1e-9", members="8")
+    numbers_from_text(cfg, schema)
+    assert cfg["bands"]["e_sigma"] == 1e-9 and cfg["bands"]["members"] == 8
+    assert schema_error(cfg, schema) is None
+    for value, wrong in (("x", "'x' is not of type 'integer'"), ("8.5", "'8.5' is not of type")):
+        cfg["bands"]["members"] = value
+        numbers_from_text(cfg, schema)
+        line = schema_error(cfg, schema)
+        assert line.startswith("bands.members: ") and wrong in line, line

@@ -35,6 +35,6 @@ rule clipped_comparison:
         f"{RES}/benchmarks/clipped_comparison.tsv"
     params:
         psi=config["clipped_comparison"]["psi"],
-        band=config["bands"],
+        band=BAND_SPEC,
     script:
         "../scripts/clipped_comparison.py"

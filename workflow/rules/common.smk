@@ -6,6 +6,13 @@ from bouncedisk.model.scene import load_scene
 from bouncedisk.studies import reproduction_files as _checked
 
 RES = config["results"]
+# How the bands are computed (members, seed, noise), apart from which scenes get one: adding a
+# scene to bands.scenes builds its band and reruns no other.
+BAND_SPEC = {k: v for k, v in config["bands"].items() if k != "scenes"}
+# the prototype's load curve (optional): fitted jointly with the run-up when the config names it,
+# and the rig (rotor, preload) of its fitted motor's load characteristic in SI units
+LOAD_CURVE = config["prototype"].get("load_curve")
+LOAD_INPUTS = [LOAD_CURVE, str(Path(LOAD_CURVE).with_suffix(".yaml"))] if LOAD_CURVE else []
 # who made the files (ACDD creator/institution attributes of every netCDF file): the jobs read
 # them from the environment (bouncedisk.io.provenance.METADATA_ENV); unset keys keep the defaults
 for _key, _value in (config.get("metadata") or {}).items():
@@ -114,8 +121,11 @@ def sweep_shards(wildcards):
 
 
 def all_targets():
-    # FIGURES: the figure table's names (figure_table.smk, workflow/config/figures.yaml)
+    # FIGURES: the figure table's names (figure_table.smk, workflow/config/figures.yaml); the
+    # config's simulations and bands too, whether a figure draws them or not
     figs = expand(f"{RES}/figures/{{fig}}.{{ext}}", fig=FIGURES, ext=["pdf", "png"])
+    figs += expand(f"{RES}/simulations/{{s}}.nc", s=config["simulations"])
+    figs += expand(f"{RES}/bands/{{s}}.nc", s=config["bands"]["scenes"])
     return figs + [
         f"{RES}/reproduction.md",
         f"{RES}/fit/prototype.nc",

@@ -34,7 +34,7 @@ rule omega_band:
     benchmark:
         f"{RES}/benchmarks/bands/{{scene}}.tsv"
     params:
-        spec=config["bands"],
+        spec=BAND_SPEC,
     threads: 1
     script:
         "../scripts/omega_band.py"

@@ -20,7 +20,7 @@ def _read_figure_table():
     with open(Path(workflow.basedir, FIGURE_TABLE_FILE)) as stream:
         table = yaml.safe_load(stream)  # a YAML error's position names the file
     if not isinstance(table, dict):  # validate() checks mappings only
-        raise ValueError(f"{FIGURE_TABLE_FILE}: must be a mapping, figure name -> entry")
+        raise ConfigError(f"{FIGURE_TABLE_FILE}: must be a mapping, figure name -> entry")
     try:
         validate(table, "../schemas/figures.schema.yaml")
     except WorkflowError as ex:
@@ -28,7 +28,7 @@ def _read_figure_table():
         if not hasattr(cause, "absolute_path"):
             raise
         where = ".".join(str(p) for p in cause.absolute_path) or "(top level)"
-        raise ValueError(f"{FIGURE_TABLE_FILE}: {where}: {cause.message}") from None
+        raise ConfigError(f"{FIGURE_TABLE_FILE}: {where}: {cause.message}") from None
     return table
 
 
@@ -42,10 +42,6 @@ def _config_has(dotted):
     return True
 
 
-FIGURE_TABLE = _read_figure_table()
-# what rule `all` draws (results/figures/<name>.pdf and .png), in the table's order; a figure
-# that needs a config key (e.g. the joint fit's, prototype.load_curve) only when it is set
-FIGURES = [n for n, e in FIGURE_TABLE.items() if "needs" not in e or _config_has(e["needs"])]
 # the fields of the table's path templates; those in _LIST_FIELDS give one file per value
 _FIELDS = {"results": RES, "curve": config["prototype"]["curve"]}
 _LIST_FIELDS = {"poincare": list(config["poincare"])}
@@ -58,7 +54,7 @@ def _figure_paths(name):
         used = set(re.findall(r"\{(\w+)\}", template))
         unknown = used - set(_FIELDS) - set(_LIST_FIELDS)
         if unknown:
-            raise ValueError(
+            raise ConfigError(
                 f"{FIGURE_TABLE_FILE}: {name}.inputs.{key}: unknown field(s) {sorted(unknown)} "
                 f"(known: {sorted(_FIELDS) + sorted(_LIST_FIELDS)})"
             )
@@ -75,23 +71,30 @@ def _check_figures():
         where = f"{FIGURE_TABLE_FILE}: {name}"
         spec = PLOTS.get(row["plot"])
         if spec is None:
-            raise ValueError(f"{where}.plot: unknown figure {row['plot']!r} "
+            raise ConfigError(f"{where}.plot: unknown figure {row['plot']!r} "
                              f"(bouncedisk.figures.drawing.FIGURES: {', '.join(sorted(PLOTS))})")
         for part, given, wanted in (("inputs", row.get("inputs", {}), spec.inputs),
                                     ("params", row.get("params", {}), spec.params)):
             if set(given) != set(wanted):
-                raise ValueError(f"{where}.{part}: {row['plot']!r} takes {sorted(wanted)}, "
+                raise ConfigError(f"{where}.{part}: {row['plot']!r} takes {sorted(wanted)}, "
                                  f"the table gives {sorted(given)}")
         for key, mapping in row.get("params", {}).items():
             if not isinstance(config.get(mapping), dict):
-                raise ValueError(f"{where}.params.{key}: no mapping {mapping!r} in the config")
+                raise ConfigError(f"{where}.params.{key}: no mapping {mapping!r} in the config")
         caption = Path(workflow.basedir, "workflow", "report", f"{row['caption']}.rst")
         if not caption.is_file():
-            raise ValueError(f"{where}.caption: no file {caption}")
+            raise ConfigError(f"{where}.caption: no file {caption}")
         _figure_paths(name)
 
 
-_check_figures()
+try:  # one line naming the file and the entry, exit 2, as the config's own checks
+    FIGURE_TABLE = _read_figure_table()
+    # what rule `all` draws (results/figures/<name>.pdf and .png), in the table's order; a
+    # figure that needs a config key (e.g. the joint fit's, prototype.load_curve) only when set
+    FIGURES = [n for n, e in FIGURE_TABLE.items() if "needs" not in e or _config_has(e["needs"])]
+    _check_figures()
+except ConfigError as _ex:
+    exit_with_error(str(_ex))
 
 
 # the batches (figures.yaml `batch`), in the table's order: batch -> its figures of FIGURES (a

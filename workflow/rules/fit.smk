@@ -21,9 +21,6 @@ rule synthetic_curve:
         "../scripts/make_synthetic_curve.py"
 
 
-# the prototype's load curve (optional): fitted jointly with the run-up when the config names it
-LOAD_CURVE = config["prototype"].get("load_curve")
-LOAD_INPUTS = [LOAD_CURVE, str(Path(LOAD_CURVE).with_suffix(".yaml"))] if LOAD_CURVE else []
 # threads of the fit (its result does not depend on them): at least this many, more if a profile
 # sets more (--set-threads fit_prototype=N, as the Slurm profile does). One by default: a second
 # thread shortens the fit's own wall time by a fifth but costs a quarter more CPU (its threads

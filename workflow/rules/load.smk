@@ -27,10 +27,12 @@ rule torque_speed:
 
 
 rule torque_speed_prototype:
-    """Load characteristic of the fitted prototype motor in SI units: results/load/prototype.nc."""
+    """Load characteristic of the fitted prototype motor in SI units: results/load/prototype.nc.
+    The motor's drive and Phi0 are the fit's (its run-ups'), its rotor and preload those of the
+    prototype's load curve (prototype.load_curve: without one, the rotor is unknown)."""
     input:
         fit=f"{RES}/fit/prototype.nc",
-        motor="workflow/config/synthetic_motor.yaml",
+        curve=LOAD_INPUTS,
         compiled=rules.compile_engine.output,
     output:
         f"{RES}/load/prototype.nc",

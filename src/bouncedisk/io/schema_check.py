@@ -41,3 +41,48 @@ def schema_error(data: Mapping, schema_path: str | Path) -> str | None:
         return None
     where = ".".join(str(k) for k in err.absolute_path) or "(top level)"
     return f"{where}: {err.message}"
+
+
+def numbers_from_text(data: dict, schema_path: str | Path) -> None:
+    """In place: every text value where the schema asks for a number (or an integer, and the
+    text is a whole number) and ``float()`` reads it becomes that number.
+
+    YAML 1.1, which PyYAML and so Snakemake read, takes ``1e-9`` (no dot) for text, and
+    Snakemake's ``--config KEY='{members: 8}'`` gives nested values as text; a scene file takes
+    any number ``float()`` reads, and so does the pipeline's config. A value the schema also
+    allows as text is left alone.
+    """
+    import jsonschema
+
+    schema = yaml.safe_load(Path(schema_path).read_text(encoding="utf-8"))
+    validator = jsonschema.validators.validator_for(schema)(schema)
+    for _ in range(10_000):  # one value per pass at least; a config has far fewer
+        fixes = [fix for err in validator.iter_errors(data) for fix in _number_fixes(err)]
+        if not fixes:
+            return
+        for path, value in fixes:
+            target = data
+            for key in path[:-1]:
+                target = target[key]
+            target[path[-1]] = value
+
+
+def _number_fixes(err) -> list[tuple[list, float | int]]:
+    """``(path, number)`` for a type error on text that is the number the schema wants (and for
+    each error inside an ``anyOf``/``oneOf``)."""
+    out = [fix for sub in err.context or () for fix in _number_fixes(sub)]
+    wanted = err.validator_value if err.validator == "type" else ()
+    wanted = {wanted} if isinstance(wanted, str) else set(wanted)
+    if not isinstance(err.instance, str) or not wanted & {"number", "integer"}:
+        return out
+    if "string" in wanted or not err.absolute_path:
+        return out
+    try:
+        x = float(err.instance.strip())
+    except ValueError:
+        return out
+    if "number" not in wanted:  # an integer: a whole number only
+        if not (x.is_integer() and abs(x) < 2**63):
+            return out
+        x = int(x)
+    return [*out, (list(err.absolute_path), x)]
