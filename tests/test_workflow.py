@@ -145,6 +145,17 @@ def test_bad_config_fails_before_any_job(tmp_path, monkeypatch):
         ("per_omega: 50000", "per_omega: -1", "per_omega"),
         ("scan: 32", "scan: 4", "scan"),
         ("results: results-small", "results: results-small\ntrackin: true", "trackin"),
+        # a swept value the model refuses: before the first shard, not after it
+        (
+            "e: {min: 0.2, max: 0.8, n: 4}",
+            "e: {min: 0.2, max: 1.5, n: 4}",
+            "sweeps.regime_map.axes.e: the value 1.5: must be in [0, 1]",
+        ),
+        (
+            "r_phi: {values: [0.01, 0.1]}",
+            "r_fi: {values: [0.01, 0.1]}",
+            "sweeps.psi_speed.axes: 'r_fi' is not one of",
+        ),
     ):
         bad.write_text(SMALL.read_text().replace(old, new))
         assert key in parse_error(bad, tmp_path / "r", monkeypatch), key

@@ -2,7 +2,7 @@
 import math
 import os
 
-from bouncedisk.model.scene import load_scene
+from bouncedisk.model.scene import check_swept, load_scene
 from bouncedisk.studies import reproduction_files as _checked
 
 RES = config["results"]
@@ -70,6 +70,16 @@ def _check_config():
                 f"workflow/config/config.yaml: poincare.{key}: not listed in 'simulations'"
             )
     for name, spec in config["sweeps"].items():
+        base = load_scene(scene_path(spec["scene"]))
+        if base.stop.time is None:  # a sweep's points are ensembles averaged over a window
+            raise ConfigError(
+                f"workflow/config/config.yaml: sweeps.{name}.scene: {spec['scene']} stops after "
+                "impacts; a sweep averages over time: give it stop.time (or stop.periods)"
+            )
+        try:
+            check_swept(base, spec["axes"], "workflow/config/config.yaml", f"sweeps.{name}.axes")
+        except InputError as ex:
+            raise ConfigError(ex.line()) from None
         first = next(iter(spec["axes"].values()))
         n = len(first["values"]) if "values" in first else first["n"]
         if spec["shards"] > n:

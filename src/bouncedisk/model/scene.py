@@ -7,12 +7,13 @@ naming the file and the dotted field.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import math
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -617,6 +618,30 @@ def time_unit_note(physical: PhysicalParameters | None) -> str:
     if physical is None:
         return ""
     return f" (a scene's times are in units of t_c = {physical.scales().t_c:.4g} s, not seconds)"
+
+
+def check_swept(scene: Scene, axes: Mapping[str, Mapping], source: str, key: str) -> None:
+    """Every value a sweep gives ``scene``'s parameters is one the model takes, checked before
+    any point runs (a pipeline's sweep would otherwise run its first shards and fail on a
+    later one). ``axes``: parameter -> ``{min, max, n}`` or ``{values: [...]}`` (the ends of a
+    range suffice: the parameters' bounds are ranges); errors name ``key.<parameter>``.
+
+    Raises
+    ------
+    InputError
+        Naming ``source`` and the axis: not a parameter, or a value the model refuses.
+    """
+    known = [f.name for f in fields(Parameters)]
+    for name, spec in axes.items():
+        where = f"{key}.{name}"
+        if name not in known:
+            raise InputError(source, where, f"not a parameter (known: {', '.join(known)})")
+        ends = spec["values"] if "values" in spec else (spec["min"], spec["max"])
+        for value in ends:
+            try:
+                dataclasses.replace(scene.params, **{name: float(value)}).validate(source)
+            except InputError as ex:
+                raise InputError(source, where, f"the value {value:g}: {ex.message}") from None
 
 
 def require_scene(scene: object, what: str = "scene") -> Scene:
