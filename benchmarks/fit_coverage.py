@@ -26,9 +26,9 @@ import tempfile
 import time
 from pathlib import Path
 
+from bouncedisk.analysis.statistics import wilson
 from bouncedisk.fitting import FitSettings, fit_curve, fit_dataset
 from bouncedisk.io.runup_curves import read_curve
-from bouncedisk.studies.basins import wilson
 
 ROOT = Path(__file__).resolve().parents[1]
 CASE = "periodic"

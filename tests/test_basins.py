@@ -11,6 +11,7 @@ import xarray as xr
 
 from bouncedisk.analysis.ensembles import run_member
 from bouncedisk.analysis.observables import REGIME_CODES, REGIMES
+from bouncedisk.analysis.statistics import Z95, wilson
 from bouncedisk.cli import main
 from bouncedisk.io.netcdf import write_dataset
 from bouncedisk.io.provenance import REQUIRED_ATTRS
@@ -38,11 +39,11 @@ stats: {discard: 300.0}
 
 
 def test_wilson_interval_closed_forms():
-    z = B.Z95
+    z = Z95
     n = 40
-    assert B.wilson(n, n) == (pytest.approx(n / (n + z * z), rel=1e-14), 1.0)
-    assert B.wilson(0, n) == (0.0, pytest.approx(z * z / (n + z * z), rel=1e-14))
-    lo, hi = B.wilson(10, 40)
+    assert wilson(n, n) == (pytest.approx(n / (n + z * z), rel=1e-14), 1.0)
+    assert wilson(0, n) == (0.0, pytest.approx(z * z / (n + z * z), rel=1e-14))
+    lo, hi = wilson(10, 40)
     # the score interval solves |p - 0.25| = z sqrt(p (1 - p) / n) at both ends
     for p in (lo, hi):
         assert abs(p - 0.25) == pytest.approx(z * math.sqrt(p * (1 - p) / n), rel=1e-12)
@@ -57,7 +58,7 @@ def test_every_start_from_rest_without_load_reaches_the_one_period_2_orbit(scene
     a = out["attractors"][0]
     assert a["regime"] == "periodic" and a["period"] == [2, 2]
     assert a["fraction"] == 1.0 and a["starts"] == 16
-    assert a["fraction_ci95"] == [pytest.approx(16 / (16 + B.Z95**2)), 1.0]
+    assert a["fraction_ci95"] == [pytest.approx(16 / (16 + Z95**2)), 1.0]
     assert set(ds["label"].values) == {0}
     # the period-2 orbit's two impact phases, the same cycle from every start
     phases = ds["orbit_phases"].values[:, :2]

@@ -386,3 +386,16 @@ def test_a_rotor_in_flight_through_the_window_is_unresolved_and_one_at_rest_is_r
     assert flight["impact_rate"] == rest["impact_rate"] == 0.0
     assert flight["regime"] == "unresolved" and rest["regime"] == "rest"
     assert flight["audit_residual_axial"] < 1e-12  # round-off of the energies, not 1
+
+
+def test_the_regime_fraction_carries_its_wilson_interval():
+    """The fraction of members in the reported regime is a proportion of a sample: it carries
+    Wilson's interval, as a basin's fraction does (closed form: all of n members)."""
+    from bouncedisk.analysis.statistics import Z95, wilson
+
+    scene = load_scene("workflow/config/scenes/stats_locked.yaml", ["ensemble.members=3"])
+    s = run_stats(scene).summary()
+    assert s["regime_fraction"] == 1.0
+    assert s["regime_fraction_ci95"] == list(wilson(3, 3))
+    assert s["regime_fraction_ci95"][0] == pytest.approx(3 / (3 + Z95**2), rel=1e-14)
+    assert format_summary(s).splitlines()[-1].endswith("(95% CI [44%, 100%], Wilson)")

@@ -22,8 +22,8 @@ from bouncedisk.cli import main
 from bouncedisk.tracking import reading as registry
 
 os.environ["MLFLOW_DISABLE_TELEMETRY"] = "true"
-ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents) if (p / "workflow").is_dir())
-scene = ROOT / "workflow/config/scenes/fig3.yaml"
+# a shipped scene is loaded by its name, from any folder
+scene = "fig3"
 work = Path(tempfile.mkdtemp())
 store = f"sqlite:///{work / 'mlflow.db'}"
 

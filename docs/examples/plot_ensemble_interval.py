@@ -9,18 +9,15 @@ the mean across members with a 95 % Student-t interval. Here the scene of the pa
 shipped scene ``stats_e06.yaml`` uses 32 members over ``t`` in [3000, 53000].
 """
 
-from pathlib import Path
-
 import matplotlib.pyplot as plt
 import numpy as np
 
 from bouncedisk.analysis.statistics import confidence_interval, run_stats
 from bouncedisk.model.scene import load_scene
 
-ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents) if (p / "workflow").is_dir())
-
+# a shipped scene is loaded by its name, from any folder
 scene = load_scene(
-    ROOT / "workflow/config/scenes/stats_e06.yaml",
+    "stats_e06",
     overrides=["ensemble.members=12", "stop.time=8000", "stats.discard=2000"],
 )
 result = run_stats(scene, cores=2)

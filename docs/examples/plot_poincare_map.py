@@ -17,9 +17,8 @@ from bouncedisk.analysis.poincare import poincare_dataset
 from bouncedisk.model.scene import load_scene
 from bouncedisk.run.runner import run_scene
 
-ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents) if (p / "workflow").is_dir())
-
-scene = load_scene(ROOT / "workflow/config/scenes/poincare_e06.yaml", ["stop.impacts=6000"])
+# a shipped scene is loaded by its name, from any folder
+scene = load_scene("poincare_e06", ["stop.impacts=6000"])
 out = Path(tempfile.mkdtemp()) / "poincare_e06.nc"
 run_scene(scene, out, progress=False)
 with xr.open_dataset(out) as sim:

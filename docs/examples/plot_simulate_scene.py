@@ -16,12 +16,11 @@ import xarray as xr
 from bouncedisk.model.scene import load_scene
 from bouncedisk.run.runner import run_scene
 
-ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents) if (p / "workflow").is_dir())
-
+# a shipped scene is loaded by its name, from any folder
 # %%
 # A scene is a YAML file (:doc:`/user_guide/scenes`); ``overrides`` are the ``--set`` of the
 # command line. Here: 120 impacts instead of 300, to keep the figure readable.
-scene = load_scene(ROOT / "workflow/config/scenes/fig3.yaml", overrides=["stop.impacts=120"])
+scene = load_scene("fig3", overrides=["stop.impacts=120"])
 print(scene.name, scene.params, sorted(scene.effects))
 
 # %%

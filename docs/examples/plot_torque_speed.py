@@ -11,7 +11,6 @@ up to ``τ_L = 1.02``, past the momentum bound.
 """
 
 import time
-from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -19,10 +18,9 @@ import numpy as np
 from bouncedisk.model.scene import load_scene
 from bouncedisk.studies.torque_speed import to_dataset, torque_speed
 
-ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents) if (p / "workflow").is_dir())
-
+# a shipped scene is loaded by its name, from any folder
 scene = load_scene(
-    ROOT / "workflow/config/scenes/load_fig3.yaml",
+    "load_fig3",
     ["ensemble.members=6", "stop.time=3000", "stats.discard=1000"],
 )
 loads = np.array([0.0, 0.02, 0.05, 0.1, 0.3, 0.6, 0.9])

@@ -82,6 +82,22 @@ def confidence_interval(
     return mean, mean - half, mean + half
 
 
+#: Standard normal quantile of the 95 % Wilson interval.
+Z95 = 1.959963984540054
+
+
+def wilson(k: int, n: int, z: float = Z95) -> tuple[float, float]:
+    """Wilson's score interval of a proportion ``k / n`` (95 % with the default ``z``):
+    ``(k + z²/2)/(n + z²) ± z/(n + z²) sqrt(k (n − k)/n + z²/4)``, inside ``[0, 1]``."""
+    if n <= 0:
+        return math.nan, math.nan
+    centre = (k + 0.5 * z * z) / (n + z * z)
+    half = z / (n + z * z) * math.sqrt(k * (n - k) / n + 0.25 * z * z)
+    low = 0.0 if k == 0 else max(0.0, centre - half)
+    high = 1.0 if k == n else min(1.0, centre + half)
+    return low, high
+
+
 def t_quantile(dof: int, level: float = LEVEL) -> float:
     """Student's quantile ``t_{(1+level)/2, dof}`` of a two-sided ``level`` interval.
 
@@ -182,6 +198,8 @@ class EnsembleStats:
         name, frac, period = self.regime
         out["regime"] = name
         out["regime_fraction"] = frac
+        n = len(self.members)  # a proportion of the members: Wilson's interval, as basins'
+        out["regime_fraction_ci95"] = list(wilson(round(frac * n), n))
         out["regime_tie"] = self.regime_tie
         out["period"] = period
         return out

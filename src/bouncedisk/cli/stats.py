@@ -65,12 +65,14 @@ def format_summary(summary: dict) -> str:
     period = summary["period"]
     reg = summary["regime"] + (f" ({period[0]} impacts / {period[1]} periods)" if period else "")
     frac = summary["regime_fraction"]
+    lo, hi = summary["regime_fraction_ci95"]
+    ci = f" (95% CI [{100 * lo:.0f}%, {100 * hi:.0f}%], Wilson)"
     tie = summary.get("regime_tie") or []
     if tie:
         reg = f"tie between {', '.join(tie[:-1])} and {tie[-1]}"
-        lines.append(f"{'regime':>18}: {reg}, {100 * frac:.0f}% of members each")
+        lines.append(f"{'regime':>18}: {reg}, {100 * frac:.0f}% of members each{ci}")
     else:
-        lines.append(f"{'regime':>18}: {reg}, {100 * frac:.0f}% of members")
+        lines.append(f"{'regime':>18}: {reg}, {100 * frac:.0f}% of members{ci}")
     return "\n".join(lines)
 
 

@@ -146,7 +146,19 @@ class Chunk:
 
 @dataclass
 class RunResult:
-    """A whole run collected in memory (:func:`simulate_arrays`)."""
+    """A whole run collected in memory (:func:`simulate_arrays`).
+
+    ``events`` maps ``t``, ``phase``, ``v_rel``, ``omega_after``, ``u``, ``omega_before`` and
+    ``kind`` to one array each, one row per event (a simulation file names them ``t_impact``,
+    ``phase``, ``v_rel``, ``omega_after``, ``u_impact``, ``omega_before``, ``kind``;
+    docs/formats.md "Simulation file"). ``traj`` is the dense trajectory, one row per sample,
+    its columns named by :class:`bouncedisk.io.records.TrajColumn` (``t``, ``u``, ``v``,
+    ``u_stator``, ``omega``); ``strobe`` the stroboscopic section (``StrobeColumn``). ``status``
+    says how the run ended (``status_code`` its code; :attr:`ok`), ``final`` is the final state
+    (``t``, ``u``, ``v``, ``omega``, ``in_contact``, ``phase``, ``omega_integral`` and, with a
+    statistics window, ``audit``: the energy audit's terms). Nondimensional throughout
+    (docs/model.md "Variables and scales").
+    """
 
     events: dict[str, np.ndarray]
     traj: np.ndarray

@@ -59,7 +59,7 @@ import xarray as xr
 
 from ..analysis import observables as ob
 from ..analysis.ensembles import CappedRun, run_member
-from ..analysis.statistics import capped_error, confidence_interval, ensemble_window
+from ..analysis.statistics import capped_error, confidence_interval, ensemble_window, wilson
 from ..analysis.sweeps import _ordered_runs, shard_slice, with_params
 from ..engine import InitialState
 from ..engine.bounds import MAX_SPEED
@@ -103,8 +103,6 @@ MAX_VALUES = 10_000
 #: Largest initial height above the stator: a fall of about 1400 time units, longer than any
 #: window a basin computation can tell settling in.
 MAX_HEIGHT = 1e6
-#: Standard normal quantile of the 95 % Wilson interval.
-Z95 = 1.959963984540054
 #: The grouping rule, as the files and ``--json`` state it.
 RULE = (
     "start settled when its two half-window mean speeds differ by <= settle * scale * "
@@ -544,18 +542,6 @@ def join_shards(shards: Sequence[xr.Dataset]) -> xr.Dataset:
         f"{first.get('scene_name', 'scene')}-basins", str(first.get("scene_sha256", "0" * 8))
     )
     return ds
-
-
-def wilson(k: int, n: int, z: float = Z95) -> tuple[float, float]:
-    """Wilson's score interval of a proportion ``k / n`` (95 % with the default ``z``):
-    ``(k + z²/2)/(n + z²) ± z/(n + z²) sqrt(k (n − k)/n + z²/4)``, inside ``[0, 1]``."""
-    if n <= 0:
-        return math.nan, math.nan
-    centre = (k + 0.5 * z * z) / (n + z * z)
-    half = z / (n + z * z) * math.sqrt(k * (n - k) / n + 0.25 * z * z)
-    low = 0.0 if k == 0 else max(0.0, centre - half)
-    high = 1.0 if k == n else min(1.0, centre + half)
-    return low, high
 
 
 def _class_of(regime: int, p: int, q: int) -> tuple | None:
