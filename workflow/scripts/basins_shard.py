@@ -10,8 +10,10 @@ with log_to(snakemake.log[0]) as log:
     scene = load_scene(snakemake.input.scene)
     grid = start_grid(
         spec["phases"],
-        parse_values(spec["speeds"], "basins.map.speeds", "speed", "config"),
-        parse_values(spec["heights"], "basins.map.heights", "height", "config"),
+        parse_values(spec["speeds"], "basins.map.speeds", "speed", "workflow/config/config.yaml"),
+        parse_values(
+            spec["heights"], "basins.map.heights", "height", "workflow/config/config.yaml"
+        ),
     )
     shard = int(snakemake.wildcards.shard)
     ds = run_starts(scene, grid, shard=shard, n_shards=spec["shards"], cores=snakemake.threads)

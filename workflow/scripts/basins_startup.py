@@ -12,9 +12,11 @@ with log_to(snakemake.log[0]) as log:
     grid = start_grid(
         spec["phases"],
         [0.0],
-        parse_values(spec["heights"], "basins.startup.heights", "height", "config"),
+        parse_values(
+            spec["heights"], "basins.startup.heights", "height", "workflow/config/config.yaml"
+        ),
     )
-    loads = parse_loads(spec["loads"], "config", "basins.startup.loads")
+    loads = parse_loads(spec["loads"], "workflow/config/config.yaml", "basins.startup.loads")
     ds = startup(scene, loads, grid, spec["fast_above"], cores=snakemake.threads)
     write_dataset(ds, snakemake.output[0])
     log.info("%s: fast fractions %s", snakemake.output[0], ds["fast_fraction"].values.round(3))

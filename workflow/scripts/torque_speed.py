@@ -11,9 +11,8 @@ from bouncedisk.studies.torque_speed import refined_torque_speed, scene_loads, t
 with log_to(snakemake.log[0]) as log:
     scene = load_scene(snakemake.input.scene)
     # N*m for a physical scene, as `bouncedisk torque-speed --loads` reads them
-    loads = scene_loads(
-        scene, snakemake.params.spec["loads"], "workflow/config/config.yaml", "loads"
-    )
+    field = f"load_curves.{snakemake.wildcards.curve}.loads"  # the config's key, named whole
+    loads = scene_loads(scene, snakemake.params.spec["loads"], "workflow/config/config.yaml", field)
     start = time.perf_counter()
     resolution = snakemake.params.spec.get("resolution")  # none: the loads as given
     rounds = REFINE_ROUNDS if resolution is not None else 0
