@@ -385,6 +385,17 @@ def test_figure_registry_refuses_an_unknown_figure_or_wrong_inputs(tmp_path):
     with pytest.raises(ValueError, match=r"takes the parameters \['labels'\], given \[\]"):
         drawing.draw_figure("poincare", {"maps": []})
     assert drawing.draw_figure("fig2", {}).axes
+    # an optional input (the trajectory's band: fig_trajectory's band=None) may be left out
+    with pytest.raises(ValueError, match=r"takes the inputs \['sim', 'band \(optional\)'\]"):
+        drawing.draw_figure("trajectory", {"band": "b.nc"})
+    import bouncedisk as bd
+
+    scene = bd.load_scene("fig3", ["stop.impacts=40"])
+    bd.run_scene(scene, tmp_path / "fig3.nc", progress=False)
+    assert len(drawing.draw_figure("trajectory", {"sim": str(tmp_path / "fig3.nc")}).axes) == 3
+    bd.run_scene(bd.load_scene("poincare_e03", ["stop.impacts=40"]), tmp_path / "p.nc", False)
+    with pytest.raises(ValueError, match="poincare_e03: no dense trajectory to draw"):
+        drawing.draw_figure("trajectory", {"sim": str(tmp_path / "p.nc")})
 
 
 def run_figure_script(tmp_path, figures, inputs):

@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -136,7 +137,9 @@ def draw_figure(
     name : str
         The figure's kind, a key of :data:`FIGURES`.
     paths : mapping
-        Input name -> a path, or a list of paths; exactly the inputs the figure takes.
+        Input name -> a path, or a list of paths: the inputs the figure takes, each optional
+        one (its drawing function's argument has a default, as ``trajectory``'s ``band``) left
+        out or given.
     params : mapping, optional
         Exactly the parameters the figure takes (``FigureSpec.params``).
 
@@ -149,18 +152,30 @@ def draw_figure(
     if spec is None:
         raise ValueError(f"unknown figure {name!r}; known figures: {', '.join(sorted(FIGURES))}")
     params = dict(params or {})
-    for what, given, wanted in (
-        ("inputs", set(paths), set(spec.inputs)),
-        ("parameters", set(params), set(spec.params)),
+    optional = _optional_inputs(spec)
+    for what, given, wanted, least in (
+        ("inputs", set(paths), set(spec.inputs), set(spec.inputs) - optional),
+        ("parameters", set(params), set(spec.params), set(spec.params)),
     ):
-        if given != wanted:
-            raise ValueError(
-                f"figure {name!r} takes the {what} {sorted(wanted)}, given {sorted(given)}"
-            )
+        if not least <= given <= wanted:
+            takes = sorted(least) + [f"{k} (optional)" for k in sorted(wanted - least)]
+            raise ValueError(f"figure {name!r} takes the {what} {takes}, given {sorted(given)}")
     opened = [
-        [opener(str(p)) for p in paths[key]]
+        None
+        if key not in paths
+        else [opener(str(p)) for p in paths[key]]
         if isinstance(paths[key], Sequence) and not isinstance(paths[key], str)
         else opener(str(paths[key]))
         for key, opener in spec.inputs.items()
     ]
     return spec.draw(*opened, **params)
+
+
+def _optional_inputs(spec: FigureSpec) -> set[str]:
+    """The inputs whose drawing-function argument (in the inputs' order) has a default."""
+    args = list(inspect.signature(spec.draw).parameters.values())
+    return {
+        key
+        for key, arg in zip(spec.inputs, args, strict=False)
+        if arg.default is not inspect.Parameter.empty
+    }

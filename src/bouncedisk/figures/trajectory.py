@@ -33,7 +33,17 @@ def fig_trajectory(ds: xr.Dataset, band: xr.Dataset | None = None, window: float
 
     With ``band`` (:func:`bouncedisk.analysis.bands.omega_band`), the ensemble's spread of ``Ω`` (central
     95 % of the members) and the 95 % interval of its mean are drawn behind the single run.
+
+    Raises
+    ------
+    ValueError
+        ``ds`` holds no dense trajectory (its scene asked for none: ``outputs.trajectory``).
     """
+    if "time" not in ds or "u_stator" not in ds:
+        raise ValueError(
+            f"{ds.attrs.get('scene_name', 'the simulation')}: no dense trajectory to draw; give "
+            "its scene outputs: {trajectory: {dt: 0.01}} (docs/formats.md)"
+        )
     t = ds["time"].values
     fig = Figure(figsize=(8.0, 7.0), layout="constrained")
     axes = fig.subplots(3, 1)
