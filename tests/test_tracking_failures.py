@@ -2,6 +2,7 @@
 reading, MLflow's own logging, and ``runs diff`` of pipeline runs.
 """
 
+import json
 import os
 import signal
 import socket
@@ -323,4 +324,19 @@ def test_changed_since_previous_names_only_changed_inputs():
     ]
     assert registry.changed_keys(rb.data.params, ra.data.params) == [
         "figures/fig4_trajectory_e06/dpi"
+    ]
+
+
+@pytest.mark.xdist_group("tracked_store")
+def test_runs_reads_the_experiment_it_is_given_and_names_the_others(tracked_store, capsys):
+    """A pipeline's tracking.experiment puts its runs in their own experiment: `runs` reads it
+    with --experiment, and a listing of an experiment with no run names the store's others."""
+    uri = str(tracked_store)
+    assert main(["runs", "--tracking-uri", uri, "--experiment", "bouncedisk", "--json"]) == 0
+    assert len(json.loads(capsys.readouterr().out)) == 1
+    assert main(["runs", "--tracking-uri", uri, "--experiment", "mylab"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out == [
+        "(no runs recorded yet)",
+        "(experiment 'mylab'; this store also has 'bouncedisk': give --experiment NAME)",
     ]

@@ -30,10 +30,13 @@ def _cmd_runs(args: argparse.Namespace) -> int:
         raise InputError("runs", action, "--port and --no-browser are options of `runs ui`")
     if action == "ui":
         return _runs_ui(args)
-    runs = registry.Runs(args.tracking_uri, args.results)
+    runs = registry.Runs(args.tracking_uri, args.results, args.experiment)
     if action == "list":
         rows = [registry.row(runs, r) for r in runs.runs]
         print(json.dumps(rows, indent=1) if args.json else registry.format_list(rows))
+        if not rows and runs.others and not args.json:
+            print(f"(experiment {runs.store.experiment!r}; this store also has "
+                  f"{', '.join(map(repr, runs.others))}: give --experiment NAME)")  # fmt: skip
         return 0
     if action == "show":
         rec = registry.show(runs, runs.find(words[0]))
@@ -60,12 +63,12 @@ def _runs_ui(args: argparse.Namespace) -> int:
     from ..tracking import store as tracking_store
     from ..tracking import ui
 
-    store = tracking_store.resolve_store(args.tracking_uri, args.results)
+    store = tracking_store.resolve_store(args.tracking_uri, args.results, args.experiment)
     if store.is_http:
         raise InputError(
             f"tracking store {store.uri}", "runs ui", "a tracking server serves its own UI: open it"
         )
-    runs = registry.Runs(args.tracking_uri, args.results)  # an existing, readable store
+    runs = registry.Runs(args.tracking_uri, args.results, args.experiment)  # readable store
     exp = tracking_store.experiment_id(runs.client, runs.store, create=False)
     if exp is None:
         raise InputError(
@@ -105,7 +108,7 @@ def _add_runs(sub) -> None:
         "runs",
         help="the tracked runs: list, show RUN, diff A B, ui (MLflow's UI on them)",
         usage="bouncedisk runs [list | show RUN | diff [A [B]] | ui [--port N] [--no-browser]] "
-        "[--json] [--tracking-uri URI]",
+        "[--json] [--tracking-uri URI] [--experiment NAME]",
     )
     p.add_argument("words", nargs="*", metavar="ACTION RUN", help="list | show RUN | diff A B | ui")
     p.add_argument("--json", action="store_true", help="print JSON")
@@ -121,4 +124,9 @@ def _add_runs(sub) -> None:
         help="tracking store (default: $MLFLOW_TRACKING_URI, else sqlite:///RESULTS/mlflow.db)",
     )
     p.add_argument("--results", default="results", help="results folder (default: %(default)s)")
+    p.add_argument(
+        "--experiment",
+        metavar="NAME",
+        help="the MLflow experiment (default: bouncedisk; the pipeline's tracking.experiment)",
+    )
     p.set_defaults(func=_cmd_runs)

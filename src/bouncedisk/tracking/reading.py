@@ -36,13 +36,21 @@ INVOCATION_METRICS = ("pipeline.", "tracking.")
 class Runs:
     """The top-level runs of one store's experiment, oldest first."""
 
-    def __init__(self, uri: str | None = None, results: str | Path = "results"):
-        self.store = store.resolve_store(uri, results)
+    def __init__(
+        self, uri: str | None = None, results: str | Path = "results", experiment: str | None = None
+    ):
+        self.store = store.resolve_store(uri, results, experiment)
         store.preflight(self.store, create=False)
         try:
             self.client = store._client(self.store)
             exp = store.experiment_id(self.client, self.store, create=False)
             self.runs = [] if exp is None else self._search(exp)
+            #: The store's other experiments (a listing that finds none names them).
+            self.others = sorted(
+                e.name
+                for e in self.client.search_experiments()
+                if e.name not in (self.store.experiment, "Default")
+            )
         except store.TrackingError:
             raise
         except Exception as ex:  # noqa: BLE001 - drivers and REST raise their own types
