@@ -525,7 +525,7 @@ def test_an_edited_package_reruns_the_fit():
 
 def test_snakemake_reads_the_default_profile_by_itself(tmp_path):
     """profiles/default (resume an interrupted run) is Snakemake's workflow profile only next to
-    the Snakefile: in workflow/profiles/ it was never read."""
+    the Snakefile: one folder down, under workflow, it was never read."""
     out = run(tmp_path / "res", 1, "--dry-run")
     assert "Using workflow specific profile profiles/default" in out, out[:500]
     profile = yaml.safe_load((ROOT / "profiles" / "default" / "config.yaml").read_text())
