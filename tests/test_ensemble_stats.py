@@ -399,3 +399,37 @@ def test_the_regime_fraction_carries_its_wilson_interval():
     assert s["regime_fraction_ci95"] == list(wilson(3, 3))
     assert s["regime_fraction_ci95"][0] == pytest.approx(3 / (3 + Z95**2), rel=1e-14)
     assert format_summary(s).splitlines()[-1].endswith("(95% CI [44%, 100%], Wilson)")
+
+
+def test_settled_reads_the_members_mean_drift_not_member_zero():
+    """The rule is the ensemble's: its members' mean drift against 2 % of the speed and three
+    standard errors. Member 0 alone drifting (or alone not) decides nothing."""
+    import dataclasses as dc
+
+    scene = load_scene("workflow/config/scenes/stats_locked.yaml", ["ensemble.members=8"])
+    base = run_stats(scene)
+    scale = abs(base.summary()["mean_omega"])  # about 7.9: 2 % is about 0.16
+    still = dc.replace(base, drift=np.array([0.0] + [0.4] * 7)).summary()
+    assert still["settled"] == 0 and still["drift"] == pytest.approx(0.35)
+    chance = dc.replace(base, drift=np.array([0.5, -0.5, 0.4, -0.4, 0.3, -0.3, 0.2, -0.2]))
+    assert chance.summary()["settled"] == 1  # a mean of 0: member 0's +0.5 alone says nothing
+    assert 0.02 * scale < 0.35
+
+
+@pytest.mark.parametrize("periods", [100.0, 255.0, 256.5, 300.0, 1000.0])
+def test_the_settling_step_reads_a_stationary_ripple_as_settled(periods):
+    """A speed 10 + sin(omega_s t) locked to the stator, sampled at the settling step over
+    windows of fewer and more than 256 periods: its halves' means agree to well under 2 % of
+    10. At a step of the window over 256 (0.996 periods at 255) they differed by 1.3."""
+    from bouncedisk.analysis.settling import settle_step
+
+    w = 1.126
+    window = periods * 2 * np.pi / w
+    for step in (settle_step(0.0, window, w), window / 256):
+        t = np.arange(0.0, window, step)
+        om = 10.0 + np.sin(w * t)
+        half = t < window / 2
+        drift = om[~half].mean() - om[half].mean()
+        if step == settle_step(0.0, window, w):
+            assert abs(drift) < 0.02, (periods, drift)
+    assert periods != 255.0 or abs(drift) > 0.5  # the planted error: the plain step aliases

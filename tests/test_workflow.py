@@ -545,6 +545,10 @@ def test_numbers_written_as_text_are_numbers_where_the_schema_wants_one():
     numbers_from_text(cfg, schema)
     assert cfg["bands"]["e_sigma"] == 1e-9 and cfg["bands"]["members"] == 8
     assert schema_error(cfg, schema) is None
+    cfg["bands"]["e_sigma"] = "nan"  # a number the schema's bounds would not see: still text
+    numbers_from_text(cfg, schema)
+    assert schema_error(cfg, schema) == "bands.e_sigma: 'nan' is not of type 'number'"
+    cfg["bands"]["e_sigma"] = 1e-9
     for value, wrong in (("x", "'x' is not of type 'integer'"), ("8.5", "'8.5' is not of type")):
         cfg["bands"]["members"] = value
         numbers_from_text(cfg, schema)

@@ -28,19 +28,23 @@ GOLDEN_FRACTION = (math.sqrt(5.0) - 1.0) / 2.0
 
 
 def settle_step(t_from: float, t_end: float, omega_s: float) -> float:
-    """The step of the samples of a window ``[t_from, t_end]``: about a :data:`SETTLE_SAMPLES`-th
-    of it, made a whole number of stator periods plus :data:`GOLDEN_FRACTION` of one.
+    """The step of the samples of a window ``[t_from, t_end]``, near a :data:`SETTLE_SAMPLES`-th
+    of it: a whole number of stator periods plus :data:`GOLDEN_FRACTION` of one, or, for a
+    window of fewer than :data:`SETTLE_SAMPLES` periods, a period over a whole number plus that
+    fraction.
 
     A periodic motion locked to the stator (``p`` impacts every ``q`` periods) sampled at a whole
-    number of periods would be read at the same few phases of its cycle: each half's mean would
-    be biased by its speed ripple, and the halves would differ although the motion is stationary.
-    With the golden fraction the samples' stator phases are equidistributed (the halves' means
-    agree to a small fraction of the ripple). A step under one period is kept as it is: its
-    samples already fall at many phases of each period.
+    number of periods, or at a step close to a period or one of its fractions, is read at phases
+    that creep slowly through its cycle: each half's mean is biased by a different part of its
+    speed ripple, and the halves differ although the motion is stationary. With the golden
+    fraction the samples' stator phases are equidistributed (the halves' means agree to a small
+    fraction of the ripple).
     """
     period = 2.0 * math.pi / omega_s
     step = (t_end - t_from) / SETTLE_SAMPLES
-    return step if step < period else (math.floor(step / period) + GOLDEN_FRACTION) * period
+    if step >= period:
+        return (math.floor(step / period) + GOLDEN_FRACTION) * period
+    return period / (math.floor(period / step) + GOLDEN_FRACTION)
 
 
 def run_settled(

@@ -80,6 +80,8 @@ def _settled_row(summary: dict) -> str:
     """Whether the window's two halves agree (:mod:`bouncedisk.analysis.settling`): the drift
     (second half's mean speed less the first's) with its interval, and what to do if not."""
     d, (low, high) = summary["drift"], summary["drift_ci95"]
+    if d is None:  # no member sampled both halves
+        return f"{'settled':>18}: n/a (no member has samples in both halves of its window)"
     ci = f" (95% CI [{low:.3g}, {high:.3g}])" if low is not None else ""
     if summary["settled"]:
         return f"{'settled':>18}: yes, the halves' mean speeds differ by {d:+.3g}{ci}"

@@ -7,6 +7,7 @@ tracking: ...``), and exits with status 2 like the package's commands.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -80,6 +81,8 @@ def _number_fixes(err) -> list[tuple[list, float | int]]:
     try:
         x = float(err.instance.strip())
     except ValueError:
+        return out
+    if not math.isfinite(x):  # "nan" or "inf": a mistake the schema's bounds would not see
         return out
     if "number" not in wanted:  # an integer: a whole number only
         if not (x.is_integer() and abs(x) < 2**63):

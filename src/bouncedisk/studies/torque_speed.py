@@ -160,9 +160,12 @@ def checked_loads(loads: object, source: str = "<arguments>", field: str = "load
         out = parse_loads(loads, source, field)
     else:
         try:
-            values = np.ravel(np.asarray(loads, dtype=object))
+            values = np.asarray(loads, dtype=object)
         except ValueError:  # ragged nesting
             raise InputError(source, field, "must be a list of numbers") from None
+        if values.ndim > 1:
+            raise InputError(source, field, f"must be a flat list of numbers, got {loads!r}")
+        values = np.ravel(values)
         if not 1 <= len(values) <= MAX_LOADS:
             raise InputError(source, field, f"must hold 1 to {MAX_LOADS} loads, got {len(values)}")
         out = np.sort([number(source, field, x, nonneg=True) for x in values])
@@ -176,8 +179,16 @@ def checked_loads(loads: object, source: str = "<arguments>", field: str = "load
 def checked_branches(branches: object, field: str = "branches") -> tuple[str, ...]:
     """The sweeps a call asks for: one or both of :data:`BRANCHES`, each once (one name or
     several)."""
-    names = (branches,) if isinstance(branches, str) else tuple(branches)
-    if not names or len(set(names)) != len(names) or any(b not in BRANCHES for b in names):
+    try:
+        names = (branches,) if isinstance(branches, str) else tuple(branches)
+    except TypeError:  # not a name nor a sequence of them (None, a number)
+        names = ()
+    if (
+        not names
+        or not all(isinstance(b, str) for b in names)
+        or len(set(names)) != len(names)
+        or any(b not in BRANCHES for b in names)
+    ):
         raise InputError(
             "<arguments>", field, f"must be one or both of {BRANCHES}, each once, got {branches!r}"
         )
