@@ -108,7 +108,7 @@ def t_quantile(dof: int, level: float = LEVEL) -> float:
     Raises
     ------
     InputError
-        ``level`` not a fraction in (0, 1) (``95`` for 95 % read as nothing, ``nan``, before).
+        ``level`` not a fraction in (0, 1): ``95`` meant as 95 % is refused, not read as NaN.
     """
     if not 0.0 < level < 1.0:
         raise InputError("<arguments>", "level", f"must be a fraction in (0, 1), got {level!r}")
