@@ -85,10 +85,13 @@ def run_settled(
 
 
 def drifting(drift: np.ndarray, scale: float | np.ndarray) -> np.ndarray:
-    """Which columns of ``drift`` (members × cases) have not settled: the members' mean drift
-    beyond :data:`DRIFT_SHARE` times ``scale`` and beyond three standard errors of 0. A column
-    without a finite drift counts as settled (nothing says otherwise)."""
-    drift = np.atleast_2d(np.asarray(drift, float))
+    """Which columns of ``drift`` (members × cases, two dimensions: a 1-D array would be read
+    neither way safely) have not settled: the members' mean drift beyond :data:`DRIFT_SHARE`
+    times ``scale`` and beyond three standard errors of 0. A column without a finite drift counts
+    as settled (nothing says otherwise)."""
+    drift = np.asarray(drift, float)
+    if drift.ndim != 2:
+        raise ValueError(f"drift must be members x cases, got the shape {drift.shape}")
     finite = np.isfinite(drift)
     k = finite.sum(axis=0)
     d = np.where(finite, drift, 0.0).sum(axis=0) / np.maximum(k, 1)

@@ -210,7 +210,7 @@ class EnsembleStats:
         speed's magnitude as the scale."""
         _put_interval(out, "drift", self.drift)
         scale = abs(float(np.nanmean(self.column("mean_omega"))))
-        out["settled"] = int(not drifting(self.drift[:, None], scale)[0])  # members x 1 case
+        out["settled"] = int(not drifting(self.drift[:, None], scale)[0])  # members x 1
 
     def _physical_values(self, out: dict) -> None:
         """Into ``out``: the mean speed in rad/s, the powers in W and the motor's mechanical

@@ -28,7 +28,6 @@ from ..io.provenance import base_attrs, new_run_id
 from ..model import stator
 from ..model.engine_config import engine_config
 from ..model.errors import InputError, plain
-from ..model.params import Parameters
 from ..model.scene import Scene
 from ..run.runner import scene_attrs
 from . import observables as ob
@@ -63,8 +62,7 @@ def shard_slice(n: int, shard: int, n_shards: int) -> slice:
 
 def with_params(scene: Scene, **values: float) -> Scene:
     """A copy of ``scene`` with some nondimensional parameters replaced (validated)."""
-    params = dataclasses.replace(scene.params, **values)
-    Parameters.validate(params, scene.source)
+    params = scene.params.replaced(scene.source, **values)
     raw = dict(scene.raw)
     raw["parameters"] = {**(raw.get("parameters") or {}), **values}
     return dataclasses.replace(scene, params=params, raw=raw)

@@ -7,6 +7,7 @@ tracking: ...``), and exits with status 2 like the package's commands.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping
 from pathlib import Path
@@ -35,13 +36,21 @@ def schema_error(data: Mapping, schema_path: str | Path) -> str | None:
     """
     import jsonschema
 
-    schema = yaml.safe_load(Path(schema_path).read_text(encoding="utf-8"))
-    validator = jsonschema.validators.validator_for(schema)(schema)
-    err = jsonschema.exceptions.best_match(validator.iter_errors(dict(data)))
+    err = jsonschema.exceptions.best_match(_validator(str(schema_path)).iter_errors(dict(data)))
     if err is None:
         return None
     where = ".".join(str(k) for k in err.absolute_path) or "(top level)"
     return f"{where}: {err.message}"
+
+
+@functools.cache
+def _validator(schema_path: str):
+    """The JSON-schema validator of a YAML schema file, read once per process (the Snakefile
+    converts the config's numbers, then checks it)."""
+    import jsonschema
+
+    schema = yaml.safe_load(Path(schema_path).read_text(encoding="utf-8"))
+    return jsonschema.validators.validator_for(schema)(schema)
 
 
 def numbers_from_text(data: dict, schema_path: str | Path) -> None:
@@ -53,10 +62,7 @@ def numbers_from_text(data: dict, schema_path: str | Path) -> None:
     any number ``float()`` reads, and so does the pipeline's config. A value the schema also
     allows as text is left alone.
     """
-    import jsonschema
-
-    schema = yaml.safe_load(Path(schema_path).read_text(encoding="utf-8"))
-    validator = jsonschema.validators.validator_for(schema)(schema)
+    validator = _validator(str(schema_path))
     for _ in range(10_000):  # one value per pass at least; a config has far fewer
         fixes = [fix for err in validator.iter_errors(data) for fix in _number_fixes(err)]
         if not fixes:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import numbers
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
 
 import numpy as np
 
@@ -167,6 +167,12 @@ class Parameters:
         except InputError as ex:  # name the file and its section, not the class
             field = prefix + ex.field.removeprefix("Parameters")
             raise InputError(source, field, ex.message) from None
+
+    def replaced(self, source: str = "", **values: float) -> Parameters:
+        """A copy with some parameters replaced, validated (:meth:`validate`): a sweep's point."""
+        params = replace(self, **values)
+        params.validate(source)
+        return params
 
     def validate(self, source: str = "", prefix: str = "parameters") -> None:
         """Raise :class:`InputError` for out-of-range values."""

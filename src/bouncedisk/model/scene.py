@@ -7,7 +7,6 @@ naming the file and the dotted field.
 
 from __future__ import annotations
 
-import dataclasses
 import hashlib
 import json
 import math
@@ -639,7 +638,7 @@ def check_swept(scene: Scene, axes: Mapping[str, Mapping], source: str, key: str
         ends = spec["values"] if "values" in spec else (spec["min"], spec["max"])
         for value in ends:
             try:
-                dataclasses.replace(scene.params, **{name: float(value)}).validate(source)
+                scene.params.replaced(source, **{name: float(value)})
             except InputError as ex:
                 raise InputError(source, where, f"the value {value:g}: {ex.message}") from None
 

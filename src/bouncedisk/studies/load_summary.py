@@ -91,7 +91,7 @@ def settled_loads(
 
     if scale is None:
         scale = speed_scale(loads, speed, bound)
-    return ~drifting(drift, scale) & ~past
+    return ~drifting(np.atleast_2d(drift), scale) & ~past  # one member: 1 x loads, as speed
 
 
 def speed_scale(loads: np.ndarray, speed: np.ndarray, bound: float | None = None) -> float:
