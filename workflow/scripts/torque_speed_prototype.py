@@ -1,6 +1,7 @@
 """Adapter: the load characteristic of the fitted prototype motor, in SI units."""
 
 import time
+from pathlib import Path
 
 import xarray as xr
 
@@ -40,10 +41,9 @@ with log_to(snakemake.log[0]) as log:
     curve = refined_torque_speed(scene, loads, resolution or 0.0, rounds, cores=snakemake.threads)
     ds = to_dataset(scene, curve, time.perf_counter() - start)
     ds.attrs["fit_file"] = "fit/prototype.nc (in the results folder)"
-    ds.attrs["motor_description"] = (
-        f"the fitted model of the motor of {snakemake.config['prototype']['curve']} (drive and "
-        f"Phi0 of its run-ups; rotor and preload of {snakemake.input.curve[0]}), in SI units"
-    )
+    # the figure's title: short (the rotor's source is the caption's and the formats page's)
+    run_up = Path(snakemake.config["prototype"]["curve"]).name
+    ds.attrs["motor_description"] = f"the fitted model of the motor of {run_up}, in SI units"
     write_dataset(ds, snakemake.output[0])
     s = curve.summary()
     log.info("fitted motor %s: stall %s N*m %s (%s), max power %s W (%s), %d loads", fitted,
